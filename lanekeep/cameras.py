@@ -1,0 +1,222 @@
+"""The two onboard cameras: pinhole model from MuJoCo's fovy, ground projection, rendering.
+
+MuJoCo cameras look along their local -z with +y up and square pixels; the vertical field of
+view `fovy` fixes the focal length: fy = (H/2) / tan(fovy/2) = fx. The principal point is the
+image centre, (W-1)/2, (H-1)/2 in OpenCV's pixel-centre convention. Poses are read from the
+compiled model relative to the body "car", whose frame is the vehicle ground frame (origin on
+the ground under the middle of the wheelbase, x forward, y left, z up), so the projection here
+and the render always agree.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+
+# Geom groups (see mjcf/car.xml and lanekeep/world.py).
+GROUP_WORLD = 0
+GROUP_MARKING = 1
+GROUP_CAR_BODY = 2
+GROUP_CAR_COLLISION = 3
+GROUP_SHADOW = 5  # translucent shadow geoms: hidden from the segmentation render
+
+
+@dataclass(frozen=True)
+class CameraModel:
+    """Pinhole camera in the vehicle ground frame.
+
+    Attributes:
+        name: MuJoCo camera name.
+        width, height: image size in pixels.
+        fovy_deg: vertical field of view (MuJoCo's convention).
+        position_m: camera centre in the vehicle frame (3,).
+        rotation: camera-to-vehicle rotation, columns = MuJoCo camera axes (right, up, back).
+    """
+
+    name: str
+    width: int
+    height: int
+    fovy_deg: float
+    position_m: np.ndarray
+    rotation: np.ndarray
+
+    @classmethod
+    def from_model(
+        cls, model: mujoco.MjModel, name: str, width: int = 1280, height: int = 720
+    ) -> CameraModel:
+        """Read pose and fovy of camera `name` from a compiled model (car at rest)."""
+        cam = model.camera(name)
+        quat = np.asarray(model.cam_quat[cam.id], dtype=float)
+        rot = np.zeros(9)
+        mujoco.mju_quat2Mat(rot, quat)
+        parent = int(model.cam_bodyid[cam.id])
+        if model.body(parent).name != "car":
+            raise ValueError(f"camera {name!r} is not mounted on the body 'car'")
+        return cls(
+            name=name,
+            width=width,
+            height=height,
+            fovy_deg=float(model.cam_fovy[cam.id]),
+            position_m=np.asarray(model.cam_pos[cam.id], dtype=float).copy(),
+            rotation=rot.reshape(3, 3),
+        )
+
+    # -- intrinsics --------------------------------------------------------------------------
+    @property
+    def focal_px(self) -> float:
+        return (self.height / 2.0) / math.tan(math.radians(self.fovy_deg) / 2.0)
+
+    @property
+    def K(self) -> np.ndarray:  # noqa: N802 - the textbook symbol
+        """3x3 intrinsic matrix in OpenCV's convention (pixel centres at integers)."""
+        f = self.focal_px
+        return np.array(
+            [[f, 0.0, (self.width - 1) / 2.0], [0.0, f, (self.height - 1) / 2.0], [0, 0, 1.0]]
+        )
+
+    @property
+    def fovx_deg(self) -> float:
+        return math.degrees(2.0 * math.atan(self.width / 2.0 / self.focal_px))
+
+    @property
+    def pitch_rad(self) -> float:
+        """Elevation of the optical axis above the vehicle's horizontal plane (+ = up)."""
+        forward = -self.rotation[:, 2]
+        return math.asin(float(np.clip(forward[2], -1.0, 1.0)))
+
+    @property
+    def height_m(self) -> float:
+        return float(self.position_m[2])
+
+    def horizon_row(self) -> float:
+        """Image row of the horizon of a flat ground (the vanishing line)."""
+        return (self.height - 1) / 2.0 + self.focal_px * math.tan(self.pitch_rad)
+
+    # -- projection --------------------------------------------------------------------------
+    def to_opencv_frame(self, points_vehicle: np.ndarray) -> np.ndarray:
+        """Vehicle-frame points (..., 3) to OpenCV camera coordinates (x right, y down, z fwd)."""
+        p = np.asarray(points_vehicle, dtype=float) - self.position_m
+        cam = p @ self.rotation  # = R^T p for each row: MuJoCo camera coordinates
+        return cam * np.array([1.0, -1.0, -1.0])
+
+    def project(self, points_vehicle: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Project vehicle-frame points (..., 3) to pixels (..., 2) and an in-front mask."""
+        cv = self.to_opencv_frame(points_vehicle)
+        z = cv[..., 2]
+        in_front = z > 1e-6
+        safe_z = np.where(in_front, z, 1.0)
+        f = self.focal_px
+        u = f * cv[..., 0] / safe_z + (self.width - 1) / 2.0
+        v = f * cv[..., 1] / safe_z + (self.height - 1) / 2.0
+        return np.stack([u, v], axis=-1), in_front
+
+    def project_ground(self, xy_vehicle: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Project ground points (..., 2) (z = 0) in the vehicle frame to pixels."""
+        xy = np.asarray(xy_vehicle, dtype=float)
+        pts = np.concatenate([xy, np.zeros(xy.shape[:-1] + (1,))], axis=-1)
+        return self.project(pts)
+
+    def pixel_rays(self, pixels: np.ndarray) -> np.ndarray:
+        """Unit-free ray directions (..., 3) in the vehicle frame through pixel centres."""
+        uv = np.asarray(pixels, dtype=float)
+        f = self.focal_px
+        x = (uv[..., 0] - (self.width - 1) / 2.0) / f
+        y = (uv[..., 1] - (self.height - 1) / 2.0) / f
+        cam_mujoco = np.stack([x, -y, -np.ones_like(x)], axis=-1)
+        return cam_mujoco @ self.rotation.T
+
+    def pixels_to_ground(self, pixels: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Intersect pixel rays with the ground plane z = 0: (..., 2) metres and a valid mask."""
+        rays = self.pixel_rays(pixels)
+        dz = rays[..., 2]
+        valid = dz < -1e-9
+        t = np.where(valid, -self.position_m[2] / np.where(valid, dz, -1.0), np.nan)
+        ground = self.position_m[:2] + rays[..., :2] * t[..., None]
+        return ground, valid
+
+
+def front_and_rear(model: mujoco.MjModel, width: int = 1280, height: int = 720) -> dict:
+    """Camera models of both onboard cameras at a given image size."""
+    return {n: CameraModel.from_model(model, n, width, height) for n in ("front", "rear")}
+
+
+@dataclass(frozen=True)
+class RenderSettings:
+    """What the renderer draws; shadows are opt-in because they double the cost on a CPU."""
+
+    width: int = 1280
+    height: int = 720
+    shadows: bool = False
+
+
+class CameraRig:
+    """One reused `mujoco.Renderer` per camera; RGB and segmentation renders.
+
+    The ego car's geoms are hidden (groups 2 and 3) as on AirSim's onboard cameras; the
+    segmentation render also hides the translucent shadow geoms so the marking masks are exact.
+    Call `close()` (or use as a context manager): EGL teardown at interpreter exit is noisy.
+    """
+
+    CAMERA_NAMES = ("front", "rear")
+
+    def __init__(self, model: mujoco.MjModel, settings: RenderSettings | None = None) -> None:
+        self.model = model
+        self.settings = settings or RenderSettings()
+        w, h = self.settings.width, self.settings.height
+        if w > model.vis.global_.offwidth or h > model.vis.global_.offheight:
+            raise ValueError(
+                f"render size {w}x{h} exceeds the model's offscreen buffer "
+                f"{model.vis.global_.offwidth}x{model.vis.global_.offheight}"
+            )
+        self.cameras = {n: CameraModel.from_model(model, n, w, h) for n in self.CAMERA_NAMES}
+        try:
+            self._renderers = {n: mujoco.Renderer(model, height=h, width=w) for n in self.CAMERA_NAMES}
+        except Exception as exc:  # noqa: BLE001 - any GL failure means the same thing to a user
+            raise RuntimeError(
+                f"cannot create an offscreen MuJoCo renderer ({exc}); on a headless machine set "
+                "MUJOCO_GL=egl and install an EGL driver (e.g. Mesa's libegl1)"
+            ) from exc
+        self._rgb_option = mujoco.MjvOption()
+        self._seg_option = mujoco.MjvOption()
+        for option in (self._rgb_option, self._seg_option):
+            option.geomgroup[GROUP_CAR_BODY] = 0
+            option.geomgroup[GROUP_CAR_COLLISION] = 0
+            option.geomgroup[GROUP_SHADOW] = 1
+        self._seg_option.geomgroup[GROUP_SHADOW] = 0
+        self._closed = False
+
+    def render_rgb(self, data: mujoco.MjData, camera: str) -> np.ndarray:
+        """RGB uint8 image (H, W, 3) of one camera."""
+        renderer = self._renderers[camera]
+        renderer.disable_segmentation_rendering()
+        renderer.update_scene(data, camera=camera, scene_option=self._rgb_option)
+        renderer.scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = self.settings.shadows
+        return renderer.render()
+
+    def render_segmentation(self, data: mujoco.MjData, camera: str) -> np.ndarray:
+        """Geom id per pixel (H, W) int32, -1 where no geom (sky)."""
+        renderer = self._renderers[camera]
+        renderer.enable_segmentation_rendering()
+        try:
+            renderer.update_scene(data, camera=camera, scene_option=self._seg_option)
+            seg = renderer.render()
+        finally:
+            renderer.disable_segmentation_rendering()
+        ids = seg[..., 0].astype(np.int32)
+        ids[seg[..., 1] != int(mujoco.mjtObj.mjOBJ_GEOM)] = -1
+        return ids
+
+    def close(self) -> None:
+        if not self._closed:
+            for renderer in self._renderers.values():
+                renderer.close()
+            self._closed = True
+
+    def __enter__(self) -> CameraRig:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
