@@ -1,0 +1,256 @@
+"""Builds the MuJoCo world of a scenario with `mujoco.MjSpec`: the car, road, markings, sky.
+
+The car comes from mjcf/car.xml; everything else is added procedurally:
+  - the road surface: one textured ribbon mesh per road segment (asphalt with grain),
+    gravel shoulders, and a grass ground plane that also carries the tyre contacts;
+  - lane markings: one mesh geom per boundary, road segment and paint brightness, so that the
+    segmentation render gives exact per-boundary masks (`World.marking_boundary[geom_id]`);
+  - lights and a gradient sky.
+Road and markings are visual only (contype 0): the flat ground plane carries the car, since
+MuJoCo collides meshes by their convex hull, which for a curved ribbon is meaningless.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+
+from lanekeep import textures
+from lanekeep.cameras import GROUP_MARKING, GROUP_WORLD
+from lanekeep.road import Road
+from lanekeep.road_mesh import Ribbon, ribbon
+from lanekeep.scenario import Scenario
+from lanekeep.vehicle import Car
+from mjcf import CAR_XML
+
+# Heights of the visual layers above the contact plane (m); 1 cm apart avoids z-fighting with
+# the depth-buffer resolution at 100 m (about 3 mm with znear 0.2 m).
+ROAD_Z_M = 0.01
+MARKING_Z_M = 0.02
+OVERLAY_Z_M = 0.03  # shadows, puddles (conditions)
+
+
+@dataclass(frozen=True)
+class WorldLayout:
+    """Sizes of what lies beside the lanes."""
+
+    shoulder_m: float = 1.5  # asphalt beyond the outer edge line
+    gravel_m: float = 1.2  # gravel strip beyond the asphalt
+    tile_m: float = 4.0  # asphalt texture period
+    texture_px: int = 512
+    paint_brightness_levels: int = 4  # worn paint is quantised into this many materials
+
+
+@dataclass
+class World:
+    """A compiled scenario: MuJoCo model and data, the car, the road, marking ids."""
+
+    scenario: Scenario
+    road: Road
+    model: mujoco.MjModel
+    data: mujoco.MjData
+    car: Car
+    marking_boundary: np.ndarray  # geom id -> boundary index, -1 for non-marking geoms
+
+    def reset(self) -> None:
+        """Put the car at the scenario's start pose and speed, everything else at rest."""
+        mujoco.mj_resetData(self.model, self.data)
+        x, y, yaw = self.scenario.start_pose(self.road)
+        self.car.place(x, y, yaw, self.scenario.start.speed_mps)
+        self.car.apply(0.0, 0.0)
+
+    def marking_mask(self, segmentation: np.ndarray, boundary: int | None = None) -> np.ndarray:
+        """Boolean mask of marking pixels (of one boundary, or of any) in a geom-id image."""
+        lookup = np.append(self.marking_boundary, -1)  # index -1 (sky) maps to -1
+        boundaries = lookup[segmentation]
+        return boundaries >= 0 if boundary is None else boundaries == boundary
+
+
+def _add_texture(spec: mujoco.MjSpec, name: str, rgb: np.ndarray) -> None:
+    tex = spec.add_texture(
+        name=name,
+        type=mujoco.mjtTexture.mjTEXTURE_2D,
+        width=rgb.shape[1],
+        height=rgb.shape[0],
+        nchannel=3,
+    )
+    tex.data = np.ascontiguousarray(rgb).tobytes()
+
+
+def _add_material(spec: mujoco.MjSpec, name: str, texture: str | None, **attrs) -> None:
+    mat = spec.add_material(name=name, **attrs)
+    if texture is not None:
+        mat.textures[mujoco.mjtTextureRole.mjTEXROLE_RGB] = texture
+
+
+def _add_mesh_geom(
+    spec: mujoco.MjSpec, name: str, mesh: Ribbon, material: str, group: int
+) -> None:
+    spec.add_mesh(
+        name=name,
+        uservert=mesh.vertices.astype(np.float32).ravel().tolist(),
+        userface=mesh.faces.ravel().tolist(),
+        usertexcoord=mesh.texcoords.astype(np.float32).ravel().tolist(),
+        inertia=mujoco.mjtMeshInertia.mjMESH_INERTIA_SHELL,
+    )
+    spec.worldbody.add_geom(
+        name=name,
+        type=mujoco.mjtGeom.mjGEOM_MESH,
+        meshname=name,
+        material=material,
+        contype=0,
+        conaffinity=0,
+        group=group,
+    )
+
+
+def _add_environment(spec: mujoco.MjSpec, road: Road, scenario: Scenario) -> None:
+    """Sky, sun, headlight, clip planes, ground plane."""
+    spec.stat.extent = 100.0
+    spec.stat.center = [0.0, 0.0, 0.0]
+    spec.visual.map.znear = 0.002  # x extent = 0.2 m
+    spec.visual.map.zfar = 10.0  # x extent = 1 km
+    spec.visual.quality.shadowsize = 2048
+    spec.visual.quality.offsamples = 4
+    spec.visual.headlight.ambient = [0.35, 0.35, 0.35]
+    spec.visual.headlight.diffuse = [0.25, 0.25, 0.25]
+    spec.visual.headlight.specular = [0.0, 0.0, 0.0]
+    spec.add_texture(
+        name="sky",
+        type=mujoco.mjtTexture.mjTEXTURE_SKYBOX,
+        builtin=mujoco.mjtBuiltin.mjBUILTIN_GRADIENT,
+        rgb1=[0.45, 0.62, 0.88],
+        rgb2=[0.88, 0.92, 0.97],
+        width=512,
+        height=512,
+    )
+    spec.worldbody.add_light(
+        name="sun",
+        type=mujoco.mjtLightType.mjLIGHT_DIRECTIONAL,
+        pos=[0.0, 0.0, 100.0],
+        dir=[0.35, 0.25, -1.0],
+        diffuse=[0.75, 0.75, 0.72],
+        ambient=[0.15, 0.15, 0.15],
+        specular=[0.1, 0.1, 0.1],
+        castshadow=scenario.camera.shadows,
+    )
+    # Ground plane around the whole road; it carries the tyre contacts.
+    ends = road.position(np.linspace(0.0, road.length_m, 64))
+    centre = ends.mean(axis=0)
+    half = float(np.max(np.abs(ends - centre))) + 200.0
+    spec.worldbody.add_geom(
+        name="ground",
+        type=mujoco.mjtGeom.mjGEOM_PLANE,
+        pos=[float(centre[0]), float(centre[1]), 0.0],
+        size=[half, half, 0.1],
+        material="grass",
+        condim=3,
+        friction=[1.0, 0.005, 0.0001],
+        group=GROUP_WORLD,
+    )
+
+
+def _add_road_surface(spec: mujoco.MjSpec, road: Road, layout: WorldLayout) -> None:
+    """Asphalt and gravel ribbons, one mesh per road segment for each."""
+    edge_right, edge_left = road.boundary_r(0), road.boundary_r(road.n_lanes)
+    asphalt_right, asphalt_left = edge_right - layout.shoulder_m, edge_left + layout.shoulder_m
+    for i, (s0, s1) in enumerate(road.segment_bounds()):
+        asphalt = ribbon(road, s0, s1, asphalt_right, asphalt_left, ROAD_Z_M, layout.tile_m)
+        _add_mesh_geom(spec, f"road_{i}", asphalt, "asphalt", GROUP_WORLD)
+        gravel = Ribbon.concatenate(
+            [
+                ribbon(road, s0, s1, asphalt_right - layout.gravel_m, asphalt_right, ROAD_Z_M,
+                       layout.tile_m),
+                ribbon(road, s0, s1, asphalt_left, asphalt_left + layout.gravel_m, ROAD_Z_M,
+                       layout.tile_m),
+            ]
+        )
+        _add_mesh_geom(spec, f"shoulder_{i}", gravel, "gravel", GROUP_WORLD)
+
+
+def _add_markings(
+    spec: mujoco.MjSpec, road: Road, layout: WorldLayout
+) -> dict[str, int]:
+    """Marking meshes grouped by (boundary, segment, brightness level); name -> boundary."""
+    styles = road.markings
+    groups: dict[tuple[int, int, int], list[Ribbon]] = {}
+    bounds = road.segment_bounds()
+    starts = np.array([b[0] for b in bounds])
+    levels = layout.paint_brightness_levels
+    for piece in road.marking_pieces():
+        segment = int(np.searchsorted(starts, piece.s_start_m, side="right") - 1)
+        level = int(np.clip(round(piece.brightness * (levels - 1)), 0, levels - 1))
+        half = piece.width_m / 2.0
+        strip = ribbon(road, piece.s_start_m, piece.s_end_m, piece.r_m - half, piece.r_m + half,
+                       MARKING_Z_M, tile_m=1.0, max_step_m=1.0)
+        groups.setdefault((piece.boundary, segment, level), []).append(strip)
+    names: dict[str, int] = {}
+    for (boundary, segment, level), strips in sorted(groups.items()):
+        colour = np.asarray(styles[boundary].colour)
+        brightness = 0.35 + 0.65 * level / max(levels - 1, 1)
+        material = f"paint_b{boundary}_l{level}"
+        if material not in {m.name for m in spec.materials}:
+            _add_material(
+                spec, material, "paint",
+                rgba=[*(colour * brightness), 1.0], specular=0.2, shininess=0.3,
+            )
+        name = f"marking_b{boundary}_s{segment}_l{level}"
+        _add_mesh_geom(spec, name, Ribbon.concatenate(strips), material, GROUP_MARKING)
+        names[name] = boundary
+    return names
+
+
+def build_spec(
+    scenario: Scenario, road: Road, layout: WorldLayout | None = None
+) -> tuple[mujoco.MjSpec, dict[str, int]]:
+    """The scenario's MjSpec and the marking geom names with their boundary index."""
+    layout = layout or WorldLayout()
+    spec = mujoco.MjSpec.from_file(str(CAR_XML))
+    spec.modelname = f"lanekeep_{scenario.name}"
+    spec.visual.global_.offwidth = max(scenario.camera.width, 1280)
+    spec.visual.global_.offheight = max(scenario.camera.height, 720)
+    rng = np.random.default_rng(scenario.seed)
+    _add_texture(spec, "asphalt", textures.asphalt(rng, layout.texture_px))
+    _add_texture(spec, "gravel", textures.gravel(rng))
+    _add_texture(spec, "grass", textures.grass(rng))
+    _add_texture(spec, "paint", textures.paint(rng))
+    _add_material(spec, "asphalt", "asphalt", specular=0.05, shininess=0.1)
+    _add_material(spec, "gravel", "gravel", specular=0.0)
+    _add_material(spec, "grass", "grass", texrepeat=[150.0, 150.0], specular=0.0)
+    _add_environment(spec, road, scenario)
+    _add_road_surface(spec, road, layout)
+    marking_names = _add_markings(spec, road, layout)
+    return spec, marking_names
+
+
+def build(scenario: Scenario, layout: WorldLayout | None = None) -> World:
+    """Compile a scenario into a ready-to-step World with the car at its start pose."""
+    road = scenario.build_road()
+    spec, marking_names = build_spec(scenario, road, layout)
+    model = spec.compile()
+    timestep = model.opt.timestep
+    ratio = scenario.control_period_s / timestep
+    if abs(ratio - round(ratio)) > 1e-9 or round(ratio) < 1:
+        raise ValueError(
+            f"control_period_s = {scenario.control_period_s} is not an integer multiple of the "
+            f"physics timestep {timestep} s"
+        )
+    marking_boundary = np.full(model.ngeom, -1, dtype=np.int32)
+    for name, boundary in marking_names.items():
+        marking_boundary[model.geom(name).id] = boundary
+    data = mujoco.MjData(model)
+    world = World(scenario, road, model, data, Car(model, data), marking_boundary)
+    world.reset()
+    return world
+
+
+def physics_steps_per_control(world: World) -> int:
+    """Physics steps in one control period (validated integer in `build`)."""
+    return int(round(world.scenario.control_period_s / world.model.opt.timestep))
+
+
+def yaw_to_quat(yaw: float) -> list[float]:
+    return [math.cos(yaw / 2.0), 0.0, 0.0, math.sin(yaw / 2.0)]
