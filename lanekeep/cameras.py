@@ -2,16 +2,17 @@
 
 MuJoCo cameras look along their local -z with +y up and square pixels; the vertical field of
 view `fovy` fixes the focal length: fy = (H/2) / tan(fovy/2) = fx. The principal point is the
-image centre, (W-1)/2, (H-1)/2 in OpenCV's pixel-centre convention. Poses are read from the
-compiled model relative to the body "car", whose frame is the vehicle ground frame (origin on
-the ground under the middle of the wheelbase, x forward, y left, z up), so the projection here
-and the render always agree.
+image centre, (W-1)/2, (H-1)/2 in OpenCV's pixel-centre convention. Real cameras (for
+`lanekeep detect`) are built from calibrated intrinsics and a mounting height and pitch.
+Simulated cameras' poses are read from the compiled model relative to the body "car", whose
+frame is the vehicle ground frame (origin on the ground under the middle of the wheelbase,
+x forward, y left, z up), so the projection here and the render always agree.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import mujoco
 import numpy as np
@@ -26,12 +27,12 @@ GROUP_SHADOW = 5  # translucent shadow geoms: hidden from the segmentation rende
 
 @dataclass(frozen=True)
 class CameraModel:
-    """Pinhole camera in the vehicle ground frame.
+    """Pinhole camera in the vehicle ground frame (OpenCV intrinsics, pixel centres at integers).
 
     Attributes:
-        name: MuJoCo camera name.
+        name: camera name (the MuJoCo camera for simulated ones).
         width, height: image size in pixels.
-        fovy_deg: vertical field of view (MuJoCo's convention).
+        fx, fy, cx, cy: intrinsics in pixels.
         position_m: camera centre in the vehicle frame (3,).
         rotation: camera-to-vehicle rotation, columns = MuJoCo camera axes (right, up, back).
     """
@@ -39,7 +40,10 @@ class CameraModel:
     name: str
     width: int
     height: int
-    fovy_deg: float
+    fx: float
+    fy: float
+    cx: float
+    cy: float
     position_m: np.ndarray
     rotation: np.ndarray
 
@@ -55,31 +59,65 @@ class CameraModel:
         parent = int(model.cam_bodyid[cam.id])
         if model.body(parent).name != "car":
             raise ValueError(f"camera {name!r} is not mounted on the body 'car'")
+        focal = (height / 2.0) / math.tan(math.radians(float(model.cam_fovy[cam.id])) / 2.0)
         return cls(
             name=name,
             width=width,
             height=height,
-            fovy_deg=float(model.cam_fovy[cam.id]),
+            fx=focal,
+            fy=focal,
+            cx=(width - 1) / 2.0,
+            cy=(height - 1) / 2.0,
             position_m=np.asarray(model.cam_pos[cam.id], dtype=float).copy(),
             rotation=rot.reshape(3, 3),
         )
 
+    @classmethod
+    def from_mounting(
+        cls,
+        name: str,
+        K: np.ndarray,  # noqa: N803 - the textbook symbol
+        width: int,
+        height: int,
+        height_m: float,
+        pitch_rad: float,
+        x_m: float = 0.0,
+        yaw_rad: float = 0.0,
+    ) -> CameraModel:
+        """A camera from intrinsics and mounting (height, pitch + = up, yaw 0 = forward)."""
+        cp, sp, cyaw, syaw = math.cos(pitch_rad), math.sin(pitch_rad), math.cos(yaw_rad), math.sin(
+            yaw_rad
+        )
+        forward = np.array([cp * cyaw, cp * syaw, sp])
+        right = np.array([syaw, -cyaw, 0.0])
+        up = np.cross(-forward, right)
+        rotation = np.stack([right, up, -forward], axis=1)
+        K = np.asarray(K, dtype=float)  # noqa: N806
+        return cls(
+            name=name,
+            width=int(width),
+            height=int(height),
+            fx=float(K[0, 0]),
+            fy=float(K[1, 1]),
+            cx=float(K[0, 2]),
+            cy=float(K[1, 2]),
+            position_m=np.array([x_m, 0.0, height_m]),
+            rotation=rotation,
+        )
+
     # -- intrinsics --------------------------------------------------------------------------
     @property
-    def focal_px(self) -> float:
-        return (self.height / 2.0) / math.tan(math.radians(self.fovy_deg) / 2.0)
+    def K(self) -> np.ndarray:  # noqa: N802 - the textbook symbol
+        """3x3 intrinsic matrix."""
+        return np.array([[self.fx, 0.0, self.cx], [0.0, self.fy, self.cy], [0.0, 0.0, 1.0]])
 
     @property
-    def K(self) -> np.ndarray:  # noqa: N802 - the textbook symbol
-        """3x3 intrinsic matrix in OpenCV's convention (pixel centres at integers)."""
-        f = self.focal_px
-        return np.array(
-            [[f, 0.0, (self.width - 1) / 2.0], [0.0, f, (self.height - 1) / 2.0], [0, 0, 1.0]]
-        )
+    def fovy_deg(self) -> float:
+        return math.degrees(2.0 * math.atan(self.height / 2.0 / self.fy))
 
     @property
     def fovx_deg(self) -> float:
-        return math.degrees(2.0 * math.atan(self.width / 2.0 / self.focal_px))
+        return math.degrees(2.0 * math.atan(self.width / 2.0 / self.fx))
 
     @property
     def pitch_rad(self) -> float:
@@ -91,9 +129,22 @@ class CameraModel:
     def height_m(self) -> float:
         return float(self.position_m[2])
 
+    def scaled(self, width: int, height: int) -> CameraModel:
+        """The same camera rendering at another image size (intrinsics scale with it)."""
+        sx, sy = width / self.width, height / self.height
+        return replace(
+            self,
+            width=width,
+            height=height,
+            fx=self.fx * sx,
+            fy=self.fy * sy,
+            cx=(self.cx + 0.5) * sx - 0.5,
+            cy=(self.cy + 0.5) * sy - 0.5,
+        )
+
     def horizon_row(self) -> float:
-        """Image row of the horizon of a flat ground (the vanishing line)."""
-        return (self.height - 1) / 2.0 + self.focal_px * math.tan(self.pitch_rad)
+        """Image row of the horizon of a flat ground (the vanishing line), at the centre column."""
+        return self.cy + self.fy * math.tan(self.pitch_rad)
 
     # -- projection --------------------------------------------------------------------------
     def to_opencv_frame(self, points_vehicle: np.ndarray) -> np.ndarray:
@@ -108,9 +159,8 @@ class CameraModel:
         z = cv[..., 2]
         in_front = z > 1e-6
         safe_z = np.where(in_front, z, 1.0)
-        f = self.focal_px
-        u = f * cv[..., 0] / safe_z + (self.width - 1) / 2.0
-        v = f * cv[..., 1] / safe_z + (self.height - 1) / 2.0
+        u = self.fx * cv[..., 0] / safe_z + self.cx
+        v = self.fy * cv[..., 1] / safe_z + self.cy
         return np.stack([u, v], axis=-1), in_front
 
     def project_ground(self, xy_vehicle: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -122,9 +172,8 @@ class CameraModel:
     def pixel_rays(self, pixels: np.ndarray) -> np.ndarray:
         """Unit-free ray directions (..., 3) in the vehicle frame through pixel centres."""
         uv = np.asarray(pixels, dtype=float)
-        f = self.focal_px
-        x = (uv[..., 0] - (self.width - 1) / 2.0) / f
-        y = (uv[..., 1] - (self.height - 1) / 2.0) / f
+        x = (uv[..., 0] - self.cx) / self.fx
+        y = (uv[..., 1] - self.cy) / self.fy
         cam_mujoco = np.stack([x, -y, -np.ones_like(x)], axis=-1)
         return cam_mujoco @ self.rotation.T
 
@@ -173,7 +222,9 @@ class CameraRig:
             )
         self.cameras = {n: CameraModel.from_model(model, n, w, h) for n in self.CAMERA_NAMES}
         try:
-            self._renderers = {n: mujoco.Renderer(model, height=h, width=w) for n in self.CAMERA_NAMES}
+            self._renderers = {
+                n: mujoco.Renderer(model, height=h, width=w) for n in self.CAMERA_NAMES
+            }
         except Exception as exc:  # noqa: BLE001 - any GL failure means the same thing to a user
             raise RuntimeError(
                 f"cannot create an offscreen MuJoCo renderer ({exc}); on a headless machine set "

@@ -99,7 +99,7 @@ class Car:
         return float(self.velocity_body()[0])
 
     def yaw_rate_rps(self) -> float:
-        """Yaw rate (rad/s, + = turning left). The free joint's angular velocity is in the body frame."""
+        """Yaw rate (rad/s, + = left); the free joint's angular velocity is in the body frame."""
         return float(self.data.qvel[self._qvel_adr + 5])
 
     def steer_angle_rad(self) -> float:
