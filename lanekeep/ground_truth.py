@@ -1,0 +1,112 @@
+"""Ground truth of the lane from the road geometry, in the vehicle ground frame.
+
+The vehicle ground frame has its origin on the ground under the vehicle reference point given by
+(x, y, yaw), x forward and y left. A line of the road at constant Frenet r is cut by the vertical
+plane x_vehicle = x at one point for each x (while the car points along the road); that point is
+found exactly by Newton's method on the road geometry, so offsets are exact and the fitted
+polynomials are least-squares fits of exact points.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from lanekeep.road import Road
+
+FIT_STEP_M = 0.5  # spacing of the points a boundary polynomial is fitted to
+
+
+@dataclass(frozen=True)
+class LaneTruth:
+    """The true lane as a detector should report it (same conventions as LaneEstimate)."""
+
+    offset_m: float  # car's lateral offset from the lane centre at x = lookahead_m, + = car left
+    heading_error_rad: float  # car yaw minus road heading at the car's s, + = car points left
+    lookahead_m: float
+    left: np.ndarray  # [c0, c1, c2] of y(x) = c0 + c1 x + c2 x^2, vehicle ground frame
+    right: np.ndarray
+    center: np.ndarray
+    s_m: float  # car's Frenet s
+    r_m: float  # car's Frenet r
+
+
+def _wrap(angle: float) -> float:
+    return (angle + math.pi) % (2.0 * math.pi) - math.pi
+
+
+def line_points(road: Road, x: float, y: float, yaw: float, r_line: float, xs) -> np.ndarray:
+    """Points (N, 2) of the road line at Frenet r = `r_line` at vehicle-frame forward distances xs.
+
+    Solves g(s) = (P(s, r_line) - p) . f - x = 0 for s by Newton's method, with
+    g'(s) = (1 - kappa r_line) cos(theta(s) - yaw).
+    """
+    xs = np.atleast_1d(np.asarray(xs, dtype=float))
+    p = np.array([x, y], dtype=float)
+    f = np.array([math.cos(yaw), math.sin(yaw)])
+    left = np.array([-f[1], f[0]])
+    s_car, _ = road.local_coordinates(p)
+    s = s_car + xs
+    for _ in range(30):
+        d = road.position(s, r_line) - p
+        g = d @ f - xs
+        slope = (1.0 - road.curvature_at(s) * r_line) * np.cos(road.heading_at(s) - yaw)
+        ds = g / np.maximum(slope, 0.1)
+        s = s - ds
+        if np.all(np.abs(ds) < 1e-10):
+            break
+    d = road.position(s, r_line) - p
+    return np.stack([d @ f, d @ left], axis=-1)
+
+
+def lane_boundary_points(
+    road: Road, x: float, y: float, yaw: float, boundary: int, xs
+) -> np.ndarray:
+    """Points (N, 2) of lane boundary `boundary` (0 = rightmost) in the vehicle frame at xs."""
+    return line_points(road, x, y, yaw, road.boundary_r(boundary), xs)
+
+
+def _fit(points: np.ndarray) -> np.ndarray:
+    return np.polyfit(points[:, 0], points[:, 1], 2)[::-1].copy()
+
+
+def lane_truth(
+    road: Road,
+    x: float,
+    y: float,
+    yaw: float,
+    lane: int,
+    lookahead_m: float = 0.0,
+    fit_range_m: tuple[float, float] = (0.0, 30.0),
+) -> LaneTruth:
+    """The true lane `lane` (0 = rightmost) seen from the car pose (x, y, yaw) in world coordinates.
+
+    Args:
+      road: the road.
+      x, y, yaw: vehicle reference point (m) and yaw (rad) in the world frame.
+      lane: lane index.
+      lookahead_m: forward distance at which the offset is measured (negative = behind).
+      fit_range_m: (x_min, x_max) of the polynomial fits; (-15, 0) for the rear camera.
+
+    The offset is exact: -y of the lane centre line at x = lookahead_m (equal to
+    -center(lookahead_m) up to the fit residual).
+    """
+    lo, hi = fit_range_m
+    if not hi > lo:
+        raise ValueError(f"fit_range_m must be increasing, got {fit_range_m}")
+    s_car, r_car = road.local_coordinates(np.array([x, y], dtype=float))
+    xs = np.linspace(lo, hi, max(3, math.ceil((hi - lo) / FIT_STEP_M) + 1))
+    centre_r = road.lane_center_r(lane)
+    offset = -float(line_points(road, x, y, yaw, centre_r, [lookahead_m])[0, 1])
+    return LaneTruth(
+        offset_m=offset,
+        heading_error_rad=_wrap(yaw - road.heading_at(s_car)),
+        lookahead_m=float(lookahead_m),
+        left=_fit(lane_boundary_points(road, x, y, yaw, lane + 1, xs)),
+        right=_fit(lane_boundary_points(road, x, y, yaw, lane, xs)),
+        center=_fit(line_points(road, x, y, yaw, centre_r, xs)),
+        s_m=float(s_car),
+        r_m=float(r_car),
+    )

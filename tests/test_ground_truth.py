@@ -1,0 +1,106 @@
+"""Ground truth from the road: offsets, heading error, boundary polynomials."""
+
+import math
+
+import numpy as np
+import pytest
+
+from lanekeep.ground_truth import lane_boundary_points, lane_truth
+from lanekeep.road import Road, SegmentSpec
+
+R_CURVE = 150.0
+
+
+@pytest.fixture(scope="module")
+def straight():
+    return Road([SegmentSpec("straight", 300.0)], start_heading_rad=0.7, start_xy=(3.0, 4.0))
+
+
+@pytest.fixture(scope="module")
+def curve():
+    return Road([SegmentSpec("straight", 50.0), SegmentSpec("arc", 400.0, 1.0 / R_CURVE)])
+
+
+def _pose(road, s, r, dyaw=0.0):
+    x, y = road.position(s, r)
+    return float(x), float(y), road.heading_at(s) + dyaw
+
+
+@pytest.mark.parametrize("lookahead", [0.0, 10.0, -8.0])
+def test_centred_and_shifted(straight, curve, lookahead):
+    for lane in (0, 1):
+        c = straight.lane_center_r(lane)
+        truth = lane_truth(straight, *_pose(straight, 200.0, c), lane, lookahead)
+        assert truth.offset_m == pytest.approx(0.0, abs=1e-9)
+        assert truth.heading_error_rad == pytest.approx(0.0, abs=1e-12)
+        assert truth.s_m == pytest.approx(200.0) and truth.r_m == pytest.approx(c)
+        # On the left curve the centre line (radius R - c) bends left by R_c - sqrt(R_c^2 - L^2).
+        c = curve.lane_center_r(lane)
+        truth = lane_truth(curve, *_pose(curve, 200.0, c), lane, lookahead)
+        r_c = R_CURVE - c
+        expected = -(r_c - math.sqrt(r_c**2 - lookahead**2))
+        assert truth.offset_m == pytest.approx(expected, abs=1e-9)
+        assert truth.heading_error_rad == pytest.approx(0.0, abs=1e-12)
+    for d in (0.4, -0.7):
+        truth = lane_truth(straight, *_pose(straight, 200.0, straight.lane_center_r(0) + d), 0)
+        assert truth.offset_m == pytest.approx(d, abs=1e-9)
+        assert truth.center[0] == pytest.approx(-d, abs=1e-9)
+
+
+def test_offset_at_zero_lookahead_on_curve_is_frenet(curve):
+    """For a car aligned with the road, offset(L=0) = r_car - lane centre r, also on a curve."""
+    for lane, d in ((0, 0.5), (1, -0.3)):
+        truth = lane_truth(curve, *_pose(curve, 250.0, curve.lane_center_r(lane) + d), lane, 0.0)
+        assert truth.offset_m == pytest.approx(d, abs=1e-9)
+        assert truth.r_m - curve.lane_center_r(lane) == pytest.approx(d, abs=1e-9)
+        # Ahead on a left curve the lane bends to the left, so the car is further right of it.
+        ahead = lane_truth(curve, *_pose(curve, 250.0, curve.lane_center_r(lane) + d), lane, 20.0)
+        assert ahead.offset_m < d - 1.0
+
+
+def test_heading_error_sign(straight):
+    pose = _pose(straight, 100.0, straight.lane_center_r(0), dyaw=0.05)
+    truth = lane_truth(straight, *pose, 0, lookahead_m=10.0)
+    assert truth.heading_error_rad == pytest.approx(0.05)
+    # Pointing left, the lane ahead appears to the right and turns clockwise in the image frame.
+    assert truth.center[1] == pytest.approx(-math.tan(0.05), rel=1e-6)
+    assert truth.offset_m == pytest.approx(10.0 * math.tan(0.05), abs=1e-9)
+
+
+def test_curve_polynomials(curve):
+    s, lane = 250.0, 0
+    truth = lane_truth(curve, *_pose(curve, s, curve.lane_center_r(lane)), lane)
+    kappa_centre = 1.0 / (R_CURVE - curve.lane_center_r(lane))  # lane centre line curvature
+    assert truth.center[2] == pytest.approx(kappa_centre / 2.0, rel=0.05)
+    assert truth.center[2] == pytest.approx(1.0 / (2.0 * R_CURVE), rel=0.05)
+    assert truth.left[0] - truth.right[0] == pytest.approx(curve.lane_width_m, abs=0.01)
+    xs = np.linspace(0.0, 30.0, 7)
+    width = np.polyval(truth.left[::-1], xs) - np.polyval(truth.right[::-1], xs)
+    # Measured along y the width grows as 1 / cos of the lane's direction in the vehicle frame.
+    slope = np.polyval(np.polyder(truth.center[::-1]), xs)
+    np.testing.assert_allclose(width * np.cos(np.arctan(slope)), curve.lane_width_m, atol=0.02)
+    # The fits pass within 2 cm of the exact boundary points over the fit range.
+    exact = lane_boundary_points(curve, *_pose(curve, s, curve.lane_center_r(lane)), lane + 1, xs)
+    np.testing.assert_allclose(np.polyval(truth.left[::-1], xs), exact[:, 1], atol=0.02)
+
+
+def test_boundary_points_lie_on_the_boundary(curve):
+    pose = _pose(curve, 120.0, -1.0, dyaw=-0.08)
+    xs = np.linspace(-15.0, 30.0, 10)
+    pts = lane_boundary_points(curve, *pose, 1, xs)
+    np.testing.assert_allclose(pts[:, 0], xs, atol=1e-9)
+    x, y, yaw = pose
+    world = np.array([x, y]) + pts[:, :1] * [math.cos(yaw), math.sin(yaw)]
+    world += pts[:, 1:] * [-math.sin(yaw), math.cos(yaw)]
+    _, r = curve.local_coordinates(world)
+    np.testing.assert_allclose(r, curve.boundary_r(1), atol=1e-6)
+
+
+def test_rear_fit_range(straight):
+    d = 0.6
+    pose = _pose(straight, 150.0, straight.lane_center_r(0) + d, dyaw=0.02)
+    truth = lane_truth(straight, *pose, 0, lookahead_m=-5.0, fit_range_m=(-15.0, 0.0))
+    assert truth.offset_m == pytest.approx(d / math.cos(0.02) - 5.0 * math.tan(0.02), abs=1e-9)
+    assert truth.right[0] - truth.left[0] == pytest.approx(-straight.lane_width_m / math.cos(0.02))
+    with pytest.raises(ValueError):
+        lane_truth(straight, *pose, 0, fit_range_m=(0.0, 0.0))
