@@ -37,8 +37,12 @@ def _wrap(angle: float) -> float:
     return (angle + math.pi) % (2.0 * math.pi) - math.pi
 
 
-def line_points(road: Road, x: float, y: float, yaw: float, r_line: float, xs) -> np.ndarray:
+def line_points(
+    road: Road, x: float, y: float, yaw: float, r_line: float, xs, s_car: float | None = None
+) -> np.ndarray:
     """Points (N, 2) of the road line at Frenet r = `r_line` at vehicle-frame forward distances xs.
+
+    `s_car` (the car's Frenet s, computed if not given) seeds the search.
 
     Solves g(s) = (P(s, r_line) - p) . f - x = 0 for s by Newton's method, with
     g'(s) = (1 - kappa r_line) cos(theta(s) - yaw).
@@ -47,7 +51,8 @@ def line_points(road: Road, x: float, y: float, yaw: float, r_line: float, xs) -
     p = np.array([x, y], dtype=float)
     f = np.array([math.cos(yaw), math.sin(yaw)])
     left = np.array([-f[1], f[0]])
-    s_car, _ = road.local_coordinates(p)
+    if s_car is None:
+        s_car, _ = road.local_coordinates(p)
     s = s_car + xs
     for _ in range(30):
         d = road.position(s, r_line) - p
@@ -99,14 +104,18 @@ def lane_truth(
     s_car, r_car = road.local_coordinates(np.array([x, y], dtype=float))
     xs = np.linspace(lo, hi, max(3, math.ceil((hi - lo) / FIT_STEP_M) + 1))
     centre_r = road.lane_center_r(lane)
-    offset = -float(line_points(road, x, y, yaw, centre_r, [lookahead_m])[0, 1])
+
+    def points(r_line: float, at) -> np.ndarray:
+        return line_points(road, x, y, yaw, r_line, at, s_car=s_car)
+
+    offset = -float(points(centre_r, [lookahead_m])[0, 1])
     return LaneTruth(
         offset_m=offset,
         heading_error_rad=_wrap(yaw - road.heading_at(s_car)),
         lookahead_m=float(lookahead_m),
-        left=_fit(lane_boundary_points(road, x, y, yaw, lane + 1, xs)),
-        right=_fit(lane_boundary_points(road, x, y, yaw, lane, xs)),
-        center=_fit(line_points(road, x, y, yaw, centre_r, xs)),
+        left=_fit(points(road.boundary_r(lane + 1), xs)),
+        right=_fit(points(road.boundary_r(lane), xs)),
+        center=_fit(points(centre_r, xs)),
         s_m=float(s_car),
         r_m=float(r_car),
     )
