@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import tomllib
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
@@ -22,11 +23,6 @@ from pathlib import Path
 from lanekeep.config_io import ConfigError, InvalidValue, from_dict
 from lanekeep.markings import MarkingStyle
 from lanekeep.road import Road, SegmentSpec
-
-try:
-    import tomllib
-except ModuleNotFoundError:  # Python 3.10
-    import tomli as tomllib
 
 TIMES_OF_DAY = ("day", "dawn", "dusk", "night")
 SHADOW_KINDS = ("buildings", "trees", "poles", "overpass")

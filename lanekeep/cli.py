@@ -1,0 +1,94 @@
+"""The `lanekeep` command line: thin argument parsing over library calls; main() returns a code.
+
+Exit codes: 0 success, 1 a failure while running, 2 bad input (arguments, files, scenarios).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+
+import lanekeep  # noqa: F401 - sets MUJOCO_GL before mujoco is imported
+from lanekeep.config_io import ConfigError
+
+EXIT_OK, EXIT_FAILURE, EXIT_BAD_INPUT = 0, 1, 2
+
+
+def _cmd_scenarios(args: argparse.Namespace) -> int:
+    from lanekeep.scenario import load_scenario, shipped_scenarios
+
+    names = shipped_scenarios()
+    width = max(len(n) for n in names)
+    for name in names:
+        print(f"{name:<{width}}  {load_scenario(name).description}")
+    return EXIT_OK
+
+
+def _cmd_render(args: argparse.Namespace) -> int:
+    from lanekeep.render import render_snapshot
+    from lanekeep.scenario import load_scenario
+
+    scenario = load_scenario(args.scenario)
+    written = render_snapshot(scenario, Path(args.out), at_s=args.at, offset_m=args.offset,
+                              heading_deg=args.heading)
+    for path in written:
+        print(path)
+    return EXIT_OK
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="lanekeep", description="Headless closed-loop lane-keeping testbed on MuJoCo."
+    )
+    sub = parser.add_subparsers(dest="command", required=True)
+
+    p = sub.add_parser("scenarios", help="list the shipped scenarios")
+    p.set_defaults(func=_cmd_scenarios)
+
+    p = sub.add_parser("render", help="render front/rear RGB and segmentation PNGs of a scenario")
+    p.add_argument("scenario", help="shipped scenario name or path to a .toml file")
+    p.add_argument("--at", type=float, default=None, help="arc length s (m); default: start")
+    p.add_argument("--offset", type=float, default=0.0, help="lateral offset from lane centre (m)")
+    p.add_argument("--heading", type=float, default=0.0, help="heading error (deg, + = left)")
+    p.add_argument("--out", default="out/render", help="output folder")
+    p.set_defaults(func=_cmd_render)
+
+    for module in _optional_command_modules():
+        module.register(sub)
+    return parser
+
+
+def _optional_command_modules() -> list:
+    """Subcommands that live in their own modules (detect, calibrate, run, bench, perf)."""
+    import importlib
+
+    modules = []
+    for name in ("lanekeep.cli_detect", "lanekeep.cli_episode"):
+        try:
+            modules.append(importlib.import_module(name))
+        except ModuleNotFoundError as err:
+            if err.name != name:
+                raise
+    return modules
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return int(args.func(args))
+    except ConfigError as err:
+        print(f"lanekeep: error: {err}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except FileNotFoundError as err:
+        print(f"lanekeep: error: {err}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except RuntimeError as err:
+        print(f"lanekeep: error: {err}", file=sys.stderr)
+        return EXIT_FAILURE
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,60 @@
+"""Snapshots of a scenario: front/rear RGB and colourised segmentation PNGs at a road pose."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from lanekeep.cameras import CameraRig, RenderSettings
+from lanekeep.scenario import Scenario
+from lanekeep.world import World, build
+
+
+def place_on_road(world: World, s_m: float, offset_m: float = 0.0, heading_deg: float = 0.0,
+                  speed_mps: float = 0.0) -> tuple[float, float, float]:
+    """Put the car in the ego lane at arc length s with an offset and heading error."""
+    road, lane = world.road, world.scenario.road.ego_lane
+    x, y = road.position(s_m, road.lane_center_r(lane) + offset_m)
+    yaw = float(road.heading_at(s_m)) + math.radians(heading_deg)
+    world.car.place(float(x), float(y), yaw, speed_mps)
+    return float(x), float(y), yaw
+
+
+def colourise_segmentation(world: World, geom_ids: np.ndarray) -> np.ndarray:
+    """RGB image: markings coloured per boundary, other geoms in grey shades, sky black."""
+    palette = np.array(
+        [[255, 80, 80], [80, 255, 80], [80, 160, 255], [255, 220, 60], [220, 80, 255]], np.uint8
+    )
+    out = np.zeros(geom_ids.shape + (3,), np.uint8)
+    known = geom_ids >= 0
+    out[known] = (40 + (geom_ids[known] * 37) % 120)[:, None].astype(np.uint8)
+    boundaries = np.append(world.marking_boundary, -1)[geom_ids]
+    marked = boundaries >= 0
+    out[marked] = palette[boundaries[marked] % len(palette)]
+    return out
+
+
+def render_snapshot(scenario: Scenario, out_dir: Path, at_s: float | None = None,
+                    offset_m: float = 0.0, heading_deg: float = 0.0) -> list[Path]:
+    """Writes front.png, rear.png, front_seg.png, rear_seg.png; returns their paths."""
+    world = build(scenario)
+    s = scenario.start.s_m if at_s is None else at_s
+    if not 0.0 <= s <= world.road.length_m:
+        raise ValueError(f"--at {s} is outside the road (0..{world.road.length_m:.0f} m)")
+    place_on_road(world, s, offset_m, heading_deg)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    written = []
+    settings = RenderSettings(scenario.camera.width, scenario.camera.height,
+                              scenario.camera.shadows)
+    with CameraRig(world.model, settings) as rig:
+        for cam in rig.CAMERA_NAMES:
+            rgb = rig.render_rgb(world.data, cam)
+            seg = colourise_segmentation(world, rig.render_segmentation(world.data, cam))
+            for name, image in ((f"{cam}.png", rgb), (f"{cam}_seg.png", seg)):
+                path = out_dir / name
+                cv2.imwrite(str(path), cv2.cvtColor(image, cv2.COLOR_RGB2BGR))
+                written.append(path)
+    return written
