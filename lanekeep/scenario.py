@@ -111,6 +111,43 @@ class Conditions:
                 raise InvalidValue(key, f"must be in [0, 1], got {getattr(self, key)}")
 
 
+RESIDUAL_MODES = ("distance_aligned", "one_step_delay")
+OUTPUT_MODES = ("select", "fused")
+CAMERAS = ("front", "rear")
+
+
+@dataclass(frozen=True)
+class EstimationConfig:
+    """Which detectors run, which one is the MMAE reference, and how the output is formed.
+
+    The paper runs two front models and a rear-camera reference; residuals compare the
+    reference with the models one step earlier (eq. 2, "one_step_delay") or, our default,
+    at the same road position ("distance_aligned"). Output: the paper's argmax ("select") or
+    the probability-weighted lane ("fused").
+    """
+
+    front_detectors: tuple[str, ...] = ("hough", "sliding_window")
+    reference_detector: str = "sliding_window"
+    reference_camera: str = "rear"
+    residual_mode: str = "distance_aligned"
+    output: str = "select"
+    offset_lookahead_m: float = 6.0  # where offsets are compared and reported (front)
+    control_lookahead_m: float = 8.0  # where the PID reads the chosen lane
+
+    def __post_init__(self):
+        if not self.front_detectors:
+            raise InvalidValue("front_detectors", "at least one front detector is needed")
+        if self.reference_camera not in CAMERAS:
+            raise InvalidValue("reference_camera", f"must be one of {CAMERAS}")
+        if self.residual_mode not in RESIDUAL_MODES:
+            raise InvalidValue("residual_mode", f"must be one of {RESIDUAL_MODES}")
+        if self.output not in OUTPUT_MODES:
+            raise InvalidValue("output", f"must be one of {OUTPUT_MODES}")
+        for key in ("offset_lookahead_m", "control_lookahead_m"):
+            if not 0.0 <= getattr(self, key) <= 40.0:
+                raise InvalidValue(key, f"must be in [0, 40] m, got {getattr(self, key)}")
+
+
 @dataclass(frozen=True)
 class Scenario:
     name: str
@@ -123,6 +160,7 @@ class Scenario:
     start: StartConfig = field(default_factory=StartConfig)
     camera: CameraConfig = field(default_factory=CameraConfig)
     conditions: Conditions = field(default_factory=Conditions)
+    estimation: EstimationConfig = field(default_factory=EstimationConfig)
     source: str = field(default="", metadata={"toml": False})  # file it was read from
 
     def __post_init__(self):

@@ -1,0 +1,161 @@
+"""`lanekeep run`, `lanekeep bench` and `lanekeep perf`: closed-loop episodes from the CLI."""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import math
+import multiprocessing
+import sys
+import time
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from pathlib import Path
+
+from lanekeep.metrics import EpisodeReport, SourceReport
+
+
+def run_episode(scenario_name: str, seed: int | None = None, seconds: float | None = None,
+                plots_dir: str | None = None, record_path: str | None = None,
+                record_every: int = 1, jpeg_quality: int = 75,
+                progress: bool = False) -> EpisodeReport:
+    """Run one scenario to the end and return its report (optionally plots and a recording)."""
+    import lanekeep  # noqa: F401 - EGL before mujoco
+    from lanekeep.episode import Episode
+    from lanekeep.plots import EpisodeTrace, write_plots
+    from lanekeep.scenario import load_scenario
+
+    scenario = load_scenario(scenario_name)
+    if seed is not None:
+        scenario = dataclasses.replace(scenario, seed=seed)
+    recorder = None
+    if record_path:
+        from lanekeep.record import RerunRecorder
+
+        recorder = RerunRecorder(Path(record_path), scenario, every=record_every,
+                                 jpeg_quality=jpeg_quality)
+    with Episode(scenario, recorder=recorder) as episode:
+        trace = EpisodeTrace(list(episode.front))
+        steps = episode.total_steps if seconds is None else int(round(seconds / episode.dt_s))
+        completed = True
+        try:
+            for i in range(steps):
+                trace.add(episode.step())
+                if progress:
+                    _progress(i + 1, steps, scenario.name)
+        except KeyboardInterrupt:
+            completed = False
+            print("\ninterrupted: writing the partial report", file=sys.stderr)
+        finally:
+            if progress:
+                print(file=sys.stderr)
+        report = episode.report(completed)
+        if plots_dir:
+            write_plots(trace, episode.world.road, Path(plots_dir), scenario.name)
+    return report
+
+
+def _progress(done: int, total: int, label: str) -> None:
+    width = 30
+    filled = int(width * done / max(total, 1))
+    print(f"\r{label:<28} [{'#' * filled}{'.' * (width - filled)}] {done}/{total}",
+          end="", file=sys.stderr, flush=True)
+
+
+def _cmd_run(args: argparse.Namespace) -> int:
+    report = run_episode(args.scenario, args.seed, args.seconds, args.plots, args.record,
+                         args.record_every, args.jpeg_quality, progress=sys.stderr.isatty())
+    print(f"scenario {report.scenario} (seed {report.seed}): {report.duration_s:.1f} s simulated "
+          f"in {report.wall_s:.1f} s")
+    print(report.table())
+    if args.json:
+        Path(args.json).write_text(json.dumps(report.to_dict(), indent=2))
+    return 0 if report.completed else 130
+
+
+def _bench_one(name: str, seed: int | None, seconds: float | None, plots: str | None,
+               record_dir: str | None) -> dict:
+    record = str(Path(record_dir) / f"{name}.rrd") if record_dir else None
+    plots_dir = str(Path(plots) / name) if plots else None
+    return run_episode(name, seed, seconds, plots_dir, record).to_dict()
+
+
+def _report_from_dict(d: dict) -> EpisodeReport:
+    d = dict(d)
+    d["sources"] = {k: SourceReport(**v) for k, v in d["sources"].items()}
+    return EpisodeReport(**d)
+
+
+def _cmd_bench(args: argparse.Namespace) -> int:
+    from lanekeep.scenario import load_scenario, shipped_scenarios
+
+    names = args.scenarios or shipped_scenarios()
+    for name in names:
+        load_scenario(name)  # fail fast on a bad name, before any worker starts
+    if args.record_dir:
+        Path(args.record_dir).mkdir(parents=True, exist_ok=True)
+    start = time.perf_counter()
+    reports: dict[str, EpisodeReport] = {}
+    context = multiprocessing.get_context("spawn")
+    with ProcessPoolExecutor(max_workers=args.workers, mp_context=context) as pool:
+        futures = {pool.submit(_bench_one, n, args.seed, args.seconds, args.plots,
+                               args.record_dir): n for n in names}
+        for done, future in enumerate(as_completed(futures), start=1):
+            reports[futures[future]] = _report_from_dict(future.result())
+            _progress(done, len(names), "bench")
+    print(file=sys.stderr)
+    wall = time.perf_counter() - start
+    for name in names:
+        r = reports[name]
+        print(f"\n== {name} (seed {r.seed}, {r.duration_s:.0f} s, wall {r.wall_s:.0f} s) ==")
+        print(r.table())
+    print("\n" + summary_table([reports[n] for n in names]))
+    print(f"\nbench wall time: {wall:.1f} s for {len(names)} scenarios "
+          f"with {args.workers} workers")
+    if args.json:
+        Path(args.json).write_text(json.dumps({n: reports[n].to_dict() for n in names},
+                                              indent=2))
+    return 0
+
+
+def summary_table(reports: list[EpisodeReport]) -> str:
+    """One line per scenario: fused vs the best single front model, reference, safety."""
+    header = (f"{'scenario':<28}{'fused':>8}{'best model':>18}{'reference':>11}"
+              f"{'car RMS':>9}{'depart':>8}{'switch':>8}")
+    lines = [header, "-" * len(header)]
+    for r in reports:
+        models = {k: v for k, v in r.sources.items() if k not in ("fused", "reference")}
+        best_name, best = min(models.items(),
+                              key=lambda kv: math.inf if math.isnan(kv[1].rmse_cm)
+                              else kv[1].rmse_cm)
+        lines.append(
+            f"{r.scenario:<28}{r.sources['fused'].rmse_cm:>8.1f}"
+            f"{best.rmse_cm:>8.1f} ({best_name[:8]:>8})"
+            f"{r.sources['reference'].rmse_cm:>11.1f}{r.car_rms_cm:>9.1f}"
+            f"{r.lane_departures:>8d}{r.mmae_switches:>8d}"
+        )
+    lines.append("(offset RMSE in cm; fused = MMAE output)")
+    return "\n".join(lines)
+
+
+def register(sub) -> None:
+    p = sub.add_parser("run", help="run one closed-loop episode and print its table")
+    p.add_argument("scenario", help="shipped scenario name or path to a .toml file")
+    p.add_argument("--seed", type=int, default=None, help="override the scenario's seed")
+    p.add_argument("--seconds", type=float, default=None, help="stop after S simulated seconds")
+    p.add_argument("--json", default=None, help="write the report as JSON")
+    p.add_argument("--plots", default=None, help="folder for PNG plots")
+    p.add_argument("--record", default=None, help="write a rerun recording (.rrd)")
+    p.add_argument("--record-every", type=int, default=1, help="record every N-th step")
+    p.add_argument("--jpeg-quality", type=int, default=75, help="JPEG quality of recorded images")
+    p.set_defaults(func=_cmd_run)
+
+    p = sub.add_parser("bench", help="run many scenarios in parallel; paper-style tables")
+    p.add_argument("scenarios", nargs="*", help="scenario names (default: all shipped)")
+    p.add_argument("--workers", type=int, default=2)
+    p.add_argument("--seed", type=int, default=None)
+    p.add_argument("--seconds", type=float, default=None)
+    p.add_argument("--json", default=None)
+    p.add_argument("--plots", default=None, help="folder; one subfolder of PNGs per scenario")
+    p.add_argument("--record-dir", default=None, help="write one .rrd per scenario here")
+    p.set_defaults(func=_cmd_bench)

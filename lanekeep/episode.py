@@ -1,0 +1,289 @@
+"""One closed-loop episode: sense, detect, track, select, control, actuate, score, record.
+
+Each line of `Episode.step` is one call into one module (DESIGN.md's loop). The front
+detectors each feed a Kalman lane tracker; the rear detector is the MMAE's reference (the
+paper's "observer"); the MMAE selects (or fuses) the front models; the PID steers on the chosen
+lane's offset at the control look-ahead; the speed PI holds the target speed.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+
+import mujoco
+import numpy as np
+
+from detectors.base import Detector, LaneEstimate, poly_eval
+from detectors.registry import create_detector
+from estimators.kalman import LaneTracker, TrackerConfig
+from estimators.mmae import MMAE, MMAEConfig
+from lanekeep import world_conditions
+from lanekeep.cameras import CameraRig, RenderSettings
+from lanekeep.conditions import apply as apply_conditions
+from lanekeep.control import SpeedController, SteeringPID
+from lanekeep.ground_truth import lane_truth
+from lanekeep.metrics import EpisodeReport, Metrics
+from lanekeep.record import NullRecorder, Recorder
+from lanekeep.scenario import Scenario
+from lanekeep.world import World, build, physics_steps_per_control
+
+FUSED, REFERENCE = "fused", "reference"
+
+
+@dataclass(frozen=True)
+class StepResult:
+    """Everything one control step produced (what the recorder and the dm_env wrapper see)."""
+
+    index: int
+    time_s: float
+    frames: dict[str, np.ndarray]
+    estimates: dict[str, LaneEstimate]
+    tracked: dict[str, np.ndarray | None]  # centre-line coefficients per front model
+    probabilities: np.ndarray
+    selected: int
+    output_offset_m: float | None
+    output_centre: np.ndarray | None
+    reference_m: float | None
+    reference_repaired: bool
+    steer: float
+    throttle: float
+    truth_offset_m: float
+    truth_centre: np.ndarray
+    pose: tuple[float, float, float]
+    speed_mps: float
+    events: list[str] = field(default_factory=list)
+
+
+class Episode:
+    """A closed-loop run of one scenario; `run()` steps it to the end and returns the report."""
+
+    def __init__(self, scenario: Scenario, recorder: Recorder | None = None,
+                 render_size: tuple[int, int] | None = None) -> None:
+        self.scenario = scenario
+        est = scenario.estimation
+        self.world: World = build(scenario)
+        width, height = render_size or (scenario.camera.width, scenario.camera.height)
+        self.rig = CameraRig(self.world.model, RenderSettings(width, height,
+                                                              scenario.camera.shadows,
+                                                              **self.world.render_flags))
+        self.rng = np.random.default_rng(scenario.seed)
+        self.dt_s = scenario.control_period_s
+        self.substeps = physics_steps_per_control(self.world)
+        self.front: dict[str, Detector] = {
+            name: create_detector(name, self.rig.cameras["front"]) for name in est.front_detectors
+        }
+        self.trackers = {name: LaneTracker(TrackerConfig()) for name in self.front}
+        self.reference: Detector = create_detector(est.reference_detector,
+                                                   self.rig.cameras[est.reference_camera])
+        self.mmae = MMAE(len(self.front), MMAEConfig(residual_mode=est.residual_mode))
+        geometry = self.world.car.geometry
+        self.steering = SteeringPID(self.dt_s, est.control_lookahead_m, geometry.wheelbase_m,
+                                    geometry.max_steer_rad)
+        self.speed = SpeedController(scenario.target_speed_mps, self.dt_s)
+        self.metrics = Metrics(list(self.front) + [FUSED, REFERENCE])
+        self.recorder: Recorder = recorder or NullRecorder()
+        self.index = 0
+        self.detector_errors = 0
+        self._wall_start = time.perf_counter()
+
+    # -- the loop ------------------------------------------------------------------------------
+    def step(self) -> StepResult:
+        events: list[str] = []
+        frames = self._sense()
+        estimates = self._detect(frames, events)
+        tracked = self._track(estimates)
+        selection = self._select(estimates, tracked, events)
+        centre, offset = self._output(tracked, selection)
+        steer, throttle = self._control(centre, offset)
+        self._actuate(steer, throttle)
+        result = self._score(frames, estimates, tracked, selection, centre, offset, steer,
+                             throttle, events)
+        self.recorder.log_step(self, result)
+        self.index += 1
+        return result
+
+    def _sense(self) -> dict[str, np.ndarray]:
+        data = self.world.data
+        frames = {}
+        for name in self.rig.CAMERA_NAMES:
+            rgb = self.rig.render_rgb(data, name)
+            frames[name] = apply_conditions(rgb, self.scenario.conditions, self.rng,
+                                            speed_mps=self.world.car.speed_mps())
+        return frames
+
+    def _safe_detect(self, name: str, detector: Detector, frame: np.ndarray,
+                     events: list[str]) -> LaneEstimate:
+        """A detector that raises or returns garbage counts as a miss, with an event."""
+        try:
+            estimate = detector.detect(frame)
+        except (ValueError, FloatingPointError, ArithmeticError) as err:
+            self.detector_errors += 1
+            events.append(f"detector {name} failed: {err}")
+            return LaneEstimate.invalid(f"error: {err}")
+        if not isinstance(estimate, LaneEstimate):
+            self.detector_errors += 1
+            events.append(f"detector {name} returned {type(estimate).__name__}")
+            return LaneEstimate.invalid("not a LaneEstimate")
+        return estimate
+
+    def _detect(self, frames, events) -> dict[str, LaneEstimate]:
+        est = self.scenario.estimation
+        out = {name: self._safe_detect(name, det, frames["front"], events)
+               for name, det in self.front.items()}
+        out[REFERENCE] = self._safe_detect(REFERENCE, self.reference,
+                                           frames[est.reference_camera], events)
+        return out
+
+    def _track(self, estimates) -> dict[str, np.ndarray | None]:
+        car = self.world.car
+        tracked = {}
+        for name, tracker in self.trackers.items():
+            tracker.predict(self.dt_s, car.speed_mps(), car.yaw_rate_rps())
+            estimate = estimates[name]
+            centre = estimate.center if estimate.valid else None
+            if estimate.valid and centre is None:
+                # One boundary only: shift it by half a lane toward the other side.
+                half = self.world.road.lane_width_m / 2.0
+                side = estimate.left if estimate.left is not None else estimate.right
+                sign = -1.0 if estimate.left is not None else 1.0
+                centre = None if side is None else np.asarray(side) + [sign * half, 0.0, 0.0]
+            tracker.update_coefficients(centre)
+            tracked[name] = tracker.coefficients
+        return tracked
+
+    def _select(self, estimates, tracked, events):
+        x_eval = self.scenario.estimation.offset_lookahead_m
+        offsets, variances = [], []
+        for tracker in self.trackers.values():
+            offsets.append(tracker.offset_m(x_eval))
+            variances.append(tracker.offset_variance_m2(x_eval))
+        reference = estimates[REFERENCE]
+        s_m, _ = self.world.road.local_coordinates(np.array(self.world.car.pose()[:2]))
+        selection = self.mmae.step(
+            reference.offset_m if reference.valid else None,
+            offsets,
+            [math.inf if v is None else v for v in variances],
+            s_m=float(s_m),
+        )
+        if selection.reference_repaired:
+            events.append(f"reference repaired: {reference.offset_m:+.2f} m -> "
+                          f"{selection.reference_m:+.2f} m")
+        return selection
+
+    def _output(self, tracked, selection) -> tuple[np.ndarray | None, float | None]:
+        """The lane the controller follows: the selected model's, or the weighted fusion."""
+        names = list(self.trackers)
+        if self.scenario.estimation.output == "fused":
+            polys = [(p, tracked[n]) for p, n in zip(selection.probabilities, names, strict=True)
+                     if tracked[n] is not None]
+            if not polys:
+                return None, None
+            weight = sum(p for p, _ in polys)
+            centre = sum(p * c for p, c in polys) / weight
+        else:
+            centre = tracked[names[selection.selected]]
+            if centre is None:  # the selected track is lost: take any live one
+                live = [tracked[n] for n in names if tracked[n] is not None]
+                centre = live[0] if live else None
+        if centre is None:
+            return None, None
+        return centre, -float(poly_eval(centre, self.scenario.estimation.offset_lookahead_m))
+
+    def _control(self, centre, offset) -> tuple[float, float]:
+        car = self.world.car
+        if centre is None:
+            steer = self.steering(None, car.speed_mps())
+        else:
+            x_ctrl = self.scenario.estimation.control_lookahead_m
+            control_offset = -float(poly_eval(centre, x_ctrl))
+            steer = self.steering(control_offset, car.speed_mps(), curvature_1pm=2.0 * centre[2])
+        return steer, self.speed(car.speed_mps())
+
+    def _actuate(self, steer: float, throttle: float) -> None:
+        self.world.car.apply(steer, throttle)
+        model, data = self.world.model, self.world.data
+        for _ in range(self.substeps):
+            mujoco.mj_step(model, data)
+        world_conditions.update_dynamic(self.world, data.time)
+
+    def _score(self, frames, estimates, tracked, selection, centre, offset, steer, throttle,
+               events) -> StepResult:
+        world, est = self.world, self.scenario.estimation
+        x, y, yaw = world.car.pose()
+        lane = self.scenario.road.ego_lane
+        truth_at = {}
+
+        def truth(x_m: float):
+            key = round(x_m, 3)
+            if key not in truth_at:
+                truth_at[key] = lane_truth(world.road, x, y, yaw, lane, lookahead_m=x_m)
+            return truth_at[key]
+
+        for name in self.front:
+            e = estimates[name]
+            self.metrics.add_offset(name, e.offset_m if e.valid else None, truth(e.x_m).offset_m)
+            self.metrics.add_lane(name, tracked[name], truth(0.0).center)
+        ref = estimates[REFERENCE]
+        self.metrics.add_offset(REFERENCE, selection.reference_m if ref.valid else None,
+                                truth(ref.x_m).offset_m)
+        self.metrics.add_offset(FUSED, offset, truth(est.offset_lookahead_m).offset_m)
+        self.metrics.add_lane(FUSED, centre, truth(0.0).center)
+        if centre is None:
+            self.metrics.add_no_estimate()
+        outside = self._wheels_outside_lane()
+        if outside:
+            events.append("lane departure: a wheel crossed a lane boundary")
+        self.metrics.add_car(truth(0.0).offset_m, outside)
+        self.metrics.add_selection(selection.selected, selection.reference_repaired)
+        return StepResult(
+            index=self.index, time_s=float(world.data.time), frames=frames, estimates=estimates,
+            tracked=tracked, probabilities=np.asarray(selection.probabilities),
+            selected=int(selection.selected), output_offset_m=offset, output_centre=centre,
+            reference_m=selection.reference_m, reference_repaired=selection.reference_repaired,
+            steer=steer, throttle=throttle, truth_offset_m=truth(0.0).offset_m,
+            truth_centre=truth(0.0).center, pose=(x, y, yaw),
+            speed_mps=world.car.speed_mps(), events=events,
+        )
+
+    def _wheels_outside_lane(self) -> bool:
+        world = self.world
+        names = ("front_left_tyre", "front_right_tyre", "rear_left_tyre", "rear_right_tyre")
+        xy = np.array([world.data.geom(n).xpos[:2] for n in names])
+        _, r = world.road.local_coordinates(xy)
+        centre = world.road.lane_center_r(self.scenario.road.ego_lane)
+        return bool(np.any(np.abs(np.asarray(r) - centre) > world.road.lane_width_m / 2.0))
+
+    # -- whole episodes --------------------------------------------------------------------
+    @property
+    def total_steps(self) -> int:
+        return int(round(self.scenario.duration_s / self.dt_s))
+
+    def run(self, seconds: float | None = None, progress=None) -> EpisodeReport:
+        """Step to the end (or `seconds`); an interrupt still returns a partial report."""
+        steps = self.total_steps if seconds is None else int(round(seconds / self.dt_s))
+        completed = True
+        try:
+            for _ in range(steps):
+                self.step()
+                if progress is not None:
+                    progress(self.index, steps)
+        except KeyboardInterrupt:
+            completed = False
+        return self.report(completed)
+
+    def report(self, completed: bool = True) -> EpisodeReport:
+        return self.metrics.report(self.scenario.name, self.scenario.seed, self.dt_s,
+                                   completed=completed,
+                                   wall_s=time.perf_counter() - self._wall_start)
+
+    def close(self) -> None:
+        self.rig.close()
+        self.recorder.close()
+
+    def __enter__(self) -> Episode:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()

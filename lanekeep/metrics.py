@@ -1,0 +1,162 @@
+"""Episode metrics: per detector, for the reference (the paper's "observer") and the fused output.
+
+Definitions (all against ground truth from the road, never from images):
+  - offset RMSE / max error (cm): the estimate's offset vs the true offset at the same
+    look-ahead x_m, over the steps where the source had a valid estimate;
+  - ADE / FDE (cm) of a tracked lane centre line: at each step, the lateral error
+    |y_est(x) - y_true(x)| at look-ahead points x_1 < ... < x_N (default 5..30 m); ADE is its
+    mean over the points and the steps, FDE its mean over the steps at the farthest point x_N
+    (the trajectory-forecasting convention, with distance ahead in place of time);
+  - valid share: the share of steps with a valid estimate (time with none is reported too);
+  - the car's own lateral error: RMS and max of the true offset at x = 0;
+  - lane departures: times a wheel's contact point crosses an ego-lane boundary (counted on
+    entry, not per step);
+  - MMAE switches: changes of the selected model.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, field
+
+import numpy as np
+
+from detectors.base import poly_eval
+
+ADE_POINTS_M = (5.0, 10.0, 15.0, 20.0, 25.0, 30.0)
+
+
+@dataclass(frozen=True)
+class SourceReport:
+    """Accuracy of one offset source over an episode (cm)."""
+
+    rmse_cm: float
+    max_cm: float
+    ade_cm: float
+    fde_cm: float
+    valid_share: float
+
+
+@dataclass(frozen=True)
+class EpisodeReport:
+    scenario: str
+    seed: int
+    duration_s: float
+    steps: int
+    sources: dict[str, SourceReport]
+    car_rms_cm: float
+    car_max_cm: float
+    lane_departures: int
+    mmae_switches: int
+    no_estimate_s: float
+    reference_repairs: int
+    completed: bool = True
+    wall_s: float = 0.0
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+    def table(self) -> str:
+        """The paper's Table 3-4 layout: columns = sources, rows = metrics (cm)."""
+        names = list(self.sources)
+        width = max(10, *(len(n) for n in names))
+        rows = [("RMSE", "rmse_cm"), ("max error", "max_cm"), ("ADE", "ade_cm"),
+                ("FDE", "fde_cm"), ("valid %", "valid_share")]
+        lines = [f"{'(cm)':<10}" + "".join(f"{n:>{width + 2}}" for n in names)]
+        for label, key in rows:
+            cells = []
+            for n in names:
+                value = getattr(self.sources[n], key)
+                value = value * 100.0 if key == "valid_share" else value
+                cells.append(f"{'-' if math.isnan(value) else f'{value:.2f}':>{width + 2}}")
+            lines.append(f"{label:<10}" + "".join(cells))
+        lines.append(
+            f"car: lateral RMS {self.car_rms_cm:.1f} cm, max {self.car_max_cm:.1f} cm; "
+            f"lane departures {self.lane_departures}; MMAE switches {self.mmae_switches}; "
+            f"reference repairs {self.reference_repairs}; no estimate {self.no_estimate_s:.1f} s"
+            + ("" if self.completed else "  [INTERRUPTED: partial episode]")
+        )
+        return "\n".join(lines)
+
+
+@dataclass
+class _SourceAccumulator:
+    offset_errors: list[float] = field(default_factory=list)
+    lateral_errors: list[np.ndarray] = field(default_factory=list)
+    valid: int = 0
+    steps: int = 0
+
+
+class Metrics:
+    """Accumulates per-step errors; `report()` summarises them."""
+
+    def __init__(self, source_names: list[str], ade_points_m: tuple[float, ...] = ADE_POINTS_M
+                 ) -> None:
+        self.ade_points_m = np.asarray(ade_points_m, dtype=float)
+        self._sources = {name: _SourceAccumulator() for name in source_names}
+        self._car_offsets: list[float] = []
+        self._departed = False
+        self.lane_departures = 0
+        self.mmae_switches = 0
+        self.reference_repairs = 0
+        self._no_estimate_steps = 0
+        self._last_selected: int | None = None
+
+    def add_offset(self, name: str, estimate_m: float | None, truth_m: float) -> None:
+        acc = self._sources[name]
+        acc.steps += 1
+        if estimate_m is not None and math.isfinite(estimate_m):
+            acc.valid += 1
+            acc.offset_errors.append(estimate_m - truth_m)
+
+    def add_lane(self, name: str, centre: np.ndarray | None, truth_centre: np.ndarray) -> None:
+        if centre is None:
+            return
+        error = np.abs(poly_eval(centre, self.ade_points_m) - poly_eval(truth_centre,
+                                                                         self.ade_points_m))
+        self._sources[name].lateral_errors.append(error)
+
+    def add_car(self, true_offset_m: float, wheels_outside_lane: bool) -> None:
+        self._car_offsets.append(true_offset_m)
+        if wheels_outside_lane and not self._departed:
+            self.lane_departures += 1
+        self._departed = wheels_outside_lane
+
+    def add_selection(self, selected: int, reference_repaired: bool) -> None:
+        if self._last_selected is not None and selected != self._last_selected:
+            self.mmae_switches += 1
+        self._last_selected = selected
+        self.reference_repairs += int(reference_repaired)
+
+    def add_no_estimate(self) -> None:
+        self._no_estimate_steps += 1
+
+    def report(self, scenario: str, seed: int, dt_s: float, completed: bool = True,
+               wall_s: float = 0.0) -> EpisodeReport:
+        sources = {}
+        for name, acc in self._sources.items():
+            errors = np.asarray(acc.offset_errors)
+            lateral = np.asarray(acc.lateral_errors)
+            sources[name] = SourceReport(
+                rmse_cm=float(np.sqrt(np.mean(errors**2)) * 100) if len(errors) else math.nan,
+                max_cm=float(np.max(np.abs(errors)) * 100) if len(errors) else math.nan,
+                ade_cm=float(lateral.mean() * 100) if len(lateral) else math.nan,
+                fde_cm=float(lateral[:, -1].mean() * 100) if len(lateral) else math.nan,
+                valid_share=acc.valid / acc.steps if acc.steps else 0.0,
+            )
+        car = np.asarray(self._car_offsets)
+        return EpisodeReport(
+            scenario=scenario,
+            seed=seed,
+            duration_s=len(car) * dt_s,
+            steps=len(car),
+            sources=sources,
+            car_rms_cm=float(np.sqrt(np.mean(car**2)) * 100) if len(car) else math.nan,
+            car_max_cm=float(np.max(np.abs(car)) * 100) if len(car) else math.nan,
+            lane_departures=self.lane_departures,
+            mmae_switches=self.mmae_switches,
+            no_estimate_s=self._no_estimate_steps * dt_s,
+            reference_repairs=self.reference_repairs,
+            completed=completed,
+            wall_s=wall_s,
+        )
