@@ -1,0 +1,174 @@
+"""Tuned numbers of the classical detectors: frozen dataclasses read from `detectors.toml`.
+
+Every threshold and window size lives in the shipped TOML (detectors/detectors.toml); the
+dataclass defaults only say what a field means. Loading is strict (unknown keys raise, naming
+the key), as for scenario files.
+"""
+
+from __future__ import annotations
+
+import tomllib
+from dataclasses import dataclass
+from importlib import resources
+from pathlib import Path
+
+from lanekeep.config_io import InvalidValue, from_dict
+
+
+@dataclass(frozen=True)
+class GroundWindow:
+    """The patch of road the bird's-eye view shows, in the vehicle ground frame.
+
+    `x_near_m` is the edge nearest the car (front: ahead of the bumper; rear: behind it, so
+    negative), `x_far_m` the far edge; the view spans y in [-y_half_m, +y_half_m]. Pixels are
+    `m_per_col` wide and `m_per_row` long (the long axis needs less resolution).
+    """
+
+    x_near_m: float = 4.0
+    x_far_m: float = 26.0
+    y_half_m: float = 6.0
+    m_per_col: float = 0.05
+    m_per_row: float = 0.1
+    lookahead_m: float | None = None  # where the offset is reported; None = the near edge
+
+    def __post_init__(self) -> None:
+        if abs(self.x_far_m - self.x_near_m) < 1.0:
+            raise InvalidValue("x_far_m", "the window must be at least 1 m long")
+        if self.x_near_m * self.x_far_m < 0:
+            raise InvalidValue("x_far_m", "near and far edge must lie on the same side of the car")
+        for key in ("y_half_m", "m_per_col", "m_per_row"):
+            if not getattr(self, key) > 0:
+                raise InvalidValue(key, f"must be > 0, got {getattr(self, key)}")
+
+    @property
+    def direction(self) -> float:
+        """+1 for a window ahead of the car, -1 behind it."""
+        return 1.0 if self.x_far_m > self.x_near_m else -1.0
+
+
+@dataclass(frozen=True)
+class Profiles:
+    """One ground window per camera kind; a detector picks by the camera's name."""
+
+    front: GroundWindow = GroundWindow()
+    rear: GroundWindow = GroundWindow(x_near_m=-4.0, x_far_m=-16.0)
+    dashcam: GroundWindow = GroundWindow(x_near_m=6.0, x_far_m=40.0)
+
+
+@dataclass(frozen=True)
+class Preprocess:
+    """Region of interest and working resolution of the image stage."""
+
+    scale: float = 0.5  # image downscale before thresholding
+    horizon_margin_px: float = 8.0  # ROI starts this far (full-res px) below the horizon
+    max_fill: float = 0.25  # binary share of the ROI above which the frame is rejected (noise)
+
+    def __post_init__(self) -> None:
+        if not 0.1 <= self.scale <= 1.0:
+            raise InvalidValue("scale", f"must be in [0.1, 1], got {self.scale}")
+
+
+@dataclass(frozen=True)
+class LaneRules:
+    """What counts as an ego-lane boundary, in metres."""
+
+    lane_width_m: float = 3.7
+    width_tolerance_m: float = 0.8  # |measured - lane_width| above this: keep only the better side
+    min_half_width: float = 0.2  # a boundary's |y| at the near edge, in lane widths
+    max_half_width: float = 1.1
+    min_span_m: float = 3.0  # a boundary must cover this much x
+    quadratic_span_m: float = 8.0  # fit a parabola only over at least this x span
+    max_curvature_1pm: float = 0.05  # |2 c2| above this: a bad fit (R < 20 m)
+
+    def __post_init__(self) -> None:
+        if not self.lane_width_m > 0:
+            raise InvalidValue("lane_width_m", f"must be > 0, got {self.lane_width_m}")
+
+
+@dataclass(frozen=True)
+class HoughConfig:
+    """Model #1: adaptive brightness threshold, bird's-eye view, probabilistic Hough."""
+
+    adaptive_block_px: int = 25  # odd, in working-resolution pixels
+    adaptive_c: float = 10.0  # a pixel must exceed its local mean by this (grey levels)
+    min_grey: int = 90  # and be at least this bright
+    rho_px: float = 1.0
+    theta_deg: float = 1.0
+    votes: int = 12
+    min_length_m: float = 1.0
+    max_gap_m: float = 1.5
+    max_angle_deg: float = 35.0  # segments further from the driving direction are dropped
+    seed_length_m: float = 10.0  # boundaries are seeded from segments starting this near
+    cluster_m: float = 0.4  # seeds closer than this (at the near edge) are one boundary
+    grow_tolerance_m: float = 0.35  # a segment joins a boundary within this of its fit
+    sample_m: float = 0.5  # spacing of the points taken along each segment
+
+    def __post_init__(self) -> None:
+        if self.adaptive_block_px < 3 or self.adaptive_block_px % 2 == 0:
+            raise InvalidValue("adaptive_block_px", "must be odd and >= 3")
+
+
+@dataclass(frozen=True)
+class SlidingWindowConfig:
+    """Model #2: Sobel-x + HLS saturation/hue thresholds, histogram, sliding windows."""
+
+    sobel_kernel: int = 3
+    sobel_min: float = 25.0  # |d lightness / dx| in grey levels per pixel (Sobel-scaled / 4)
+    min_lightness_gain: float = 10.0  # gradient pixels must sit in a brighter-than-local ridge
+    local_block_px: int = 25
+    white_lightness: int = 180  # HLS L at or above: paint-white
+    white_saturation_max: int = 255
+    yellow_hue: tuple[int, int] = (12, 38)  # OpenCV hue (0..180) range of yellow paint
+    yellow_saturation: int = 90
+    yellow_lightness: int = 80
+    n_windows: int = 11
+    margin_m: float = 0.45  # half width of a window
+    min_pixels: int = 8  # a window re-centres when it holds this many pixels
+    histogram_fraction: float = 0.5  # the near part of the view that the histogram sums
+    min_peak_pixels: int = 15
+    search_margin_m: float = 0.4  # around the previous frame's fit
+    min_fit_pixels: int = 40
+
+    def __post_init__(self) -> None:
+        if self.sobel_kernel not in (1, 3, 5, 7):
+            raise InvalidValue("sobel_kernel", "must be 1, 3, 5 or 7")
+        if self.local_block_px < 3 or self.local_block_px % 2 == 0:
+            raise InvalidValue("local_block_px", "must be odd and >= 3")
+
+
+@dataclass(frozen=True)
+class DashcamDefaults:
+    """An unknown real camera (`lanekeep detect` without --camera): typical highway dashcam."""
+
+    hfov_deg: float = 60.0
+    height_m: float = 1.5
+    horizon_fraction: float = 0.5  # horizon row / image height when it cannot be estimated
+    min_horizon_fraction: float = 0.2
+    max_horizon_fraction: float = 0.75
+
+
+@dataclass(frozen=True)
+class DetectorsConfig:
+    profiles: Profiles = Profiles()
+    preprocess: Preprocess = Preprocess()
+    lane: LaneRules = LaneRules()
+    hough: HoughConfig = HoughConfig()
+    sliding_window: SlidingWindowConfig = SlidingWindowConfig()
+    dashcam: DashcamDefaults = DashcamDefaults()
+
+    def window_for(self, camera_name: str) -> GroundWindow:
+        """The ground window of a camera: by name, real cameras use the dashcam profile."""
+        if camera_name in ("front", "rear"):
+            return getattr(self.profiles, camera_name)
+        return self.profiles.dashcam
+
+
+def load_config(path: str | Path | None = None) -> DetectorsConfig:
+    """Read a detectors TOML file; None reads the shipped, tuned detectors/detectors.toml."""
+    if path is None:
+        text = resources.files("detectors").joinpath("detectors.toml").read_text()
+        source = "detectors.toml"
+    else:
+        text = Path(path).read_text()
+        source = str(path)
+    return from_dict(DetectorsConfig, tomllib.loads(text), source=source)

@@ -1,0 +1,186 @@
+"""Paper 001 model #1: ROI, binarisation, bird's-eye view, Hough transform, nearest-row centre.
+
+Pipeline per frame: crop the image below the ground window's far edge and work at reduced
+resolution; binarise by brightness against the local mean (adaptive threshold) and an absolute
+floor; warp to the bird's-eye view of the camera model; find segments with OpenCV's
+probabilistic Hough transform; keep segments near the driving direction, seed one boundary per
+side from the segments nearest the car (clustered by their lateral position at the near edge)
+and grow each boundary outwards with segments that continue its fit; fit y(x) per side. The
+offset is the lane centre at the view's row nearest the car. Being brightness-based, it takes
+the edges of hard shadows for paint, which is the weakness the paper reports.
+"""
+
+from __future__ import annotations
+
+import math
+
+import cv2
+import numpy as np
+
+from detectors.base import LaneEstimate, poly_eval
+from detectors.config import DetectorsConfig, load_config
+from detectors.geometry import (
+    Boundary,
+    assemble,
+    check_frame,
+    crop_and_scale,
+    fit_boundary,
+    parallel,
+    view_for,
+)
+from lanekeep.cameras import CameraModel
+
+
+class HoughDetector:
+    """Model #1 on one camera; stateless between frames."""
+
+    def __init__(
+        self,
+        camera: CameraModel,
+        config: DetectorsConfig | None = None,
+        distortion: np.ndarray | None = None,
+        name: str = "hough",
+    ) -> None:
+        self.name = name
+        self.camera = camera
+        self.config = config or load_config()
+        pre = self.config.preprocess
+        window = self.config.window_for(camera.name)
+        self.view = view_for(camera, window, pre.scale, pre.horizon_margin_px, distortion)
+        w = self.view.window
+        self.x_ref = w.lookahead_m if w.lookahead_m is not None else w.x_near_m
+
+    def reset(self) -> None:
+        """Nothing is carried between frames."""
+
+    # -- stages -------------------------------------------------------------------------------
+    def binarise(self, roi: np.ndarray) -> np.ndarray:
+        """Paint candidates: brighter than the local mean by adaptive_c and above min_grey."""
+        cfg = self.config.hough
+        grey = cv2.cvtColor(roi, cv2.COLOR_RGB2GRAY)
+        mask = cv2.adaptiveThreshold(grey, 255, cv2.ADAPTIVE_THRESH_MEAN_C, cv2.THRESH_BINARY,
+                                     cfg.adaptive_block_px, -cfg.adaptive_c)
+        mask[grey < cfg.min_grey] = 0
+        return mask
+
+    def segments(self, bev: np.ndarray) -> np.ndarray:
+        """Hough segments (N, 4) as vehicle-frame metres x1, y1, x2, y2, end 1 nearer the car."""
+        cfg, w = self.config.hough, self.view.window
+        lines = cv2.HoughLinesP(
+            bev, cfg.rho_px, math.radians(cfg.theta_deg), cfg.votes,
+            minLineLength=cfg.min_length_m / w.m_per_row, maxLineGap=cfg.max_gap_m / w.m_per_row,
+        )
+        if lines is None:
+            return np.zeros((0, 4))
+        c = lines.reshape(-1, 4).astype(float)
+        x1, y1 = self.view.to_ground(c[:, 0], c[:, 1])
+        x2, y2 = self.view.to_ground(c[:, 2], c[:, 3])
+        seg = np.stack([x1, y1, x2, y2], axis=1)
+        swap = (seg[:, 0] - w.x_near_m) * w.direction > (seg[:, 2] - w.x_near_m) * w.direction
+        seg[swap] = seg[swap][:, [2, 3, 0, 1]]
+        dx, dy = seg[:, 2] - seg[:, 0], seg[:, 3] - seg[:, 1]
+        keep = np.abs(np.arctan2(np.abs(dy), np.abs(dx))) <= math.radians(cfg.max_angle_deg)
+        keep &= np.abs(dx) > 1e-6
+        return seg[keep]
+
+    def _samples(self, seg: np.ndarray) -> np.ndarray:
+        step = self.config.hough.sample_m
+        out = []
+        for x1, y1, x2, y2 in seg:
+            n = max(2, int(math.hypot(x2 - x1, y2 - y1) / step) + 1)
+            t = np.linspace(0.0, 1.0, n)
+            out.append(np.stack([x1 + t * (x2 - x1), y1 + t * (y2 - y1)], axis=1))
+        return np.concatenate(out) if out else np.zeros((0, 2))
+
+    def boundaries(self, seg: np.ndarray) -> tuple[Boundary | None, Boundary | None]:
+        """Seed a boundary per side near the car, grow both with continuing segments, fit them."""
+        cfg, rules, w = self.config.hough, self.config.lane, self.view.window
+        near, d = w.x_near_m, w.direction
+        if len(seg) == 0:
+            return None, None
+        dx, dy = seg[:, 2] - seg[:, 0], seg[:, 3] - seg[:, 1]
+        slope = dy / dx
+        length = np.hypot(dx, dy)
+        dist = (seg[:, 0] - near) * d
+        # The lane's direction near the car: length-weighted median slope of the near segments
+        # (a short segment's own slope is too noisy to extrapolate with).
+        near_seg = dist <= cfg.seed_length_m
+        pool = near_seg if near_seg.any() else np.ones(len(seg), bool)
+        order = np.argsort(slope[pool])
+        cum = np.cumsum(length[pool][order])
+        heading = float(slope[pool][order][np.searchsorted(cum, cum[-1] / 2.0)])
+        y_near = seg[:, 1] + (near - seg[:, 0]) * heading
+        width = rules.lane_width_m
+        used = np.zeros(len(seg), bool)
+        points: list[np.ndarray | None] = []
+        for side in (1.0, -1.0):
+            lateral = side * y_near
+            cand = np.flatnonzero(
+                near_seg
+                & (lateral >= rules.min_half_width * width)
+                & (lateral <= rules.max_half_width * width)
+            )
+            cand = cand[np.argsort(lateral[cand])]
+            members = None  # the nearest cluster (lateral, at the near edge) long enough
+            start = 0
+            for i in range(1, len(cand) + 1):
+                if i == len(cand) or lateral[cand[i]] - lateral[cand[i - 1]] > cfg.cluster_m:
+                    group = cand[start:i]
+                    if length[group].sum() >= 2.0 * cfg.min_length_m:
+                        members = group
+                        break
+                    start = i
+            if members is None:
+                points.append(None)
+                continue
+            used[members] = True
+            points.append(self._samples(seg[members]))
+        # Grow outwards: a segment joins the side whose current fit it continues best.
+        for j in np.argsort(dist):
+            if used[j]:
+                continue
+            best, best_side = np.inf, -1
+            for k, pts in enumerate(points):
+                if pts is None:
+                    continue
+                coeffs = self._provisional(pts, heading)
+                far = max(d * seg[j, 0], d * seg[j, 2])
+                reach = max(0.0, far - float((d * pts[:, 0]).max()))
+                tol = cfg.grow_tolerance_m + 0.03 * reach
+                res = max(abs(seg[j, 1] - poly_eval(coeffs, seg[j, 0])),
+                          abs(seg[j, 3] - poly_eval(coeffs, seg[j, 2])))
+                if res < tol and res < best:
+                    best, best_side = res, k
+            if best_side >= 0:
+                used[j] = True
+                points[best_side] = np.concatenate([points[best_side],
+                                                    self._samples(seg[j : j + 1])])
+        x_cam = float(self.camera.position_m[0])
+        fits = [None if p is None else fit_boundary(p, rules, x_cam) for p in points]
+        return parallel(fits[0], fits[1], rules, x_cam)
+
+    def _provisional(self, pts: np.ndarray, heading: float) -> np.ndarray:
+        """The current guess of a growing boundary: its fit, or the lane direction through it."""
+        fit = fit_boundary(pts, self.config.lane, float(self.camera.position_m[0]))
+        if fit is not None:
+            return fit.coeffs
+        x0, y0 = pts.mean(axis=0)
+        return np.array([y0 - heading * x0, heading, 0.0])
+
+    # -- the detector ------------------------------------------------------------------------
+    def detect(self, frame: np.ndarray) -> LaneEstimate:
+        check_frame(frame, self.camera)
+        pre = self.config.preprocess
+        roi = crop_and_scale(frame, self.view.crop_top, pre.scale)
+        mask = self.binarise(roi)
+        fill = cv2.countNonZero(mask) / mask.size
+        if fill > pre.max_fill:
+            return LaneEstimate.invalid(f"binary image too full ({fill:.0%}): noise", self.x_ref)
+        bev = self.view.warp(mask)
+        bev = np.where(bev >= 128, 255, 0).astype(np.uint8)
+        seg = self.segments(bev)
+        left, right = self.boundaries(seg)
+        support = sum(b.x_span_m for b in (left, right) if b is not None)
+        span = abs(self.view.window.x_far_m - self.view.window.x_near_m)
+        confidence = min(1.0, support / span)
+        return assemble(left, right, self.x_ref, self.config.lane, self.camera, confidence)
