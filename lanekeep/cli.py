@@ -65,7 +65,7 @@ def _optional_command_modules() -> list:
     import importlib
 
     modules = []
-    for name in ("lanekeep.cli_detect", "lanekeep.cli_episode"):
+    for name in ("lanekeep.cli_detect", "lanekeep.cli_episode", "lanekeep.perf"):
         try:
             modules.append(importlib.import_module(name))
         except ModuleNotFoundError as err:

@@ -89,14 +89,15 @@ class Episode:
         self._wall_start = time.perf_counter()
 
     # -- the loop ------------------------------------------------------------------------------
-    def step(self) -> StepResult:
+    def step(self, action: tuple[float, float] | None = None) -> StepResult:
+        """One control period. `action` = (steer, throttle) overrides the controllers."""
         events: list[str] = []
         frames = self._sense()
         estimates = self._detect(frames, events)
         tracked = self._track(estimates)
         selection = self._select(estimates, tracked, events)
         centre, offset = self._output(tracked, selection)
-        steer, throttle = self._control(centre, offset)
+        steer, throttle = self._control(centre, offset) if action is None else action
         self._actuate(steer, throttle)
         result = self._score(frames, estimates, tracked, selection, centre, offset, steer,
                              throttle, events)
