@@ -180,9 +180,9 @@ def parallel(
         c0 = float(np.sum(w * (y - c[1] * x - c[2] * x * x)) / np.sum(w))
         return replace(short, coeffs=np.array([c0, c[1], c[2]]))
 
-    if left.x_span_m < rules.quadratic_span_m <= right.x_span_m:
+    if left.x_span_m < rules.quadratic_span_m and right.x_span_m >= 2.0 * left.x_span_m:
         left = refit(left, right)
-    elif right.x_span_m < rules.quadratic_span_m <= left.x_span_m:
+    elif right.x_span_m < rules.quadratic_span_m and left.x_span_m >= 2.0 * right.x_span_m:
         right = refit(right, left)
     return left, right
 

@@ -1,0 +1,181 @@
+"""Paper 001 model #2: Sobel-x + saturation + hue thresholds, histogram, sliding windows.
+
+Pipeline per frame: (undistortion folded into the bird's-eye warp when the camera has a
+distortion model) ROI below the ground window's far edge at reduced resolution; binary =
+(Sobel-x of HLS lightness on a bright ridge) | (white: high lightness) | (yellow: hue in range
+and saturated); bird's-eye warp; a column histogram of the near part of the view gives one
+start per side (the peak nearest the car within the expected lane half-width); windows slide
+from the near edge outwards, re-centring on their pixels; a 2nd-order y(x) per boundary in the
+vehicle frame; the offset at the look-ahead. With a previous fit, pixels are taken in a band
+around it instead (`reset()` forgets it). Fixed-size windows lose a boundary that bends out of
+them faster than they can follow, which is this model's weakness in sharp turns.
+"""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+
+from detectors.base import LaneEstimate, poly_eval
+from detectors.config import DetectorsConfig, load_config
+from detectors.geometry import (
+    Boundary,
+    assemble,
+    check_frame,
+    crop_and_scale,
+    fit_boundary,
+    parallel,
+    view_for,
+)
+from lanekeep.cameras import CameraModel
+
+
+class SlidingWindowDetector:
+    """Model #2 on one camera; remembers the last good fit to search around it."""
+
+    def __init__(
+        self,
+        camera: CameraModel,
+        config: DetectorsConfig | None = None,
+        distortion: np.ndarray | None = None,
+        name: str = "sliding_window",
+    ) -> None:
+        self.name = name
+        self.camera = camera
+        self.config = config or load_config()
+        pre = self.config.preprocess
+        window = self.config.window_for(camera.name)
+        self.view = view_for(camera, window, pre.scale, pre.horizon_margin_px, distortion)
+        w = self.view.window
+        self.x_ref = w.lookahead_m if w.lookahead_m is not None else w.x_near_m
+        self._previous: list[np.ndarray | None] = [None, None]
+
+    def reset(self) -> None:
+        """Forget the previous frame's fit."""
+        self._previous = [None, None]
+
+    # -- stages -------------------------------------------------------------------------------
+    def binarise(self, roi: np.ndarray) -> np.ndarray:
+        """Sobel-x on lightness (on a bright ridge) | white lightness | yellow hue+saturation."""
+        cfg = self.config.sliding_window
+        hls = cv2.cvtColor(roi, cv2.COLOR_RGB2HLS)
+        hue, light, sat = hls[..., 0], hls[..., 1], hls[..., 2]
+        grad = np.abs(cv2.Sobel(light, cv2.CV_16S, 1, 0, ksize=cfg.sobel_kernel))
+        norm = {1: 1.0, 3: 4.0, 5: 48.0 / 4.0, 7: 640.0 / 10.0}[cfg.sobel_kernel]
+        local = cv2.blur(light, (cfg.local_block_px, cfg.local_block_px))
+        ridge = light.astype(np.int16) >= local.astype(np.int16) + int(cfg.min_lightness_gain)
+        ridge = cv2.dilate(ridge.astype(np.uint8), np.ones((3, 3), np.uint8)) > 0
+        edges = (grad >= cfg.sobel_min * norm) & ridge
+        white = (light >= cfg.white_lightness) & (sat <= cfg.white_saturation_max)
+        lo, hi = cfg.yellow_hue
+        yellow = ((hue >= lo) & (hue <= hi) & (sat >= cfg.yellow_saturation)
+                  & (light >= cfg.yellow_lightness))
+        return ((edges | white | yellow) * 255).astype(np.uint8)
+
+    def _starts(self, bev: np.ndarray) -> list[float | None]:
+        """Histogram peak column per side (left, right) nearest the car, or None.
+
+        The histogram sums the near part of the view; a side without a peak there (a dashed
+        line in its gap) is looked for again over the whole view.
+        """
+        cfg = self.config.sliding_window
+        rows = int(round(self.view.rows * cfg.histogram_fraction))
+        out = self._peaks(bev[-rows:])
+        if None in out:
+            again = self._peaks(bev)
+            out = [a if a is not None else b for a, b in zip(out, again, strict=True)]
+        return out
+
+    def _peaks(self, part: np.ndarray) -> list[float | None]:
+        cfg, rules, w = self.config.sliding_window, self.config.lane, self.view.window
+        hist = (part > 0).sum(axis=0).astype(float)
+        k = max(1, int(round(0.3 / w.m_per_col)))
+        hist = np.convolve(hist, np.ones(k), mode="same")
+        cols = np.arange(self.view.cols)
+        # Lateral position at the near edge of each column (the camera's left is +1).
+        _, y = self.view.to_ground(cols, np.full(len(cols), self.view.rows - 1))
+        out: list[float | None] = []
+        for side in (1.0, -1.0):
+            lateral = side * y
+            ok = ((lateral >= rules.min_half_width * rules.lane_width_m)
+                  & (lateral <= rules.max_half_width * rules.lane_width_m)
+                  & (hist >= cfg.min_peak_pixels))
+            idx = np.flatnonzero(ok)
+            if len(idx) == 0:
+                out.append(None)
+                continue
+            # Local maxima among the allowed columns; take the nearest to the car.
+            peaks = [i for i in idx if hist[i] >= hist[max(i - k, 0) : i + k + 1].max()]
+            if not peaks:
+                peaks = [int(idx[np.argmax(hist[idx])])]
+            out.append(float(min(peaks, key=lambda i: lateral[i])))
+        return out
+
+    def _slide(self, start_col: float, ys: np.ndarray, xs: np.ndarray) -> np.ndarray:
+        """Indices of the bird's-eye pixels (ys rows, xs cols) the sliding windows collect."""
+        cfg, w = self.config.sliding_window, self.view.window
+        margin = cfg.margin_m / w.m_per_col
+        height = self.view.rows / cfg.n_windows
+        centre, step = start_col, 0.0
+        taken = []
+        for i in range(cfg.n_windows):
+            bottom = self.view.rows - i * height
+            top = bottom - height
+            inside = np.flatnonzero((ys >= top) & (ys < bottom)
+                                    & (np.abs(xs - centre) <= margin))
+            taken.append(inside)
+            if len(inside) >= cfg.min_pixels:
+                new = float(xs[inside].mean())
+                step, centre = new - centre, new
+            else:
+                centre += step  # keep drifting the way the line was going
+        return np.concatenate(taken) if taken else np.zeros(0, int)
+
+    def boundaries(self, bev: np.ndarray) -> tuple[Boundary | None, Boundary | None]:
+        cfg, rules = self.config.sliding_window, self.config.lane
+        ys, xs = np.nonzero(bev)
+        gx, gy = self.view.to_ground(xs, ys)
+        x_cam = float(self.camera.position_m[0])
+        fits: list[Boundary | None] = [None, None]
+        starts = None
+        for k, side in enumerate((1.0, -1.0)):
+            prev = self._previous[k]
+            if prev is not None:
+                band = np.abs(gy - poly_eval(prev, gx)) <= cfg.search_margin_m
+                if band.sum() >= cfg.min_fit_pixels:
+                    fits[k] = fit_boundary(np.stack([gx[band], gy[band]], 1), rules, x_cam)
+                    if fits[k] is not None:
+                        continue
+            if starts is None:
+                starts = self._starts(bev)
+            if starts[k] is None:
+                continue
+            idx = self._slide(starts[k], ys, xs)
+            if len(idx) >= cfg.min_fit_pixels:
+                fit = fit_boundary(np.stack([gx[idx], gy[idx]], 1), rules, x_cam)
+                ok = fit is not None and side * poly_eval(fit.coeffs, self.view.window.x_near_m) > 0
+                fits[k] = fit if ok else None
+        return parallel(fits[0], fits[1], rules, x_cam)
+
+    # -- the detector ------------------------------------------------------------------------
+    def detect(self, frame: np.ndarray) -> LaneEstimate:
+        check_frame(frame, self.camera)
+        pre = self.config.preprocess
+        roi = crop_and_scale(frame, self.view.crop_top, pre.scale)
+        mask = self.binarise(roi)
+        fill = cv2.countNonZero(mask) / mask.size
+        if fill > pre.max_fill:
+            self.reset()
+            return LaneEstimate.invalid(f"binary image too full ({fill:.0%}): noise", self.x_ref)
+        bev = self.view.warp(mask)
+        bev = np.where(bev >= 128, 255, 0).astype(np.uint8)
+        left, right = self.boundaries(bev)
+        support = sum(b.x_span_m for b in (left, right) if b is not None)
+        span = abs(self.view.window.x_far_m - self.view.window.x_near_m)
+        estimate = assemble(left, right, self.x_ref, self.config.lane, self.camera,
+                            min(1.0, support / span))
+        if estimate.valid:
+            self._previous = [estimate.left, estimate.right]
+        else:
+            self.reset()
+        return estimate

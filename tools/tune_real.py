@@ -1,0 +1,91 @@
+"""Score the classical detectors on labelled real frames (TuSimple rule), for tuning.
+
+    .venv/bin/python tools/tune_real.py /work/shared/real/tusimple_dev [--overlay DIR]
+
+The folder holds N.jpg and labels/N.txt (one labelled lane a line: "x y x y ..."). Prints per
+frame and mean accuracy over all labelled lanes, and the ego accuracy: the same rule on the two
+labelled lanes that bound the ego lane (nearest left and right of the image centre at their
+lowest labelled row). The photos are never copied anywhere.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+import numpy as np
+
+import lanekeep  # noqa: F401
+from detectors.config import load_config
+from detectors.registry import known_detectors, make_detector
+from detectors.tusimple import estimate_lanes, h_samples_for, score_frame
+from lanekeep.calibration import read_image
+from lanekeep.camera_file import camera_for_image
+
+
+def read_labels(path: Path, h_samples: list[int]) -> list[list[int]]:
+    lanes = []
+    for line in path.read_text().splitlines():
+        values = [float(v) for v in line.split()]
+        if len(values) < 4:
+            continue
+        pts = dict(zip(np.round(values[1::2]).astype(int), values[0::2], strict=True))
+        lanes.append([int(round(pts[v])) if v in pts else -2 for v in h_samples])
+    return lanes
+
+
+def ego_lanes(lanes: list[list[int]], h_samples: list[int], centre: float) -> list[list[int]]:
+    left, right = None, None
+    for lane in lanes:
+        xs = [(v, x) for v, x in zip(h_samples, lane, strict=True) if x >= 0]
+        if not xs:
+            continue
+        x = max(xs)[1]  # at the lowest labelled row
+        if x < centre and (left is None or x > left[0]):
+            left = (x, lane)
+        if x >= centre and (right is None or x < right[0]):
+            right = (x, lane)
+    return [side[1] for side in (left, right) if side is not None]
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("folder")
+    parser.add_argument("--detector", action="append", choices=known_detectors())
+    args = parser.parse_args()
+    folder = Path(args.folder)
+    config = load_config()
+    dash = config.dashcam
+    for name in args.detector or known_detectors():
+        overall, ego = [], []
+        for img_path in sorted(folder.glob("*.jpg"), key=lambda p: p.stem):
+            label = folder / "labels" / (img_path.stem + ".txt")
+            if not label.exists():
+                continue
+            image = read_image(img_path)
+            h_samples = h_samples_for(image.shape[0])
+            camera, _, horizon = camera_for_image(
+                image, None, dash.hfov_deg, dash.height_m, dash.horizon_fraction,
+                dash.min_horizon_fraction, dash.max_horizon_fraction)
+            detector = make_detector(name, camera, config)
+            estimate = detector.detect(image)
+            x_range = (float(camera.position_m[0]) + 1.0, detector.view.window.x_far_m * 1.3)
+            pred = estimate_lanes(estimate, camera, h_samples, x_range)
+            gt = read_labels(label, h_samples)
+            acc, _ = score_frame(pred, gt, h_samples)
+            ego_gt = ego_lanes(gt, h_samples, image.shape[1] / 2.0)
+            _, per = score_frame(pred, ego_gt, h_samples)
+            ego_acc = sum(per) / max(len(ego_gt), 1)
+            overall.append(acc)
+            ego.append(ego_acc)
+            print(f"{name:15s} {img_path.name:8s} horizon {horizon:5.0f} "
+                  f"valid {estimate.valid!s:5s} "
+                  f"acc {acc:5.1%} ego {ego_acc:5.1%} {estimate.reason}")
+        print(f"{name}: mean accuracy {np.mean(overall):.1%}, ego {np.mean(ego):.1%} "
+              f"over {len(overall)} frames")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
