@@ -62,6 +62,8 @@ class Preprocess:
     scale: float = 0.5  # image downscale before thresholding
     horizon_margin_px: float = 8.0  # ROI starts this far (full-res px) below the horizon
     max_fill: float = 0.25  # binary share of the ROI above which the frame is rejected (noise)
+    min_coherence: float = 0.5  # share of binary pixels that survive a 2x2 opening (paint
+    # comes in blobs, sensor noise in isolated pixels); below it the frame is rejected
 
     def __post_init__(self) -> None:
         if not 0.1 <= self.scale <= 1.0:

@@ -246,6 +246,20 @@ def crop_and_scale(frame: np.ndarray, top: int, scale: float) -> np.ndarray:
     return cv2.resize(roi, size, interpolation=cv2.INTER_AREA)
 
 
+def reject_noise(mask: np.ndarray, max_fill: float, min_coherence: float) -> str:
+    """Why a binary ROI looks like noise rather than paint ('' when it does not)."""
+    filled = cv2.countNonZero(mask)
+    fill = filled / mask.size
+    if fill > max_fill:
+        return f"binary image too full ({fill:.0%}): noise"
+    if filled:
+        opened = cv2.morphologyEx(mask, cv2.MORPH_OPEN, np.ones((2, 2), np.uint8))
+        coherence = cv2.countNonZero(opened) / filled
+        if coherence < min_coherence:
+            return f"binary image is speckle ({coherence:.0%} survives an opening): noise"
+    return ""
+
+
 def view_for(camera: CameraModel, window: GroundWindow, scale: float, margin_px: float,
              distortion: np.ndarray | None = None) -> BirdsEye:
     """The bird's-eye view a detector uses: visible part of the window, ROI below its far edge."""

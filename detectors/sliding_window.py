@@ -25,6 +25,7 @@ from detectors.geometry import (
     crop_and_scale,
     fit_boundary,
     parallel,
+    reject_noise,
     view_for,
 )
 from lanekeep.cameras import CameraModel
@@ -163,10 +164,10 @@ class SlidingWindowDetector:
         pre = self.config.preprocess
         roi = crop_and_scale(frame, self.view.crop_top, pre.scale)
         mask = self.binarise(roi)
-        fill = cv2.countNonZero(mask) / mask.size
-        if fill > pre.max_fill:
+        noise = reject_noise(mask, pre.max_fill, pre.min_coherence)
+        if noise:
             self.reset()
-            return LaneEstimate.invalid(f"binary image too full ({fill:.0%}): noise", self.x_ref)
+            return LaneEstimate.invalid(noise, self.x_ref)
         bev = self.view.warp(mask)
         bev = np.where(bev >= 128, 255, 0).astype(np.uint8)
         left, right = self.boundaries(bev)

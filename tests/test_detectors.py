@@ -139,7 +139,7 @@ def test_tusimple_output_round_trips_through_the_scorer(rendered):
     assert score_frame(gt, gt, h_samples) == (1.0, [1.0, 1.0])
     shift = lambda lanes, dx: [[x + dx if x >= 0 else x for x in lane] for lane in lanes]  # noqa: E731
     assert score_frame(shift(gt, 15), gt, h_samples)[0] == 1.0  # inside 20 px / cos(angle)
-    assert score_frame(shift(gt, 60), gt, h_samples)[0] == 0.0
+    assert score_frame(shift(gt[:1], 60), gt[:1], h_samples)[0] == 0.0
     # One lane predicted out of two: half the frame.
     assert score_frame(gt[:1], gt, h_samples)[0] == pytest.approx(0.5)
     # The threshold widens with the lane's slant: 20 / cos(45 deg) = 28.3 px.
