@@ -16,7 +16,7 @@ import mujoco
 import numpy as np
 
 from detectors.base import Detector, LaneEstimate, poly_eval
-from detectors.registry import create_detector
+from detectors.registry import make_detector
 from estimators.kalman import LaneTracker, TrackerConfig
 from estimators.mmae import MMAE, MMAEConfig
 from lanekeep import world_conditions
@@ -65,25 +65,31 @@ class Episode:
         est = scenario.estimation
         self.world: World = build(scenario)
         width, height = render_size or (scenario.camera.width, scenario.camera.height)
-        self.rig = CameraRig(self.world.model, RenderSettings(width, height,
-                                                              scenario.camera.shadows,
-                                                              **self.world.render_flags))
+        self.rig = CameraRig(self.world.model,
+                             RenderSettings(width, height, scenario.camera.shadows))
         self.rng = np.random.default_rng(scenario.seed)
         self.dt_s = scenario.control_period_s
         self.substeps = physics_steps_per_control(self.world)
         self.front: dict[str, Detector] = {
-            name: create_detector(name, self.rig.cameras["front"]) for name in est.front_detectors
+            name: make_detector(name, self.rig.cameras["front"]) for name in est.front_detectors
         }
         self.trackers = {name: LaneTracker(TrackerConfig()) for name in self.front}
-        self.reference: Detector = create_detector(est.reference_detector,
+        self.reference: Detector = make_detector(est.reference_detector,
                                                    self.rig.cameras[est.reference_camera])
-        self.mmae = MMAE(len(self.front), MMAEConfig(residual_mode=est.residual_mode))
+        # Distance-aligned residuals: the reference looks at road the front models looked at
+        # (front look-ahead - reference look-behind) metres earlier.
+        reference_x_m = float(getattr(self.reference, "x_ref", -4.0))
+        self.mmae = MMAE(len(self.front), MMAEConfig(
+            residual_mode=est.residual_mode,
+            reference_lag_m=max(est.offset_lookahead_m - reference_x_m, 0.0)))
         geometry = self.world.car.geometry
         self.steering = SteeringPID(self.dt_s, est.control_lookahead_m, geometry.wheelbase_m,
                                     geometry.max_steer_rad)
         self.speed = SpeedController(scenario.target_speed_mps, self.dt_s)
         self.metrics = Metrics(list(self.front) + [FUSED, REFERENCE])
         self.recorder: Recorder = recorder or NullRecorder()
+        for detector in [*self.front.values(), self.reference]:
+            detector.reset()
         self.index = 0
         self.detector_errors = 0
         self._wall_start = time.perf_counter()

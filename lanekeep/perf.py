@@ -32,7 +32,7 @@ def measure(scenario_name: str = "clear_curve", repeats: int = 10,
     """All figures as a flat dict (ms, or steps/s)."""
     import cv2
 
-    from detectors.registry import create_detector
+    from detectors.registry import make_detector
     from lanekeep.cameras import CameraRig, RenderSettings
     from lanekeep.episode import Episode
     from lanekeep.render import place_on_road
@@ -63,7 +63,7 @@ def measure(scenario_name: str = "clear_curve", repeats: int = 10,
     cv2.setNumThreads(1)
     try:
         for name in dict.fromkeys(scenario.estimation.front_detectors):
-            detector = create_detector(name, cameras["front"])
+            detector = make_detector(name, cameras["front"])
             results[f"detector_ms_{name}"] = _time_ms(lambda d=detector: d.detect(frame),
                                                       repeats * 3)
     finally:
