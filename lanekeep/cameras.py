@@ -199,6 +199,7 @@ class RenderSettings:
     width: int = 1280
     height: int = 720
     shadows: bool = False
+    fog: bool = True  # MuJoCo fog; scenes without fog put it beyond the far plane (conditions)
 
 
 class CameraRig:
@@ -245,6 +246,7 @@ class CameraRig:
         renderer.disable_segmentation_rendering()
         renderer.update_scene(data, camera=camera, scene_option=self._rgb_option)
         renderer.scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = self.settings.shadows
+        renderer.scene.flags[mujoco.mjtRndFlag.mjRND_FOG] = self.settings.fog
         return renderer.render()
 
     def render_segmentation(self, data: mujoco.MjData, camera: str) -> np.ndarray:
@@ -253,6 +255,7 @@ class CameraRig:
         renderer.enable_segmentation_rendering()
         try:
             renderer.update_scene(data, camera=camera, scene_option=self._seg_option)
+            renderer.scene.flags[mujoco.mjtRndFlag.mjRND_FOG] = False  # ids must stay exact
             seg = renderer.render()
         finally:
             renderer.disable_segmentation_rendering()

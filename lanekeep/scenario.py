@@ -25,7 +25,8 @@ from lanekeep.markings import MarkingStyle
 from lanekeep.road import Road, SegmentSpec
 
 TIMES_OF_DAY = ("day", "dawn", "dusk", "night")
-SHADOW_KINDS = ("buildings", "trees", "poles", "overpass")
+SHADOW_KINDS = ("buildings", "trees")
+SIDES = ("left", "right")
 
 
 class ScenarioError(ConfigError):
@@ -86,29 +87,112 @@ class CameraConfig:
                 raise InvalidValue(key, f"must be > 0, got {getattr(self, key)}")
 
 
+def _check_unit(obj, keys: tuple[str, ...]) -> None:
+    for key in keys:
+        if not 0.0 <= getattr(obj, key) <= 1.0:
+            raise InvalidValue(key, f"must be in [0, 1], got {getattr(obj, key)}")
+
+
+@dataclass(frozen=True)
+class ShadowZone:
+    """Hard shadows cast across the road by buildings or trees standing on one side of it.
+
+    The casters' heights are chosen so that, with the scenario's sun, their shadows reach
+    `reach` of the carriageway's width (1 = to the far edge line) from the `side` they stand on.
+    """
+
+    s_start_m: float
+    s_end_m: float
+    kind: str = "buildings"  # "buildings" | "trees"
+    side: str = "left"  # side of the road the casters stand on
+    reach: float = 1.0  # how far across the carriageway the shadows reach, 0..1.5 of its width
+    coverage: float = 0.6  # fraction of the zone's length in shadow; 1 = one continuous shadow
+    darkness: float = 0.55  # opacity of the shadow overlay: 0 none, 1 black
+
+    def __post_init__(self):
+        if self.kind not in SHADOW_KINDS:
+            raise InvalidValue("kind", f"must be one of {SHADOW_KINDS}, got {self.kind!r}")
+        if self.side not in SIDES:
+            raise InvalidValue("side", f"must be one of {SIDES}, got {self.side!r}")
+        if not self.s_end_m > self.s_start_m >= 0.0:
+            raise InvalidValue("s_end_m", "need 0 <= s_start_m < s_end_m")
+        if not 0.0 < self.reach <= 1.5:
+            raise InvalidValue("reach", f"must be in (0, 1.5], got {self.reach}")
+        if not 0.05 <= self.coverage <= 1.0:
+            raise InvalidValue("coverage", f"must be in [0.05, 1], got {self.coverage}")
+        _check_unit(self, ("darkness",))
+
+
+@dataclass(frozen=True)
+class VehicleSpec:
+    """Another car (or truck) driving along a lane at constant speed; it hides markings.
+
+    Driven kinematically (a mocap body): s(t) = s_m + speed_mps * t; negative speeds drive
+    towards decreasing s (oncoming traffic, facing the other way).
+    """
+
+    lane: int = 1
+    s_m: float = 30.0  # arc length of its centre at t = 0
+    speed_mps: float = 15.0
+    offset_m: float = 0.0  # from the lane centre, + = left
+    length_m: float = 4.6
+    width_m: float = 1.85
+    height_m: float = 1.5
+    colour: tuple[float, float, float] = (0.6, 0.08, 0.08)
+
+    def __post_init__(self):
+        for key in ("length_m", "width_m", "height_m"):
+            if not 0.5 <= getattr(self, key) <= 20.0:
+                raise InvalidValue(key, f"must be in [0.5, 20] m, got {getattr(self, key)}")
+        if len(self.colour) != 3 or not all(0.0 <= c <= 1.0 for c in self.colour):
+            raise InvalidValue("colour", f"must be 3 values in [0, 1], got {self.colour}")
+
+
 @dataclass(frozen=True)
 class Conditions:
-    """Weather, light and sensor conditions; all off by default (the conditions issue fills in)."""
+    """Light, weather, road surface, traffic and sensor conditions; all off by default.
 
-    shadows: tuple[str, ...] = ()  # kinds of cast shadows on the road
-    wet: bool = False
-    fog: float = 0.0  # 0..1
-    time_of_day: str = "day"
-    rain: float = 0.0  # 0..1
-    snow: float = 0.0  # 0..1
-    noise: float = 0.0  # 0..1 sensor noise level
+    Rendered by MuJoCo (lanekeep/world_conditions.py): sun and time of day, shadows, speed bumps,
+    wet asphalt and puddles, fog, headlights, other vehicles, snow on the verges. Applied to the
+    images (lanekeep/conditions.py): rain streaks and lens drops, snowflakes, sensor noise,
+    motion blur, low-light gain. The default sun reproduces world.py's clear-day light.
+    """
+
+    time_of_day: str = "day"  # "day" | "dawn" | "dusk" | "night"; headlights on unless "day"
+    sun_elevation_deg: float = 66.7  # above the horizon
+    sun_azimuth_deg: float = -144.5  # towards the sun, from the road's start heading, + = left
+    shadows: tuple[ShadowZone, ...] = ()
+    speed_bumps_m: tuple[float, ...] = ()  # arc length of each bump across the road
+    speed_bump_height_m: float = 0.08
+    wet: float = 0.0  # 0 dry .. 1 soaked: darker, glossier asphalt and more puddles
+    fog: float = 0.0  # 0 none .. 1 dense (visibility 400 m .. 25 m)
+    rain: float = 0.0  # 0..1 streaks and lens drops (image effect)
+    snow: float = 0.0  # 0..1 flakes and whitening (image effect), snow on the verges (world)
+    noise: float = 0.0  # 0..1 sensor noise (Gaussian read noise + shot noise)
+    motion_blur: float = 0.0  # 0..1 scale of the speed-proportional motion blur
+    vehicles: tuple[VehicleSpec, ...] = ()
 
     def __post_init__(self):
         if self.time_of_day not in TIMES_OF_DAY:
             raise InvalidValue(
                 "time_of_day", f"must be one of {TIMES_OF_DAY}, got {self.time_of_day!r}"
             )
-        for i, kind in enumerate(self.shadows):
-            if kind not in SHADOW_KINDS:
-                raise InvalidValue(f"shadows[{i}]", f"must be one of {SHADOW_KINDS}, got {kind!r}")
-        for key in ("fog", "rain", "snow", "noise"):
-            if not 0.0 <= getattr(self, key) <= 1.0:
-                raise InvalidValue(key, f"must be in [0, 1], got {getattr(self, key)}")
+        if not 2.0 <= self.sun_elevation_deg <= 90.0:
+            raise InvalidValue(
+                "sun_elevation_deg", f"must be in [2, 90], got {self.sun_elevation_deg}"
+            )
+        if not 0.02 <= self.speed_bump_height_m <= 0.15:
+            raise InvalidValue(
+                "speed_bump_height_m", f"must be in [0.02, 0.15], got {self.speed_bump_height_m}"
+            )
+        for i, s in enumerate(self.speed_bumps_m):
+            if not s >= 0.0:
+                raise InvalidValue(f"speed_bumps_m[{i}]", f"must be >= 0, got {s}")
+        _check_unit(self, ("wet", "fog", "rain", "snow", "noise", "motion_blur"))
+
+    @property
+    def headlights(self) -> bool:
+        return self.time_of_day != "day"
 
 
 RESIDUAL_MODES = ("distance_aligned", "one_step_delay")
@@ -131,7 +215,7 @@ class EstimationConfig:
     reference_camera: str = "rear"
     residual_mode: str = "distance_aligned"
     output: str = "select"
-    offset_lookahead_m: float = 6.0  # where offsets are compared and reported (front)
+    offset_lookahead_m: float = 4.0  # where offsets are compared and reported (front)
     control_lookahead_m: float = 8.0  # where the PID reads the chosen lane
 
     def __post_init__(self):

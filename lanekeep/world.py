@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import mujoco
 import numpy as np
@@ -25,6 +26,9 @@ from lanekeep.road_mesh import Ribbon, ribbon
 from lanekeep.scenario import Scenario
 from lanekeep.vehicle import Car
 from mjcf import CAR_XML
+
+if TYPE_CHECKING:
+    from lanekeep.world_conditions import ConditionsInfo  # conditions hook
 
 # Heights of the visual layers above the contact plane (m); 1 cm apart avoids z-fighting with
 # the depth-buffer resolution at 100 m (about 3 mm with znear 0.2 m).
@@ -54,6 +58,7 @@ class World:
     data: mujoco.MjData
     car: Car
     marking_boundary: np.ndarray  # geom id -> boundary index, -1 for non-marking geoms
+    conditions: ConditionsInfo | None = None  # conditions hook: what world_conditions added
 
     def reset(self) -> None:
         """Put the car at the scenario's start pose and speed, everything else at rest."""
@@ -205,8 +210,9 @@ def _add_markings(
 
 def build_spec(
     scenario: Scenario, road: Road, layout: WorldLayout | None = None
-) -> tuple[mujoco.MjSpec, dict[str, int]]:
-    """The scenario's MjSpec and the marking geom names with their boundary index."""
+) -> tuple[mujoco.MjSpec, dict[str, int], ConditionsInfo]:
+    """The scenario's MjSpec, the marking geom names with their boundary index, and what the
+    scenario's conditions added (lanekeep/world_conditions.py)."""
     layout = layout or WorldLayout()
     spec = mujoco.MjSpec.from_file(str(CAR_XML))
     spec.modelname = f"lanekeep_{scenario.name}"
@@ -223,13 +229,15 @@ def build_spec(
     _add_environment(spec, road, scenario)
     _add_road_surface(spec, road, layout)
     marking_names = _add_markings(spec, road, layout)
-    return spec, marking_names
+    from lanekeep.world_conditions import add_conditions  # conditions hook (imports this module)
+
+    return spec, marking_names, add_conditions(spec, scenario, road)
 
 
 def build(scenario: Scenario, layout: WorldLayout | None = None) -> World:
     """Compile a scenario into a ready-to-step World with the car at its start pose."""
     road = scenario.build_road()
-    spec, marking_names = build_spec(scenario, road, layout)
+    spec, marking_names, conditions = build_spec(scenario, road, layout)
     model = spec.compile()
     timestep = model.opt.timestep
     ratio = scenario.control_period_s / timestep
@@ -242,7 +250,7 @@ def build(scenario: Scenario, layout: WorldLayout | None = None) -> World:
     for name, boundary in marking_names.items():
         marking_boundary[model.geom(name).id] = boundary
     data = mujoco.MjData(model)
-    world = World(scenario, road, model, data, Car(model, data), marking_boundary)
+    world = World(scenario, road, model, data, Car(model, data), marking_boundary, conditions)
     world.reset()
     return world
 
