@@ -54,6 +54,7 @@ class StepResult:
     pose: tuple[float, float, float]
     speed_mps: float
     events: list[str] = field(default_factory=list)
+    tracker_status: dict[str, str] = field(default_factory=dict)  # UpdateStatus value per model
 
 
 class Episode:
@@ -146,6 +147,7 @@ class Episode:
     def _track(self, estimates) -> dict[str, np.ndarray | None]:
         car = self.world.car
         tracked = {}
+        self._tracker_status = {}
         for name, tracker in self.trackers.items():
             tracker.predict(self.dt_s, car.speed_mps(), car.yaw_rate_rps())
             estimate = estimates[name]
@@ -156,7 +158,7 @@ class Episode:
                 side = estimate.left if estimate.left is not None else estimate.right
                 sign = -1.0 if estimate.left is not None else 1.0
                 centre = None if side is None else np.asarray(side) + [sign * half, 0.0, 0.0]
-            tracker.update_coefficients(centre)
+            self._tracker_status[name] = tracker.update_coefficients(centre).status.value
             tracked[name] = tracker.coefficients
         return tracked
 
@@ -252,6 +254,7 @@ class Episode:
             steer=steer, throttle=throttle, truth_offset_m=truth(0.0).offset_m,
             truth_centre=truth(0.0).center, pose=(x, y, yaw),
             speed_mps=world.car.speed_mps(), events=events,
+            tracker_status=dict(self._tracker_status),
         )
 
     def _wheels_outside_lane(self) -> bool:

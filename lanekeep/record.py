@@ -1,8 +1,71 @@
-"""Episode recording. `NullRecorder` costs nothing; the rerun recorder logs every step."""
+"""Episode recording. `NullRecorder` costs nothing; `RerunRecorder` writes a rerun .rrd file.
+
+`rerun` is imported only when a `RerunRecorder` is made, so an episode without recording never
+loads it. Everything one control step logs is stamped with the time lines `step` (sequence:
+the control step index) and `sim_time` (the simulated time at which that step's camera frames
+were taken). The episode hands the recorder the state after actuation; the recorder therefore
+keeps the previous step's pose, which is the pose the frames were taken from, and draws ground
+truth from it so that it lines up with the images.
+
+Entity paths (metres; `world` is MuJoCo's frame, z up; lanes of the vehicle frame x forward,
+y left are drawn in world coordinates):
+
+    scenario                              static: TOML text, seed, command that reproduces it
+    cameras/{front,rear}/image            JPEG, encoded by rerun (quality configurable)
+    cameras/{cam}/segmentation            marking mask (optional layer)
+    cameras/{cam}/lanes/{model}/points    pixels each detector fitted (LaneEstimate.image_points)
+    cameras/{cam}/lanes/{model}/boundaries  its left/right polynomials projected by the camera
+    cameras/{cam}/lanes/truth             the true ego-lane boundaries projected (green)
+    cameras/front/lanes/output            centre of the lane the controller follows (white)
+    world/road/boundaries                 static: every lane boundary
+    world/car, world/car/body             pose (Transform3D) and a box the car's size
+    world/path                            the driven path so far
+    world/lanes/{model}, world/lanes/output  lane estimates in world coordinates
+    plots/offset/{truth,model...,reference,fused}  lateral offsets at each look-ahead (m)
+    plots/error/{model...,reference,fused}  estimate - truth at the estimate's look-ahead (m)
+    plots/probability/{model}             MMAE probabilities
+    plots/car/{offset_m,speed_mps,steer,throttle}
+    events                                text: model switches, reference repairs, gated
+                                          measurements, lanes lost/found, detector failures,
+                                          lane departures
+
+Scalars and events are logged every step; images, overlays and the 3D view every `every`-th.
+"""
 
 from __future__ import annotations
 
+import math
+import queue
+import signal
+import threading
+import uuid
+from collections.abc import Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass
+from pathlib import Path
 from typing import Any, Protocol
+
+import numpy as np
+
+from detectors.base import LaneEstimate, poly_eval
+
+APPLICATION_ID = "lanekeep"
+REFERENCE, TRUTH, OUTPUT = "reference", "truth", "output"
+COLOURS = {
+    TRUTH: (40, 220, 40),
+    OUTPUT: (255, 255, 255),
+    REFERENCE: (255, 220, 0),
+    "fused": (255, 255, 255),
+    "hough": (255, 140, 0),
+    "sliding_window": (0, 170, 255),
+    "lanenet": (230, 60, 230),
+}
+_SPARE_COLOURS = ((255, 90, 90), (140, 110, 255), (0, 220, 200), (200, 200, 120))
+LANE_RANGE_M = (3.0, 30.0)  # |x| of the lane polylines drawn from each camera
+TRUTH_BEHIND_M, TRUTH_AHEAD_M, TRUTH_STEP_M = 25.0, 45.0, 0.5
+ROAD_STEP_M = 1.0
+MAX_POINTS_PER_SIDE = 400
+LINE_Z_M = 0.05  # lifted above the road in the 3D view
 
 
 class Recorder(Protocol):
@@ -21,3 +84,427 @@ class NullRecorder:
 
     def close(self) -> None:
         return None
+
+
+def colour(name: str, index: int = 0) -> tuple[int, int, int]:
+    """Fixed colour per source, so a model has the same colour in every view."""
+    return COLOURS.get(name, _SPARE_COLOURS[index % len(_SPARE_COLOURS)])
+
+
+# -- geometry -----------------------------------------------------------------------------------
+def world_to_vehicle(xy: np.ndarray, pose: tuple[float, float, float]) -> np.ndarray:
+    """World XY (..., 2) into the vehicle ground frame of `pose` = (x, y, yaw)."""
+    x, y, yaw = pose
+    d = np.asarray(xy, dtype=float) - (x, y)
+    c, s = math.cos(yaw), math.sin(yaw)
+    return np.stack([d[..., 0] * c + d[..., 1] * s, -d[..., 0] * s + d[..., 1] * c], axis=-1)
+
+
+def vehicle_to_world(xy: np.ndarray, pose: tuple[float, float, float]) -> np.ndarray:
+    """Vehicle-frame XY (..., 2) of `pose` into world XY."""
+    x, y, yaw = pose
+    v = np.asarray(xy, dtype=float)
+    c, s = math.cos(yaw), math.sin(yaw)
+    return np.stack([x + v[..., 0] * c - v[..., 1] * s, y + v[..., 0] * s + v[..., 1] * c], -1)
+
+
+class TrueLane:
+    """The ego lane from the road geometry, sampled around one pose, in that vehicle frame."""
+
+    def __init__(self, road, lane: int, pose: tuple[float, float, float]) -> None:
+        s_car, _ = road.local_coordinates(np.array(pose[:2]))
+        s = s_car + np.arange(-TRUTH_BEHIND_M, TRUTH_AHEAD_M + TRUTH_STEP_M, TRUTH_STEP_M)
+        r = np.array([road.boundary_r(lane + 1), road.boundary_r(lane), road.lane_center_r(lane)])
+        left, right, centre = world_to_vehicle(road.position(s[None, :], r[:, None]), pose)
+        self.left, self.right, self.centre = left, right, centre
+
+    def offset_m(self, x_m: float) -> float:
+        """True offset of the car from the lane centre at look-ahead x (+ = car left of centre)."""
+        order = np.argsort(self.centre[:, 0])
+        return -float(np.interp(x_m, self.centre[order, 0], self.centre[order, 1]))
+
+    def boundaries(self, x_lo: float, x_hi: float) -> list[np.ndarray]:
+        return [b[(b[:, 0] >= x_lo) & (b[:, 0] <= x_hi)] for b in (self.left, self.right)]
+
+
+def _camera_x_range(camera) -> tuple[float, float]:
+    """Vehicle-frame x interval of the ground that a camera looks at (front: +, rear: -)."""
+    forward = -camera.rotation[0, 2]
+    lo, hi = LANE_RANGE_M
+    return (lo, hi) if forward >= 0 else (-hi, -lo)
+
+
+def _poly_points(coeffs, x_range: tuple[float, float], n: int = 28) -> np.ndarray:
+    xs = np.linspace(*x_range, n)
+    return np.column_stack([xs, poly_eval(coeffs, xs)])
+
+
+def _to_pixels(camera, ground_xy: np.ndarray) -> np.ndarray:
+    """Project ground points; keep those in front of the camera and near the image."""
+    if len(ground_xy) == 0:
+        return np.zeros((0, 2))
+    uv, in_front = camera.project_ground(ground_xy)
+    margin_w, margin_h = camera.width, camera.height
+    keep = in_front & (uv[:, 0] > -margin_w) & (uv[:, 0] < camera.width + margin_w)
+    keep &= (uv[:, 1] > -margin_h) & (uv[:, 1] < camera.height + margin_h)
+    return uv[keep]
+
+
+def _estimate_sides(estimate: LaneEstimate) -> list:
+    return [c for c in (estimate.left, estimate.right) if c is not None]
+
+
+@contextmanager
+def _no_interrupt() -> Iterator[None]:
+    """Hold off Ctrl-C while the file is finalised (a second one would cut its footer)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
+# -- the blueprint ------------------------------------------------------------------------------
+def blueprint(scenario):
+    """Cameras side by side; offsets and probabilities; the top view; errors, car, events."""
+    import rerun.blueprint as rrb
+
+    x, y, yaw = scenario.start_pose()
+    eye = [x - 25.0 * math.cos(yaw), y - 25.0 * math.sin(yaw), 45.0]
+    top = rrb.Spatial3DView(
+        origin="world", name="top view",
+        eye_controls=rrb.EyeControls3D(kind=rrb.Eye3DKind.Orbital, position=eye,
+                                       look_target=[x, y, 0.0], eye_up=[0.0, 0.0, 1.0],
+                                       tracking_entity="world/car"),
+    )
+    return rrb.Blueprint(
+        rrb.Vertical(
+            rrb.Horizontal(
+                rrb.Spatial2DView(origin="cameras/front", name="front camera"),
+                rrb.Spatial2DView(origin="cameras/rear", name="rear camera"),
+            ),
+            rrb.Horizontal(
+                rrb.Vertical(
+                    rrb.TimeSeriesView(origin="plots/offset", name="offsets (m)"),
+                    rrb.TimeSeriesView(origin="plots/probability", name="MMAE probabilities",
+                                       axis_y=rrb.ScalarAxis(range=(0.0, 1.0))),
+                ),
+                top,
+                rrb.Vertical(
+                    rrb.TimeSeriesView(origin="plots/error", name="errors (m)"),
+                    rrb.TimeSeriesView(origin="plots/car", name="car"),
+                    rrb.TextLogView(origin="events", name="events"),
+                ),
+                column_shares=[2, 2, 2],
+            ),
+            row_shares=[2, 3],
+        ),
+        rrb.BlueprintPanel(state="collapsed"),
+        rrb.SelectionPanel(state="collapsed"),
+    )
+
+
+def scenario_document(scenario) -> str:
+    """Markdown that says how to reproduce the recording: command, seed, the scenario's TOML."""
+    source = Path(scenario.source) if scenario.source else None
+    if source is not None and source.is_file():
+        toml = source.read_text(encoding="utf-8")
+    else:
+        toml = f"# source {scenario.source!r} is not a file; the parsed scenario:\n{scenario!r}"
+    where = str(source) if source is not None and source.is_file() else scenario.name
+    return (f"# {scenario.name}\n\nseed **{scenario.seed}** (it overrides the file's seed)\n\n"
+            f"reproduce: `lanekeep run {where} --seed {scenario.seed}`\n\n"
+            f"duration {scenario.duration_s} s, control period {scenario.control_period_s} s\n\n"
+            f"```toml\n{toml}\n```\n")
+
+
+# -- the recorder -------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class _EpisodeView:
+    """What the writer thread needs from an episode, read once on the episode's thread."""
+
+    road: Any
+    cameras: dict[str, Any]
+    models: list[str]
+    dt_s: float
+    car_size_m: tuple[float, float]
+
+    @classmethod
+    def of(cls, episode) -> _EpisodeView:
+        geometry = episode.world.car.geometry
+        return cls(episode.world.road, dict(episode.rig.cameras), list(episode.front),
+                   float(episode.dt_s), (geometry.length_m, geometry.width_m))
+
+
+class RerunRecorder:
+    """Streams every step of an episode to a rerun .rrd file, with a default blueprint.
+
+    `log_step` only queues the step (and renders the segmentation, which needs the physics
+    state): a writer thread JPEG-encodes, projects and logs, so the loop does not wait for it
+    while the GIL is free (rendering, physics, OpenCV). The queue is bounded, so a slow writer
+    slows the loop rather than filling memory. Steps are treated as immutable once handed over.
+
+    Args:
+        path: the .rrd file (streamed as the episode runs; `close()` writes its footer).
+        scenario: the scenario being run; its TOML and seed are stored in the recording.
+        every: log images, overlays and the 3D view on every N-th step (scalars: every step).
+        jpeg_quality: quality of the camera images (rerun's JPEG encoder), 1..100.
+        segmentation: also render and log the marking mask of both cameras (two extra renders
+            per recorded step, on the episode's thread).
+    """
+
+    QUEUE_STEPS = 4
+
+    def __init__(self, path: Path, scenario, every: int = 1, jpeg_quality: int = 75,
+                 segmentation: bool = False) -> None:
+        if every < 1:
+            raise ValueError(f"every must be >= 1, got {every}")
+        if not 1 <= jpeg_quality <= 100:
+            raise ValueError(f"jpeg_quality must be in 1..100, got {jpeg_quality}")
+        import rerun as rr
+
+        self._rr = rr
+        self.path = Path(path)
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        self.scenario = scenario
+        self.every = int(every)
+        self.jpeg_quality = int(jpeg_quality)
+        self.segmentation = segmentation
+        self._rec = rr.RecordingStream(APPLICATION_ID, recording_id=uuid.uuid4())
+        self._rec.save(self.path, default_blueprint=blueprint(scenario))
+        self._rec.send_recording_name(f"{scenario.name} seed {scenario.seed}")
+        self._rec.log("scenario", rr.TextDocument(scenario_document(scenario),
+                                                  media_type=rr.MediaType.MARKDOWN), static=True)
+        self._view: _EpisodeView | None = None
+        self._closed = False
+        self._error: BaseException | None = None
+        # Writer-thread state: the pose the current frames were taken from, the path so far.
+        self._sense_pose: tuple[float, float, float] | None = None
+        self._path: list[tuple[float, float]] = []
+        self._selected: int | None = None
+        self._valid: dict[str, bool] = {}
+        self._queue: queue.Queue = queue.Queue(maxsize=self.QUEUE_STEPS)
+        self._writer = threading.Thread(target=self._write_loop, name="rerun-recorder",
+                                        daemon=True)
+        self._writer.start()
+
+    # -- the episode's thread ------------------------------------------------------------------
+    def log_step(self, episode: Any, step: Any) -> None:
+        if self._closed:
+            return
+        self._raise_writer_error()
+        if self._view is None:
+            self._view = _EpisodeView.of(episode)
+            self._queue.put(("static", self._view, None))
+        masks = None
+        if self.segmentation and (step.index + 1) % self.every == 0:
+            # The physics state now is the one the next step's frames will be rendered from.
+            masks = {name: episode.world.marking_mask(
+                episode.rig.render_segmentation(episode.world.data, name)).astype(np.uint8)
+                for name in step.frames}
+        self._queue.put(("step", step, masks))
+
+    def close(self) -> None:
+        """Drain the writer, flush and finalise the file (footer included); safe to repeat."""
+        if self._closed:
+            return
+        self._closed = True
+        with _no_interrupt():
+            self._queue.put(None)
+            self._writer.join()
+            self._rec.flush()
+            self._rec.disconnect()
+        self._raise_writer_error()
+
+    def __enter__(self) -> RerunRecorder:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def _raise_writer_error(self) -> None:
+        if self._error is not None:
+            error, self._error = self._error, None
+            raise RuntimeError(f"recording to {self.path} failed: {error!r}") from error
+
+    # -- the writer thread ---------------------------------------------------------------------
+    def _write_loop(self) -> None:
+        while (item := self._queue.get()) is not None:
+            if self._error is not None:
+                continue  # keep draining so that the episode never blocks on a full queue
+            kind, payload, masks = item
+            try:
+                if kind == "static":
+                    self._log_static(payload)
+                else:
+                    self._log_step(payload, masks)
+            except Exception as err:  # noqa: BLE001 - handed to the episode's thread
+                self._error = err
+
+    def _log_step(self, step, masks) -> None:
+        rr, rec, view = self._rr, self._rec, self._view
+        pose = self._sense_pose or self.scenario.start_pose(view.road)
+        self._sense_pose = tuple(step.pose)  # the pose the next step's frames are taken from
+        self._path.append(pose[:2])
+        rec.set_time("step", sequence=int(step.index))
+        rec.set_time("sim_time", duration=max(0.0, float(step.time_s) - view.dt_s))
+        truth = TrueLane(view.road, self.scenario.road.ego_lane, pose)
+        self._log_scalars(step, truth)
+        self._log_events(step)
+        if step.index % self.every == 0:
+            self._log_cameras(step, truth)
+            self._log_world(step, pose)
+        if masks:
+            rec.set_time("step", sequence=int(step.index) + 1)
+            rec.set_time("sim_time", duration=float(step.time_s))
+            for name, mask in masks.items():
+                rec.log(f"cameras/{name}/segmentation", rr.SegmentationImage(mask, opacity=0.5))
+
+    def _sources(self) -> dict[str, str]:
+        """Estimate name -> the camera its frame came from."""
+        cams = {name: "front" for name in self._view.models}
+        cams[REFERENCE] = self.scenario.estimation.reference_camera
+        return cams
+
+    def _colour(self, name: str) -> tuple[int, int, int]:
+        models = self._view.models
+        return colour(name, models.index(name) if name in models else 0)
+
+    def _log_static(self, view: _EpisodeView) -> None:
+        rr, rec, road = self._rr, self._rec, view.road
+        s = np.append(np.arange(0.0, road.length_m, ROAD_STEP_M), road.length_m)
+        strips = []
+        for i in range(road.n_lanes + 1):
+            xy = road.position(s, road.boundary_r(i))
+            strips.append(np.column_stack([xy, np.full(len(s), LINE_Z_M)]))
+        rec.log("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
+        rec.log("world/road/boundaries",
+                rr.LineStrips3D(strips, colors=[(200, 200, 200)], radii=0.06), static=True)
+        length, width = view.car_size_m
+        rec.log("world/car/body", rr.Boxes3D(centers=[[0.0, 0.0, 0.75]],
+                                             half_sizes=[[length / 2, width / 2, 0.75]],
+                                             colors=[(90, 90, 200)]), static=True)
+        rec.log("cameras", rr.AnnotationContext([(0, "road", (0, 0, 0, 0)),
+                                                 (1, "marking", (255, 0, 255, 160))]),
+                static=True)
+        series = {f"plots/offset/{TRUTH}": TRUTH, f"plots/offset/{REFERENCE}": REFERENCE,
+                  "plots/offset/fused": "fused", f"plots/error/{REFERENCE}": REFERENCE,
+                  "plots/error/fused": "fused"}
+        for name in view.models:
+            for group in ("offset", "error", "probability"):
+                series[f"plots/{group}/{name}"] = name
+        for path, name in series.items():
+            rec.log(path, rr.SeriesLines(colors=[self._colour(name)], names=[name]), static=True)
+
+    def _log_scalars(self, step, truth: TrueLane) -> None:
+        rr, rec = self._rr, self._rec
+        est = self.scenario.estimation
+        rec.log(f"plots/offset/{TRUTH}", rr.Scalars(truth.offset_m(est.offset_lookahead_m)))
+        for name, estimate in step.estimates.items():
+            value = step.reference_m if name == REFERENCE else estimate.offset_m
+            if not estimate.valid or value is None:
+                continue
+            rec.log(f"plots/offset/{name}", rr.Scalars(value))
+            rec.log(f"plots/error/{name}", rr.Scalars(value - truth.offset_m(estimate.x_m)))
+        if step.output_offset_m is not None:
+            rec.log("plots/offset/fused", rr.Scalars(step.output_offset_m))
+            rec.log("plots/error/fused", rr.Scalars(
+                step.output_offset_m - truth.offset_m(est.offset_lookahead_m)))
+        for name, p in zip(self._view.models, np.asarray(step.probabilities), strict=False):
+            rec.log(f"plots/probability/{name}", rr.Scalars(float(p)))
+        rec.log("plots/car/offset_m", rr.Scalars(truth.offset_m(0.0)))
+        rec.log("plots/car/speed_mps", rr.Scalars(float(step.speed_mps)))
+        rec.log("plots/car/steer", rr.Scalars(float(step.steer)))
+        rec.log("plots/car/throttle", rr.Scalars(float(step.throttle)))
+
+    def _log_events(self, step) -> None:
+        names = self._view.models
+        lines: list[tuple[str, str]] = []
+        if self._selected is not None and step.selected != self._selected:
+            p = float(np.asarray(step.probabilities)[step.selected])
+            lines.append(("INFO", f"model switch: {names[self._selected]} -> "
+                                  f"{names[step.selected]} (p = {p:.2f})"))
+        self._selected = int(step.selected)
+        for name, status in getattr(step, "tracker_status", {}).items():
+            if status == "gated":
+                lines.append(("WARN", f"tracker {name}: measurement gated"))
+        for name, estimate in step.estimates.items():
+            was = self._valid.get(name)
+            if was is not None and was != estimate.valid:
+                text = "lane found" if estimate.valid else f"lane lost ({estimate.reason})"
+                lines.append(("INFO", f"detector {name}: {text}"))
+            self._valid[name] = estimate.valid
+        for text in step.events:
+            level = ("WARN" if "departure" in text else
+                     "ERROR" if "failed" in text or "returned" in text else "INFO")
+            lines.append((level, text))
+        for level, text in lines:
+            self._rec.log("events", self._rr.TextLog(text, level=level))
+
+    def _log_cameras(self, step, truth: TrueLane) -> None:
+        rr, rec, cameras = self._rr, self._rec, self._view.cameras
+        for cam_name, frame in step.frames.items():
+            rec.log(f"cameras/{cam_name}/image",
+                    rr.Image(frame).compress(jpeg_quality=self.jpeg_quality))
+            x_range = _camera_x_range(cameras[cam_name])
+            strips = [_to_pixels(cameras[cam_name], b) for b in truth.boundaries(*x_range)]
+            rec.log(f"cameras/{cam_name}/lanes/{TRUTH}",
+                    rr.LineStrips2D(strips, colors=[colour(TRUTH)], radii=1.5))
+        for name, cam_name in self._sources().items():
+            estimate = step.estimates.get(name)
+            base = f"cameras/{cam_name}/lanes/{name}"
+            if estimate is None or not estimate.valid:
+                rec.log(base, rr.Clear(recursive=True))
+                continue
+            camera, rgb = cameras[cam_name], self._colour(name)
+            x_range = _camera_x_range(camera)
+            strips = [_to_pixels(camera, _poly_points(c, x_range))
+                      for c in _estimate_sides(estimate)]
+            rec.log(f"{base}/boundaries", rr.LineStrips2D(strips, colors=[rgb], radii=2.0))
+            points = [np.asarray(p, dtype=float).reshape(-1, 2)
+                      for p in estimate.image_points.values()]
+            points = [p[:: max(1, len(p) // MAX_POINTS_PER_SIDE)] for p in points]
+            if points:
+                rec.log(f"{base}/points", rr.Points2D(np.concatenate(points), colors=[rgb],
+                                                      radii=2.0))
+        if step.output_centre is None:
+            rec.log(f"cameras/front/lanes/{OUTPUT}", rr.Clear(recursive=False))
+        else:
+            front = cameras["front"]
+            line = _to_pixels(front, _poly_points(step.output_centre, _camera_x_range(front)))
+            rec.log(f"cameras/front/lanes/{OUTPUT}",
+                    rr.LineStrips2D([line], colors=[colour(OUTPUT)], radii=1.5))
+
+    def _log_world(self, step, pose) -> None:
+        rr, rec, cameras = self._rr, self._rec, self._view.cameras
+        x, y, yaw = pose
+        rec.log("world/car", rr.Transform3D(translation=[x, y, 0.0],
+                                            rotation=rr.RotationAxisAngle(axis=[0, 0, 1],
+                                                                          radians=yaw)))
+        path = np.asarray(self._path, dtype=np.float32)
+        rec.log("world/path", rr.LineStrips3D(
+            [np.column_stack([path, np.full(len(path), LINE_Z_M, dtype=np.float32)])],
+            colors=[(255, 80, 80)], radii=0.1))
+        for name, cam_name in self._sources().items():
+            estimate = step.estimates.get(name)
+            if estimate is None or not estimate.valid:
+                rec.log(f"world/lanes/{name}", rr.Clear(recursive=False))
+                continue
+            x_range = _camera_x_range(cameras[cam_name])
+            strips = [_lifted(vehicle_to_world(_poly_points(c, x_range), pose))
+                      for c in _estimate_sides(estimate)]
+            rec.log(f"world/lanes/{name}",
+                    rr.LineStrips3D(strips, colors=[self._colour(name)], radii=0.08))
+        if step.output_centre is None:
+            rec.log(f"world/lanes/{OUTPUT}", rr.Clear(recursive=False))
+        else:
+            centre = _poly_points(step.output_centre, _camera_x_range(cameras["front"]))
+            rec.log(f"world/lanes/{OUTPUT}", rr.LineStrips3D(
+                [_lifted(vehicle_to_world(centre, pose))], colors=[colour(OUTPUT)], radii=0.06))
+
+
+def _lifted(xy: np.ndarray) -> np.ndarray:
+    return np.column_stack([xy, np.full(len(xy), LINE_Z_M)])
