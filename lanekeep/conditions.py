@@ -7,8 +7,8 @@ snow in front of the camera, water drops on the lens, then the sensor: low-light
 `ImageEffects` is made once per camera and episode: it precomputes kernels and a noise bank and
 keeps the lens drops (they stay on the lens and slide down slowly). Every random choice per frame
 comes from the `numpy.random.Generator` passed in, so a seed gives bit-identical frames.
-`apply(image, conditions, rng)` is the one-shot form. Each effect costs about 2-8 ms on a
-1280x720 frame on one core (measured in tests/test_conditions.py).
+`apply(image, conditions, rng)` is the one-shot form. Each effect costs about 1.5-8.5 ms on a
+1280x720 frame (rain with lens drops 6, snow 4, noise 8, motion blur 1.5, night gain and noise 8.5).
 """
 
 from __future__ import annotations
@@ -52,8 +52,8 @@ class ImageEffects:
         if self.noise_level > 0.0:
             bank_rows = NOISE_BANK_FRAMES * height
             self.noise_bank = rng.standard_normal((bank_rows, width * 3), dtype=np.float32)
-            sd = np.sqrt(READ_NOISE_DN**2 + SHOT_GAIN_DN * np.arange(256))
-            self.noise_sd = (sd * self.noise_level).astype(np.float32)
+            sd = np.sqrt(READ_NOISE_DN**2 + SHOT_GAIN_DN * np.arange(256)) * self.noise_level
+            self.noise_sd4 = _lut(np.round(4.0 * sd))  # quarter-DN steps, <= 255 (sd <= 19 DN)
         # Lens drops: centre (x, y), radius in pixels; they stay and slide down.
         n_drops = int(round(14 * c.rain))
         r = rng.uniform(8.0, 30.0, n_drops) * self.scale
@@ -130,11 +130,8 @@ class ImageEffects:
         h = self.height
         start = int(rng.integers(0, self.noise_bank.shape[0] - h + 1))
         noise = self.noise_bank[start : start + h].reshape(h, self.width, 3)
-        if rng.integers(0, 2):
-            noise = noise[:, ::-1]
-        sd = self.noise_sd[image]
-        out = cv2.add(image, sd * noise, dtype=cv2.CV_32F)
-        return np.clip(out, 0, 255).round().astype(np.uint8)  # round: bit-exact, no cv2 ties
+        scaled = cv2.multiply(noise, cv2.LUT(image, self.noise_sd4), scale=0.25, dtype=cv2.CV_32F)
+        return cv2.add(image, scaled, dtype=cv2.CV_8U)  # saturates and rounds
 
     def __call__(self, image: np.ndarray, rng: np.random.Generator,
                  speed_mps: float = 0.0) -> np.ndarray:
