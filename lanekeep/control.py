@@ -61,6 +61,7 @@ class SteeringTuning:
     integral_time_curvy_s: float = 6.0  # paper: K_i > 0 only on curvy roads
     curvy_threshold_1pm: float = 1.0 / 400.0  # |curvature| above which the curvy set is used
     integral_limit_m_s: float = 2.0  # anti-windup clamp on the summed error (m*s)
+    curvature_feedforward: bool = True
 
 
 @dataclass(frozen=True)
@@ -97,6 +98,11 @@ class SteeringPID:
     Gains are scheduled between a straight and a curvy set by the estimated road curvature,
     re-derived for the current speed; the integral is clamped and frozen while the output
     saturates (anti-windup). Output: steer in [-1, 1], + = left.
+
+    Our addition to eq. 9: a curvature feed-forward, the steady-state Ackermann angle
+    atan(L kappa) of the estimated lane curvature, so that the feedback only corrects errors
+    instead of having to build a standing offset (or a slow integral) to hold a curve. Set
+    `SteeringTuning.curvature_feedforward = False` for the paper's pure PID.
     """
 
     def __init__(self, dt_s: float, lookahead_m: float, wheelbase_m: float,
@@ -131,6 +137,8 @@ class SteeringPID:
         delta = 0.0 if self.previous_error is None else error - self.previous_error
         self.previous_error = error
         unclipped = g.kp * error + g.ki * self.error_sum + g.kd * delta  # eq. 9
+        if self.tuning.curvature_feedforward:
+            unclipped += math.atan(self.wheelbase_m * curvature_1pm) / self.max_steer_rad
         out = min(max(unclipped, -1.0), 1.0)
         saturated = (out >= 1.0 and error > 0) or (out <= -1.0 and error < 0)
         if not saturated and g.ki > 0:

@@ -8,7 +8,6 @@ lane's offset at the control look-ahead; the speed PI holds the target speed.
 
 from __future__ import annotations
 
-import math
 import time
 from dataclasses import dataclass, field
 
@@ -17,11 +16,12 @@ import numpy as np
 
 from detectors.base import Detector, LaneEstimate, poly_eval
 from detectors.registry import make_detector
+from estimators.alignment import OdometryAlignedHistory
 from estimators.kalman import LaneTracker, TrackerConfig
 from estimators.mmae import MMAE, MMAEConfig
 from lanekeep import world_conditions
 from lanekeep.cameras import CameraRig, RenderSettings
-from lanekeep.conditions import apply as apply_conditions
+from lanekeep.conditions import ImageEffects
 from lanekeep.control import SpeedController, SteeringPID
 from lanekeep.ground_truth import lane_truth
 from lanekeep.metrics import EpisodeReport, Metrics
@@ -69,6 +69,9 @@ class Episode:
         self.rig = CameraRig(self.world.model,
                              RenderSettings(width, height, scenario.camera.shadows))
         self.rng = np.random.default_rng(scenario.seed)
+        # One effects pipeline per camera: lens drops persist and slide between frames.
+        self.effects = {name: ImageEffects(scenario.conditions, height, width, self.rng)
+                        for name in self.rig.CAMERA_NAMES}
         self.dt_s = scenario.control_period_s
         self.substeps = physics_steps_per_control(self.world)
         self.front: dict[str, Detector] = {
@@ -77,12 +80,13 @@ class Episode:
         self.trackers = {name: LaneTracker(TrackerConfig()) for name in self.front}
         self.reference: Detector = make_detector(est.reference_detector,
                                                    self.rig.cameras[est.reference_camera])
-        # Distance-aligned residuals: the reference looks at road the front models looked at
-        # (front look-ahead - reference look-behind) metres earlier.
-        reference_x_m = float(getattr(self.reference, "x_ref", -4.0))
-        self.mmae = MMAE(len(self.front), MMAEConfig(
-            residual_mode=est.residual_mode,
-            reference_lag_m=max(est.offset_lookahead_m - reference_x_m, 0.0)))
+        # Distance-aligned residuals: each model's past lane estimate is carried by odometry to
+        # the point the reference measures now (estimators/alignment.py), so the MMAE compares
+        # values for the same road position at the same step (lag 0 in its own terms).
+        self.reference_x_m = float(getattr(self.reference, "x_ref", -4.0))
+        self.aligned = OdometryAlignedHistory(len(self.front))
+        self.travelled_m = 0.0
+        self.mmae = MMAE(len(self.front), MMAEConfig(residual_mode=est.residual_mode))
         geometry = self.world.car.geometry
         self.steering = SteeringPID(self.dt_s, est.control_lookahead_m, geometry.wheelbase_m,
                                     geometry.max_steer_rad)
@@ -117,8 +121,7 @@ class Episode:
         frames = {}
         for name in self.rig.CAMERA_NAMES:
             rgb = self.rig.render_rgb(data, name)
-            frames[name] = apply_conditions(rgb, self.scenario.conditions, self.rng,
-                                            speed_mps=self.world.car.speed_mps())
+            frames[name] = self.effects[name](rgb, self.rng, speed_mps=self.world.car.speed_mps())
         return frames
 
     def _safe_detect(self, name: str, detector: Detector, frame: np.ndarray,
@@ -169,12 +172,16 @@ class Episode:
             offsets.append(tracker.offset_m(x_eval))
             variances.append(tracker.offset_variance_m2(x_eval))
         reference = estimates[REFERENCE]
-        s_m, _ = self.world.road.local_coordinates(np.array(self.world.car.pose()[:2]))
+        pose = self.world.car.pose()
+        self.travelled_m += abs(self.world.car.speed_mps()) * self.dt_s  # odometry
+        if self.scenario.estimation.residual_mode == "distance_aligned":
+            self.aligned.push(pose, list(tracked.values()), variances, x_eval)
+            offsets, variances = self.aligned.offsets_at(pose, self.reference_x_m)
         selection = self.mmae.step(
             reference.offset_m if reference.valid else None,
             offsets,
-            [math.inf if v is None else v for v in variances],
-            s_m=float(s_m),
+            variances,
+            s_m=self.travelled_m,
         )
         if selection.reference_repaired:
             events.append(f"reference repaired: {reference.offset_m:+.2f} m -> "

@@ -1,0 +1,81 @@
+"""Closed-loop episodes: safety in every shipped scenario, accuracy on the clear roads and the
+paper's five cases, determinism, and dm_env conformance."""
+
+import dataclasses
+
+import pytest
+from absl.testing import absltest
+from dm_env import test_utils
+
+from lanekeep.env import LaneKeepEnv
+from lanekeep.episode import Episode
+from lanekeep.scenario import load_scenario, shipped_scenarios
+
+PAPER_CASES = ("case1_building_shadows", "case2_sharp_turn", "case3_mild_turn_shade_bumps",
+               "case4_half_shade_straight", "case5_wet_rain_turn")
+
+
+def _run(name, seconds=None, render_size=None, **changes):
+    scenario = load_scenario(name)
+    if changes:
+        scenario = dataclasses.replace(scenario, **changes)
+    with Episode(scenario, render_size=render_size) as episode:
+        return episode.run(seconds)
+
+
+@pytest.fixture(scope="module")
+def paper_reports():
+    return {name: _run(name) for name in PAPER_CASES}
+
+
+@pytest.mark.parametrize("name", shipped_scenarios())
+def test_no_lane_departure_with_the_mmae_loop(name):
+    """8 s of every shipped scenario at half resolution (the full runs are `lanekeep bench`)."""
+    report = _run(name, seconds=8.0, render_size=(640, 360))
+    assert report.steps == 80
+    assert report.lane_departures == 0, report.table()
+    assert report.car_max_cm < 120.0, report.table()
+
+
+@pytest.mark.parametrize("name", ["clear_straight", "clear_curve"])
+def test_fused_rmse_within_10cm_on_clear_roads(name):
+    report = _run(name)
+    assert report.completed and report.lane_departures == 0
+    assert report.sources["fused"].rmse_cm <= 10.0, report.table()
+    assert report.sources["fused"].valid_share == 1.0
+
+
+def test_fused_beats_the_best_single_model_on_four_of_five_paper_cases(paper_reports):
+    wins = []
+    for report in paper_reports.values():
+        models = [v.rmse_cm for k, v in report.sources.items() if k not in ("fused", "reference")]
+        wins.append(report.sources["fused"].rmse_cm <= min(models))
+    tables = "\n\n".join(f"{n}\n{r.table()}" for n, r in paper_reports.items())
+    assert sum(wins) >= 4, tables
+    assert all(r.lane_departures == 0 for r in paper_reports.values()), tables
+
+
+def test_same_scenario_twice_gives_identical_metrics():
+    a = _run("clear_curve", seconds=3.0, render_size=(640, 360)).to_dict()
+    b = _run("clear_curve", seconds=3.0, render_size=(640, 360)).to_dict()
+    a.pop("wall_s"), b.pop("wall_s")
+    assert a == b
+
+
+def test_unknown_detector_is_a_clear_error():
+    scenario = load_scenario("clear_straight")
+    bad = dataclasses.replace(scenario, estimation=dataclasses.replace(
+        scenario.estimation, front_detectors=("hough", "no_such_detector")))
+    with pytest.raises(ValueError, match="no_such_detector"):
+        Episode(bad, render_size=(320, 180))
+
+
+class LaneKeepEnvConformanceTest(test_utils.EnvironmentTestMixin, absltest.TestCase):
+    """dm_env's own conformance checks, on a short, low-resolution episode."""
+
+    def make_object_under_test(self):
+        return LaneKeepEnv("clear_straight", render_size=(160, 90), duration_s=1.5)
+
+    def make_action_sequence(self):
+        for _ in range(40):  # long enough to reach the end of the 15-step episode twice
+            yield self.make_action()
