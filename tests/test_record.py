@@ -42,7 +42,7 @@ def read_back(path: Path) -> dict[str, dict[str, list]]:
         steps = (batch.column("step").to_pylist() if "step" in names
                  else [None] * batch.num_rows)
         for name in names:
-            if ":" in name:
+            if ":" in name or chunk.entity_path.startswith("/__properties/"):
                 for step, value in zip(steps, batch.column(name).to_pylist(), strict=True):
                     if value is not None:
                         out[chunk.entity_path][name].append((step, value))
@@ -200,6 +200,9 @@ def test_scenario_and_events_are_logged(fake, tmp_path):
     (document,) = [v for _, v in data["/scenario"]["TextDocument:text"]]
     toml = Path(fake.scenario.source).read_text(encoding="utf-8")
     assert toml in document[0] and f"--seed {fake.scenario.seed}" in document[0]
+    # and machine-readable, as a recording property
+    assert data["/__properties/scenario"]["seed"] == [(None, [fake.scenario.seed])]
+    assert data["/__properties/scenario"]["name"] == [(None, ["clear_curve"])]
 
 
 def test_writer_failure_reaches_the_episode_and_the_file_still_closes(fake, tmp_path):
