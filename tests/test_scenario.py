@@ -14,7 +14,13 @@ from lanekeep.scenario import (
     shipped_scenarios,
 )
 
-SHIPPED = ["clear_curve", "clear_straight", "s_bend", "sharp_turn"]
+SHIPPED = shipped_scenarios()
+REQUIRED = {  # the foundation's three, the paper's five cases, and the harder conditions
+    "clear_straight", "clear_curve", "sharp_turn", "s_bend",
+    "case1_building_shadows", "case2_sharp_turn", "case3_mild_turn_shade_bumps",
+    "case4_half_shade_straight", "case5_wet_rain_turn",
+    "night", "fog", "snow", "heavy_rain", "worn_markings", "occlusion", "highway_multilane",
+}
 
 MINIMAL = """
 name = "tiny"
@@ -27,7 +33,9 @@ length_m = 100
 
 
 def test_shipped_list():
-    assert shipped_scenarios() == SHIPPED
+    assert SHIPPED == sorted(SHIPPED)
+    assert REQUIRED <= set(SHIPPED)
+    assert len(SHIPPED) >= 14
 
 
 @pytest.mark.parametrize("name", SHIPPED)
