@@ -15,6 +15,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 import mujoco
+import numpy as np
 
 
 def _time_ms(fn: Callable[[], object], repeats: int) -> float:
@@ -58,6 +59,15 @@ def measure(scenario_name: str = "clear_curve", repeats: int = 10,
     for _ in range(n):
         mujoco.mj_step(world.model, world.data)
     results["physics_steps_per_s"] = n / (time.perf_counter() - start)
+
+    from lanekeep.conditions import ImageEffects
+    from lanekeep.scenario import Conditions
+
+    rng = np.random.default_rng(0)
+    for label in ("rain", "snow", "noise", "motion_blur"):
+        cond = Conditions(**{label: 1.0})
+        effect = ImageEffects(cond, 720, 1280, rng)
+        results[f"effect_ms_{label}"] = _time_ms(lambda e=effect: e(frame, rng, 15.0), repeats)
 
     threads = cv2.getNumThreads()
     cv2.setNumThreads(1)

@@ -4,7 +4,6 @@ shadows leave the marking masks alone, speed bumps are hit by the tyres, traffic
 
 import dataclasses
 import math
-import time
 
 import cv2
 import mujoco
@@ -304,21 +303,6 @@ def test_effects_are_deterministic_for_a_seed(clear_frame):
 def test_no_conditions_leave_the_image_unchanged(clear_frame):
     out = effects.apply(clear_frame, Conditions(), np.random.default_rng(0))
     assert np.array_equal(out, clear_frame) and out is not clear_frame
-
-
-def test_each_effect_costs_under_25_ms_at_1280x720(clear_frame):
-    frame = cv2.resize(clear_frame, (1280, 720))
-    rng = np.random.default_rng(0)
-    for cond in (Conditions(rain=1.0), Conditions(snow=1.0), Conditions(noise=1.0),
-                 Conditions(motion_blur=1.0)):
-        fx = effects.ImageEffects(cond, 720, 1280, rng)
-        fx(frame, rng, 15.0)
-        times = []
-        for _ in range(5):
-            t0 = time.perf_counter()
-            fx(frame, rng, 15.0)
-            times.append(time.perf_counter() - t0)
-        assert np.median(times) < 0.025, (cond, times)  # ~2-8 ms measured; loose for shared CPUs
 
 
 # -- schema ----------------------------------------------------------------------------------------
