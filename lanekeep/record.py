@@ -252,7 +252,9 @@ class RerunRecorder:
         every: log images, overlays and the 3D view on every N-th step (scalars: every step).
         jpeg_quality: quality of the camera images (rerun's JPEG encoder), 1..100.
         segmentation: also render and log the marking mask of both cameras (two extra renders
-            per recorded step, on the episode's thread).
+            per recorded step, on the episode's thread). It is rendered from the state after a
+            step, which is the state the next step's frames come from, and logged at that next
+            step: so from step `every` on (none at step 0), and one past the last step.
     """
 
     QUEUE_STEPS = 4
