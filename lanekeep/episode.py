@@ -56,9 +56,10 @@ class StepResult:
     reference_repaired: bool
     steer: float
     throttle: float
-    truth_offset_m: float
-    truth_centre: np.ndarray
-    pose: tuple[float, float, float]
+    truth_offset_m: float  # the car's true lateral offset after the period (at `pose`)
+    truth_centre: np.ndarray  # true lane centre in the frame of `sensed_pose`
+    pose: tuple[float, float, float]  # after the control period
+    sensed_pose: tuple[float, float, float]  # where the frames were taken
     speed_mps: float
     events: list[str] = field(default_factory=list)
     tracker_status: dict[str, str] = field(default_factory=dict)  # UpdateStatus value per model
@@ -110,15 +111,16 @@ class Episode:
     def step(self, action: tuple[float, float] | None = None) -> StepResult:
         """One control period. `action` = (steer, throttle) overrides the controllers."""
         events: list[str] = []
+        sensed_pose = self.world.car.pose()  # the pose the frames are taken from
         frames = self._sense()
         estimates = self._detect(frames, events)
         tracked = self._track(estimates)
         selection = self._select(estimates, tracked, events)
-        centre, offset = self._output(tracked, selection)
+        centre, offset = self._output(estimates, tracked, selection)
         steer, throttle = self._control(centre, offset) if action is None else action
         self._actuate(steer, throttle)
-        result = self._score(frames, estimates, tracked, selection, centre, offset, steer,
-                             throttle, events)
+        result = self._score(sensed_pose, frames, estimates, tracked, selection, centre,
+                             offset, steer, throttle, events)
         self.recorder.log_step(self, result)
         self.index += 1
         return result
@@ -160,15 +162,8 @@ class Episode:
         self._tracker_status = {}
         for name, tracker in self.trackers.items():
             tracker.predict(self.dt_s, car.speed_mps(), car.yaw_rate_rps())
-            estimate = estimates[name]
-            centre = estimate.center if estimate.valid else None
-            if estimate.valid and centre is None:
-                # One boundary only: shift it by half a lane toward the other side.
-                half = self.world.road.lane_width_m / 2.0
-                side = estimate.left if estimate.left is not None else estimate.right
-                sign = -1.0 if estimate.left is not None else 1.0
-                centre = None if side is None else np.asarray(side) + [sign * half, 0.0, 0.0]
-            self._tracker_status[name] = tracker.update_coefficients(centre).status.value
+            result = tracker.update_coefficients(self._centre_of(estimates[name]))
+            self._tracker_status[name] = result.status.value
             tracked[name] = tracker.coefficients
         return tracked
 
@@ -195,24 +190,48 @@ class Episode:
                           f"{selection.reference_m:+.2f} m")
         return selection
 
-    def _output(self, tracked, selection) -> tuple[np.ndarray | None, float | None]:
-        """The lane the controller follows: the selected model's, or the weighted fusion."""
+    def _output(self, estimates, tracked, selection
+                ) -> tuple[np.ndarray | None, float | None]:
+        """The lane the controller follows.
+
+        As in the paper, the selected model's own detection drives the PID (its Kalman track
+        only supplies the covariance for eq. 8); the track stands in while the detector has
+        nothing (coasting). "fused" weights each model's lane by its probability.
+        """
         names = list(self.trackers)
+        lanes = {n: self._lane_of(estimates[n], tracked[n]) for n in names}
         if self.scenario.estimation.output == "fused":
-            polys = [(p, tracked[n]) for p, n in zip(selection.probabilities, names, strict=True)
-                     if tracked[n] is not None]
+            polys = [(p, lanes[n]) for p, n in zip(selection.probabilities, names, strict=True)
+                     if lanes[n] is not None]
             if not polys:
                 return None, None
             weight = sum(p for p, _ in polys)
             centre = sum(p * c for p, c in polys) / weight
         else:
-            centre = tracked[names[selection.selected]]
-            if centre is None:  # the selected track is lost: take any live one
-                live = [tracked[n] for n in names if tracked[n] is not None]
+            centre = lanes[names[selection.selected]]
+            if centre is None:  # the selected model has nothing at all: take any live one
+                live = [lanes[n] for n in names if lanes[n] is not None]
                 centre = live[0] if live else None
         if centre is None:
             return None, None
         return centre, -float(poly_eval(centre, self.scenario.estimation.offset_lookahead_m))
+
+    def _lane_of(self, estimate: LaneEstimate, tracked: np.ndarray | None) -> np.ndarray | None:
+        centre = self._centre_of(estimate)
+        return np.asarray(centre) if centre is not None else tracked
+
+    def _centre_of(self, estimate: LaneEstimate) -> np.ndarray | None:
+        """Centre line of a detection; one boundary is shifted by half a lane."""
+        if not estimate.valid:
+            return None
+        if estimate.center is not None:
+            return estimate.center
+        half = self.world.road.lane_width_m / 2.0
+        if estimate.left is not None:
+            return np.asarray(estimate.left) - [half, 0.0, 0.0]
+        if estimate.right is not None:
+            return np.asarray(estimate.right) + [half, 0.0, 0.0]
+        return None
 
     def _control(self, centre, offset) -> tuple[float, float]:
         car = self.world.car
@@ -238,18 +257,22 @@ class Episode:
             mujoco.mj_step(model, data)
         world_conditions.update_dynamic(self.world, data.time)
 
-    def _score(self, frames, estimates, tracked, selection, centre, offset, steer, throttle,
-               events) -> StepResult:
+    def _score(self, sensed_pose, frames, estimates, tracked, selection, centre, offset, steer,
+               throttle, events) -> StepResult:
+        """Estimates against the truth of the pose their frames were taken from; the car's own
+        lateral error and lane departures at its pose after the control period."""
         world, est = self.world, self.scenario.estimation
-        x, y, yaw = world.car.pose()
         lane = self.scenario.road.ego_lane
         truth_at = {}
 
         def truth(x_m: float):
             key = round(x_m, 3)
             if key not in truth_at:
-                truth_at[key] = lane_truth(world.road, x, y, yaw, lane, lookahead_m=x_m)
+                truth_at[key] = lane_truth(world.road, *sensed_pose, lane, lookahead_m=x_m)
             return truth_at[key]
+
+        x, y, yaw = world.car.pose()
+        car_offset_m = lane_truth(world.road, x, y, yaw, lane).offset_m
 
         for name in self.front:
             e = estimates[name]
@@ -265,15 +288,15 @@ class Episode:
         outside = self._wheels_outside_lane()
         if outside:
             events.append("lane departure: a wheel crossed a lane boundary")
-        self.metrics.add_car(truth(0.0).offset_m, outside)
+        self.metrics.add_car(car_offset_m, outside)
         self.metrics.add_selection(selection.selected, selection.reference_repaired)
         return StepResult(
             index=self.index, time_s=float(world.data.time), frames=frames, estimates=estimates,
             tracked=tracked, probabilities=np.asarray(selection.probabilities),
             selected=int(selection.selected), output_offset_m=offset, output_centre=centre,
             reference_m=selection.reference_m, reference_repaired=selection.reference_repaired,
-            steer=steer, throttle=throttle, truth_offset_m=truth(0.0).offset_m,
-            truth_centre=truth(0.0).center, pose=(x, y, yaw),
+            steer=steer, throttle=throttle, truth_offset_m=car_offset_m,
+            truth_centre=truth(0.0).center, pose=(x, y, yaw), sensed_pose=sensed_pose,
             speed_mps=world.car.speed_mps(), events=events,
             tracker_status=dict(self._tracker_status),
         )

@@ -3,9 +3,9 @@
 `rerun` is imported only when a `RerunRecorder` is made, so an episode without recording never
 loads it. Everything one control step logs is stamped with the time lines `step` (sequence:
 the control step index) and `sim_time` (the simulated time at which that step's camera frames
-were taken). The episode hands the recorder the state after actuation; the recorder therefore
-keeps the previous step's pose, which is the pose the frames were taken from, and draws ground
-truth from it so that it lines up with the images.
+were taken). The episode hands the recorder the state after actuation and the pose the frames
+were taken from (`StepResult.sensed_pose`); ground truth is drawn from the latter so that it
+lines up with the images.
 
 Entity paths (metres; `world` is MuJoCo's frame, z up; lanes of the vehicle frame x forward,
 y left are drawn in world coordinates):
@@ -287,8 +287,7 @@ class RerunRecorder:
         self._view: _EpisodeView | None = None
         self._closed = False
         self._error: BaseException | None = None
-        # Writer-thread state: the pose the current frames were taken from, the path so far.
-        self._sense_pose: tuple[float, float, float] | None = None
+        # Writer-thread state: the path so far.
         self._path: list[tuple[float, float]] = []
         self._selected: int | None = None
         self._valid: dict[str, bool] = {}
@@ -352,8 +351,7 @@ class RerunRecorder:
 
     def _log_step(self, step, masks) -> None:
         rr, rec, view = self._rr, self._rec, self._view
-        pose = self._sense_pose or self.scenario.start_pose(view.road)
-        self._sense_pose = tuple(step.pose)  # the pose the next step's frames are taken from
+        pose = tuple(step.sensed_pose)  # the pose the frames were taken from
         self._path.append(pose[:2])
         rec.set_time("step", sequence=int(step.index))
         rec.set_time("sim_time", duration=max(0.0, float(step.time_s) - view.dt_s))

@@ -99,7 +99,8 @@ def make_step(fake, index: int, **changes) -> SimpleNamespace:
         selected=0, output_offset_m=0.05, output_centre=np.zeros(3), reference_m=0.04,
         reference_repaired=False, steer=0.01, throttle=0.2, truth_offset_m=0.0,
         truth_centre=np.zeros(3), pose=fake.scenario.start_pose(fake.episode.world.road),
-        speed_mps=15.0, events=[], tracker_status=dict.fromkeys(MODELS, "updated"),
+        sensed_pose=fake.scenario.start_pose(fake.episode.world.road), speed_mps=15.0,
+        events=[], tracker_status=dict.fromkeys(MODELS, "updated"),
     )
     step.update(changes)
     return SimpleNamespace(**step)
@@ -143,12 +144,12 @@ def test_recording_verifies_and_holds_one_image_per_camera_per_recorded_step(fak
 
 
 def test_ground_truth_overlay_lies_on_the_rendered_markings(fake, tmp_path):
-    """Frames come from the pose before the step's actuation: step 0's from the start pose,
-    step 1's from step 0's pose. Step 0 reports a pose 1.5 m off, so step 1's truth, drawn on the
-    same start-pose frame, must miss the markings: the check can tell right from wrong."""
+    """Truth is drawn from the pose the frames were taken from (`sensed_pose`). Step 1 claims
+    its frames came from a pose 1.5 m off, so its truth, drawn on the same start-pose frame,
+    must miss the markings: the check can tell right from wrong."""
     x, y, yaw = fake.scenario.start_pose(fake.episode.world.road)
     moved = (x - 1.5 * np.sin(yaw), y + 1.5 * np.cos(yaw), yaw + 0.03)
-    steps = [make_step(fake, 0, pose=moved), make_step(fake, 1, pose=moved)]
+    steps = [make_step(fake, 0, pose=moved), make_step(fake, 1, pose=moved, sensed_pose=moved)]
     data = read_back(record(fake, tmp_path / "x.rrd", steps))
     strips = {s: value_at(data, "/cameras/front/lanes/truth", "LineStrips2D:strips", s)
               for s in (0, 1)}
@@ -207,7 +208,7 @@ def test_scenario_and_events_are_logged(fake, tmp_path):
 
 def test_writer_failure_reaches_the_episode_and_the_file_still_closes(fake, tmp_path):
     recorder = RerunRecorder(tmp_path / "x.rrd", fake.scenario)
-    recorder.log_step(fake.episode, make_step(fake, 0, pose=None))  # the writer fails on it
+    recorder.log_step(fake.episode, make_step(fake, 0, sensed_pose=None))  # the writer fails on it
     with pytest.raises(RuntimeError, match="recording to .* failed"):
         recorder.close()
     assert verify(tmp_path / "x.rrd").returncode == 0
