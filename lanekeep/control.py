@@ -56,7 +56,7 @@ class SteeringTuning:
     """
 
     tau_straight_s: float = 0.9  # closed-loop time constant on straights
-    tau_curvy_s: float = 0.6  # faster on curves, where the lane runs away from the car
+    tau_curvy_s: float = 0.4  # faster on curves, where the lane runs away from the car
     zeta: float = 0.8  # damping ratio
     integral_time_curvy_s: float = 6.0  # paper: K_i > 0 only on curvy roads
     curvy_threshold_1pm: float = 1.0 / 400.0  # |curvature| above which the curvy set is used
