@@ -115,6 +115,12 @@ class SlidingWindowConfig:
     """Model #2: Sobel-x + HLS saturation/hue thresholds, histogram, sliding windows."""
 
     sobel_kernel: int = 3
+    # Shade compensation: lightness is scaled so that the local background (a wide box blur)
+    # reads `illumination_target`, by a gain of at most `illumination_max_gain` (1 = off).
+    # Paint in a building's shadow keeps its contrast ratio to the asphalt, not its level.
+    illumination_block_px: int = 61
+    illumination_target: float = 80.0
+    illumination_max_gain: float = 1.0
     sobel_min: float = 25.0  # |d lightness / dx| in grey levels per pixel (Sobel-scaled / 4)
     min_lightness_gain: float = 10.0  # gradient pixels must sit in a brighter-than-local ridge
     local_block_px: int = 25

@@ -61,6 +61,8 @@ class SlidingWindowDetector:
         cfg = self.config.sliding_window
         hls = cv2.cvtColor(roi, cv2.COLOR_RGB2HLS)
         hue, light, sat = hls[..., 0], hls[..., 1], hls[..., 2]
+        if cfg.illumination_max_gain > 1.0:
+            light = self._compensate_shade(light)
         grad = np.abs(cv2.Sobel(light, cv2.CV_16S, 1, 0, ksize=cfg.sobel_kernel))
         norm = {1: 1.0, 3: 4.0, 5: 48.0 / 4.0, 7: 640.0 / 10.0}[cfg.sobel_kernel]
         local = cv2.blur(light, (cfg.local_block_px, cfg.local_block_px))
@@ -72,6 +74,15 @@ class SlidingWindowDetector:
         yellow = ((hue >= lo) & (hue <= hi) & (sat >= cfg.yellow_saturation)
                   & (light >= cfg.yellow_lightness))
         return ((edges | white | yellow) * 255).astype(np.uint8)
+
+    def _compensate_shade(self, light: np.ndarray) -> np.ndarray:
+        """Lightness scaled so the local background reads the configured target level."""
+        cfg = self.config.sliding_window
+        block = (cfg.illumination_block_px, cfg.illumination_block_px)
+        background = cv2.blur(light, block).astype(np.float32)
+        gain = np.clip(cfg.illumination_target / np.maximum(background, 1.0), 1.0,
+                       cfg.illumination_max_gain)
+        return np.clip(light.astype(np.float32) * gain, 0, 255).astype(np.uint8)
 
     def _starts(self, bev: np.ndarray) -> list[float | None]:
         """Histogram peak column per side (left, right) nearest the car, or None.
