@@ -28,18 +28,7 @@ def paper_reports():
     return {name: _run(name) for name in PAPER_CASES}
 
 
-KNOWN_DEPARTURES = {
-    # Open work (issue [closed-loop]): vehicles in the ego lane ahead hide the markings and the
-    # classical detectors latch onto the occluder's edges; the car leaves its lane.
-    "occlusion": "detectors latch onto occluding vehicles (open)",
-}
-
-
-@pytest.mark.parametrize("name", [
-    pytest.param(n, marks=pytest.mark.xfail(reason=KNOWN_DEPARTURES[n], strict=False))
-    if n in KNOWN_DEPARTURES else n
-    for n in shipped_scenarios()
-])
+@pytest.mark.parametrize("name", shipped_scenarios())
 def test_no_lane_departure_with_the_mmae_loop(name):
     """8 s of every shipped scenario at half resolution (the full runs are `lanekeep bench`)."""
     report = _run(name, seconds=8.0, render_size=(640, 360))
