@@ -266,3 +266,13 @@ def view_for(camera: CameraModel, window: GroundWindow, scale: float, margin_px:
     window = visible_window(camera, window)
     top = roi_crop(camera, window, margin_px)
     return BirdsEye(camera, window, scale=scale, crop_top=top, distortion=distortion)
+
+
+def detector_view(camera: CameraModel, config, distortion: np.ndarray | None = None
+                  ) -> tuple[BirdsEye, float]:
+    """The bird's-eye view of a camera's ground window and the look-ahead x it reports at."""
+    pre = config.preprocess
+    window = config.window_for(camera.name)
+    view = view_for(camera, window, pre.scale, pre.horizon_margin_px, distortion)
+    w = view.window
+    return view, (w.lookahead_m if w.lookahead_m is not None else w.x_near_m)

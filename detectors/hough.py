@@ -24,10 +24,10 @@ from detectors.geometry import (
     assemble,
     check_frame,
     crop_and_scale,
+    detector_view,
     fit_boundary,
     parallel,
     reject_noise,
-    view_for,
 )
 from lanekeep.cameras import CameraModel
 
@@ -45,11 +45,7 @@ class HoughDetector:
         self.name = name
         self.camera = camera
         self.config = config or load_config()
-        pre = self.config.preprocess
-        window = self.config.window_for(camera.name)
-        self.view = view_for(camera, window, pre.scale, pre.horizon_margin_px, distortion)
-        w = self.view.window
-        self.x_ref = w.lookahead_m if w.lookahead_m is not None else w.x_near_m
+        self.view, self.x_ref = detector_view(camera, self.config, distortion)
 
     def reset(self) -> None:
         """Nothing is carried between frames."""

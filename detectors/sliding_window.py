@@ -23,10 +23,10 @@ from detectors.geometry import (
     assemble,
     check_frame,
     crop_and_scale,
+    detector_view,
     fit_boundary,
     parallel,
     reject_noise,
-    view_for,
 )
 from lanekeep.cameras import CameraModel
 
@@ -44,11 +44,7 @@ class SlidingWindowDetector:
         self.name = name
         self.camera = camera
         self.config = config or load_config()
-        pre = self.config.preprocess
-        window = self.config.window_for(camera.name)
-        self.view = view_for(camera, window, pre.scale, pre.horizon_margin_px, distortion)
-        w = self.view.window
-        self.x_ref = w.lookahead_m if w.lookahead_m is not None else w.x_near_m
+        self.view, self.x_ref = detector_view(camera, self.config, distortion)
         self._previous: list[np.ndarray | None] = [None, None]
 
     def reset(self) -> None:

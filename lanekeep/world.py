@@ -91,7 +91,7 @@ def _add_material(spec: mujoco.MjSpec, name: str, texture: str | None, **attrs) 
         mat.textures[mujoco.mjtTextureRole.mjTEXROLE_RGB] = texture
 
 
-def _add_mesh_geom(
+def add_mesh_geom(
     spec: mujoco.MjSpec, name: str, mesh: Ribbon, material: str, group: int
 ) -> None:
     spec.add_mesh(
@@ -164,7 +164,7 @@ def _add_road_surface(spec: mujoco.MjSpec, road: Road, layout: WorldLayout) -> N
     asphalt_right, asphalt_left = edge_right - layout.shoulder_m, edge_left + layout.shoulder_m
     for i, (s0, s1) in enumerate(road.segment_bounds()):
         asphalt = ribbon(road, s0, s1, asphalt_right, asphalt_left, ROAD_Z_M, layout.tile_m)
-        _add_mesh_geom(spec, f"road_{i}", asphalt, "asphalt", GROUP_WORLD)
+        add_mesh_geom(spec, f"road_{i}", asphalt, "asphalt", GROUP_WORLD)
         gravel = Ribbon.concatenate(
             [
                 ribbon(road, s0, s1, asphalt_right - layout.gravel_m, asphalt_right, ROAD_Z_M,
@@ -173,7 +173,7 @@ def _add_road_surface(spec: mujoco.MjSpec, road: Road, layout: WorldLayout) -> N
                        layout.tile_m),
             ]
         )
-        _add_mesh_geom(spec, f"shoulder_{i}", gravel, "gravel", GROUP_WORLD)
+        add_mesh_geom(spec, f"shoulder_{i}", gravel, "gravel", GROUP_WORLD)
 
 
 def _add_markings(
@@ -203,7 +203,7 @@ def _add_markings(
                 rgba=[*(colour * brightness), 1.0], specular=0.2, shininess=0.3,
             )
         name = f"marking_b{boundary}_s{segment}_l{level}"
-        _add_mesh_geom(spec, name, Ribbon.concatenate(strips), material, GROUP_MARKING)
+        add_mesh_geom(spec, name, Ribbon.concatenate(strips), material, GROUP_MARKING)
         names[name] = boundary
     return names
 

@@ -37,7 +37,7 @@ from lanekeep.cameras import GROUP_SHADOW, GROUP_WORLD
 from lanekeep.road import Road
 from lanekeep.road_mesh import Ribbon, ribbon
 from lanekeep.scenario import Conditions, Scenario, ShadowZone, VehicleSpec
-from lanekeep.world import OVERLAY_Z_M, ROAD_Z_M, WorldLayout
+from lanekeep.world import OVERLAY_Z_M, ROAD_Z_M, WorldLayout, add_mesh_geom
 
 SHOULDER_M = WorldLayout.shoulder_m
 GRAVEL_M = WorldLayout.gravel_m
@@ -119,18 +119,6 @@ def _polygon_mesh(polygons: list[np.ndarray], z_m: float) -> Ribbon:
         offset += n
     v = np.concatenate(verts)
     return Ribbon(v, np.concatenate(faces).astype(np.int32), v[:, :2] / 4.0)
-
-
-def _add_mesh(spec: mujoco.MjSpec, name: str, mesh: Ribbon, material: str, group: int) -> None:
-    spec.add_mesh(
-        name=name,
-        uservert=mesh.vertices.astype(np.float32).ravel().tolist(),
-        userface=mesh.faces.ravel().tolist(),
-        usertexcoord=mesh.texcoords.astype(np.float32).ravel().tolist(),
-        inertia=mujoco.mjtMeshInertia.mjMESH_INERTIA_SHELL,
-    )
-    spec.worldbody.add_geom(name=name, type=mujoco.mjtGeom.mjGEOM_MESH, meshname=name,
-                            material=material, contype=0, conaffinity=0, group=group)
 
 
 def _yaw_quat(yaw: float) -> list[float]:
@@ -307,7 +295,7 @@ def _add_zone(spec: mujoco.MjSpec, road: Road, zone: ShadowZone, index: int, to_
         s += length + gap
         k += 1
     if polygons:
-        _add_mesh(spec, f"cond_shadow_{index}", _polygon_mesh(polygons, OVERLAY_Z_M),
+        add_mesh_geom(spec, f"cond_shadow_{index}", _polygon_mesh(polygons, OVERLAY_Z_M),
                   f"cond_shadow_{index}", GROUP_SHADOW)
         info.shadow_polygons.extend(polygons)
 
@@ -368,7 +356,7 @@ def _add_wet(spec: mujoco.MjSpec, road: Road, cond: Conditions, rng: np.random.G
         rot = local @ np.array([[c, sn], [-sn, c]])
         polygons.append(road.position(s, r) + rot)
     if polygons:
-        _add_mesh(spec, "cond_puddles", _polygon_mesh(polygons, OVERLAY_Z_M - 0.002),
+        add_mesh_geom(spec, "cond_puddles", _polygon_mesh(polygons, OVERLAY_Z_M - 0.002),
                   "cond_puddle", GROUP_SHADOW)
         info.puddle_polygons = polygons
 
@@ -392,7 +380,7 @@ def _add_snow(spec: mujoco.MjSpec, road: Road, cond: Conditions,
             ribbon(road, s0, s1, road.boundary_r(road.n_lanes) + inner,
                    road.boundary_r(road.n_lanes) + SHOULDER_M, OVERLAY_Z_M, 4.0),
         ])
-        _add_mesh(spec, f"cond_snowdrift_{i}", drifts, "cond_snowdrift", GROUP_SHADOW)
+        add_mesh_geom(spec, f"cond_snowdrift_{i}", drifts, "cond_snowdrift", GROUP_SHADOW)
 
 
 # -- traffic -----------------------------------------------------------------------------------
