@@ -28,7 +28,6 @@ from detectors.geometry import (
     fit_boundary,
     parallel,
     reject_noise,
-    remove_streaks,
 )
 from lanekeep.cameras import CameraModel
 
@@ -174,7 +173,6 @@ class HoughDetector:
         noise = reject_noise(mask, pre.max_fill, pre.min_coherence)
         if noise:
             return LaneEstimate.invalid(noise, self.x_ref)
-        mask = remove_streaks(mask, pre.streak_min_rows, pre.streak_max_tilt_deg)
         bev = self.view.warp(mask)
         bev = np.where(bev >= 128, 255, 0).astype(np.uint8)
         seg = self.segments(bev)

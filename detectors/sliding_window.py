@@ -27,7 +27,6 @@ from detectors.geometry import (
     fit_boundary,
     parallel,
     reject_noise,
-    remove_streaks,
 )
 from lanekeep.cameras import CameraModel
 
@@ -176,7 +175,6 @@ class SlidingWindowDetector:
         if noise:
             self.reset()
             return LaneEstimate.invalid(noise, self.x_ref)
-        mask = remove_streaks(mask, pre.streak_min_rows, pre.streak_max_tilt_deg)
         bev = self.view.warp(mask)
         bev = np.where(bev >= 128, 255, 0).astype(np.uint8)
         left, right = self.boundaries(bev)
