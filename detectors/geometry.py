@@ -276,3 +276,26 @@ def detector_view(camera: CameraModel, config, distortion: np.ndarray | None = N
     view = view_for(camera, window, pre.scale, pre.horizon_margin_px, distortion)
     w = view.window
     return view, (w.lookahead_m if w.lookahead_m is not None else w.x_near_m)
+
+
+def binary_bird_eye(frame: np.ndarray, camera: CameraModel, view: BirdsEye, preprocess,
+                    binarise) -> tuple[np.ndarray | None, str]:
+    """A frame's binary bird's-eye view (0/255), or None and why its binary image is noise.
+
+    The image stage both models share; `binarise` is each model's own thresholding of the ROI.
+    """
+    check_frame(frame, camera)
+    roi = crop_and_scale(frame, view.crop_top, preprocess.scale)
+    mask = binarise(roi)
+    noise = reject_noise(mask, preprocess.max_fill, preprocess.min_coherence)
+    if noise:
+        return None, noise
+    bev = view.warp(mask)
+    return np.where(bev >= 128, 255, 0).astype(np.uint8), ""
+
+
+def support_confidence(left: Boundary | None, right: Boundary | None, view: BirdsEye) -> float:
+    """Share of the ground window's depth the found boundaries cover (both sides summed, <= 1)."""
+    support = sum(b.x_span_m for b in (left, right) if b is not None)
+    span = abs(view.window.x_far_m - view.window.x_near_m)
+    return min(1.0, support / span)

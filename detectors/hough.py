@@ -22,12 +22,11 @@ from detectors.config import DetectorsConfig, load_config
 from detectors.geometry import (
     Boundary,
     assemble,
-    check_frame,
-    crop_and_scale,
+    binary_bird_eye,
     detector_view,
     fit_boundary,
     parallel,
-    reject_noise,
+    support_confidence,
 )
 from lanekeep.cameras import CameraModel
 
@@ -166,18 +165,10 @@ class HoughDetector:
 
     # -- the detector ------------------------------------------------------------------------
     def detect(self, frame: np.ndarray) -> LaneEstimate:
-        check_frame(frame, self.camera)
-        pre = self.config.preprocess
-        roi = crop_and_scale(frame, self.view.crop_top, pre.scale)
-        mask = self.binarise(roi)
-        noise = reject_noise(mask, pre.max_fill, pre.min_coherence)
-        if noise:
+        bev, noise = binary_bird_eye(frame, self.camera, self.view, self.config.preprocess,
+                                     self.binarise)
+        if bev is None:
             return LaneEstimate.invalid(noise, self.x_ref)
-        bev = self.view.warp(mask)
-        bev = np.where(bev >= 128, 255, 0).astype(np.uint8)
-        seg = self.segments(bev)
-        left, right = self.boundaries(seg)
-        support = sum(b.x_span_m for b in (left, right) if b is not None)
-        span = abs(self.view.window.x_far_m - self.view.window.x_near_m)
-        confidence = min(1.0, support / span)
-        return assemble(left, right, self.x_ref, self.config.lane, self.camera, confidence)
+        left, right = self.boundaries(self.segments(bev))
+        return assemble(left, right, self.x_ref, self.config.lane, self.camera,
+                        support_confidence(left, right, self.view))
