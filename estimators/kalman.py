@@ -64,6 +64,10 @@ class TrackerConfig:
     ego_motion: bool = True
     ego_fit_range_m: float = 30.0  # look-ahead range refitted in the ego-motion transform
     ego_fit_points: int = 16
+    # Full 3x3 R of a coefficient measurement; overrides the three stds above. A fitted
+    # quadratic's coefficients are strongly correlated (c0-c1 about -0.9, c1-c2 about -0.99:
+    # the fit pivots about its data, 5-30 m ahead), and a diagonal R gates ordinary fits.
+    coefficient_covariance: tuple[tuple[float, float, float], ...] | None = None
 
     def __post_init__(self) -> None:
         positive = {
@@ -87,6 +91,12 @@ class TrackerConfig:
             raise ValueError(f"gate_probability must be in (0, 1), got {self.gate_probability}")
         if self.max_coast_steps < 0:
             raise ValueError(f"max_coast_steps must be >= 0, got {self.max_coast_steps}")
+        if self.coefficient_covariance is not None:
+            r = np.asarray(self.coefficient_covariance, dtype=float)
+            if (r.shape != (N_COEF, N_COEF) or not np.all(np.isfinite(r))
+                    or not np.allclose(r, r.T) or np.any(np.linalg.eigvalsh(r) <= 0)):
+                raise ValueError("coefficient_covariance must be a symmetric positive-definite "
+                                 f"3x3 matrix, got {self.coefficient_covariance}")
         if self.ego_fit_points < N_COEF:
             raise ValueError(f"ego_fit_points must be >= {N_COEF}, got {self.ego_fit_points}")
 
@@ -109,6 +119,8 @@ class TrackerConfig:
     @property
     def coefficient_r(self) -> np.ndarray:
         """R of a full coefficient measurement [c0, c1, c2]."""
+        if self.coefficient_covariance is not None:
+            return np.asarray(self.coefficient_covariance, dtype=float)
         std = (self.c0_measurement_std_m, self.c1_measurement_std, self.c2_measurement_std_pm)
         return np.diag(np.square(std))
 
@@ -125,6 +137,7 @@ class UpdateStatus(enum.Enum):
     UPDATED = "updated"  # passed the gate and was fused
     GATED = "gated"  # rejected by the chi-square gate; the track coasts
     MISSED = "missed"  # None, NaN or inf; the track coasts
+    RESTARTED = "restarted"  # gated, but corroborated elsewhere: the track restarts from it
 
 
 @dataclass(frozen=True)
@@ -160,6 +173,7 @@ def ego_motion_transform(
     dt_s: float,
     fit_range_m: float = 30.0,
     fit_points: int = 16,
+    lateral_speed_mps: float = 0.0,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Affine map c_new = A c + b of a polynomial into the vehicle frame after one step.
 
@@ -169,16 +183,23 @@ def ego_motion_transform(
     is taken at `coefficients` (the current mean), so the mean is mapped exactly and A is the
     Jacobian used for P with that O(yaw * slope) dependence neglected.
 
+    `lateral_speed_mps` is the body-frame sideways velocity (sideslip): in a tight turn the car
+    drifts outwards along its own y by ~v*beta*dt, 5-10 cm a step at 0.5 g, which would
+    otherwise read as the lane moving.
+
     Returns:
         A (3, 3) and b (3,).
     """
     c = np.asarray(coefficients, dtype=float)
     yaw = yaw_rate_rps * dt_s
-    ds = speed_mps * dt_s
+    ds = float(np.hypot(speed_mps, lateral_speed_mps)) * dt_s * (1.0 if speed_mps >= 0 else -1.0)
     if abs(yaw) < 1e-9:
         tx, ty = ds, 0.0
     else:  # chord of an arc of radius ds / yaw
         tx, ty = ds / yaw * np.sin(yaw), ds / yaw * (1.0 - np.cos(yaw))
+    if lateral_speed_mps != 0.0:  # the arc is travelled at the slip angle beta to the body x
+        beta = np.arctan2(lateral_speed_mps, abs(speed_mps)) * (1.0 if speed_mps >= 0 else -1.0)
+        tx, ty = tx * np.cos(beta) - ty * np.sin(beta), tx * np.sin(beta) + ty * np.cos(beta)
     x_old = tx + np.linspace(0.0, fit_range_m, fit_points)
     v_old = np.vander(x_old, N_COEF, increasing=True)
     y_old = v_old @ c
@@ -255,7 +276,8 @@ class LaneTracker:
         return float(h @ self._kf.P @ h)  # C P C'
 
     # ---- predict -----------------------------------------------------------------------------
-    def predict(self, dt_s: float, speed_mps: float = 0.0, yaw_rate_rps: float = 0.0) -> None:
+    def predict(self, dt_s: float, speed_mps: float = 0.0, yaw_rate_rps: float = 0.0,
+                lateral_speed_mps: float = 0.0) -> None:
         """Propagate the track over dt_s; move the curve by the ego-motion when enabled.
 
         Non-finite speed or yaw rate means the ego-motion is unknown this step: the prediction is
@@ -272,10 +294,12 @@ class LaneTracker:
         )
         f, u = f_cv, np.zeros((DIM_X, 1))
         moving = np.isfinite(speed_mps) and np.isfinite(yaw_rate_rps)
+        lateral_speed_mps = lateral_speed_mps if np.isfinite(lateral_speed_mps) else 0.0
         if cfg.ego_motion and moving and (speed_mps != 0.0 or yaw_rate_rps != 0.0):
             c_cv = (f_cv @ self._kf.x)[:N_COEF, 0]
             a, b = ego_motion_transform(
-                c_cv, speed_mps, yaw_rate_rps, dt_s, cfg.ego_fit_range_m, cfg.ego_fit_points
+                c_cv, speed_mps, yaw_rate_rps, dt_s, cfg.ego_fit_range_m, cfg.ego_fit_points,
+                lateral_speed_mps,
             )
             # c <- A (c + dc/dt dt) + b. The rates stay: they model what the ego-motion does not
             # explain (sideslip, yaw-rate bias, curvature change), which is set in the car frame;
@@ -331,6 +355,20 @@ class LaneTracker:
         self._symmetrize()
         self._missed_steps = 0
         return UpdateResult(UpdateStatus.UPDATED, nis)
+
+    def restart(self, coefficients: ArrayLike) -> UpdateResult:
+        """Drop the track and start a new one from this measurement, ungated.
+
+        For a measurement the gate rejected but an independent source corroborates (two
+        detectors that agree with each other outvote a track that has fallen behind the road,
+        e.g. in a clothoid into a tight turn): without it the gate keeps rejecting until the
+        track has coasted `max_coast_steps`.
+        """
+        self.reset()
+        result = self.update_coefficients(coefficients)
+        if result.status is not UpdateStatus.INITIALIZED:
+            return result
+        return UpdateResult(UpdateStatus.RESTARTED, float("nan"))
 
     def _miss(self) -> UpdateResult:
         if self._initialized:

@@ -17,7 +17,8 @@ import numpy as np
 from detectors.base import Detector, LaneEstimate, poly_eval
 from detectors.registry import make_detector
 from estimators.alignment import OdometryAlignedHistory
-from estimators.kalman import LaneTracker, TrackerConfig
+from estimators.consensus import corroborated
+from estimators.kalman import LaneTracker, TrackerConfig, UpdateStatus
 from estimators.mmae import MMAE, MMAEConfig
 from lanekeep import world_conditions
 from lanekeep.cameras import CameraRig, RenderSettings
@@ -30,13 +31,29 @@ from lanekeep.scenario import Scenario
 from lanekeep.world import World, build, physics_steps_per_control
 
 FUSED, REFERENCE = "fused", "reference"
+_ACCEPTED = (UpdateStatus.UPDATED.value, UpdateStatus.INITIALIZED.value,
+             UpdateStatus.RESTARTED.value)
 
 # Tracker noise for the closed loop. Ego-motion explains most of the lane's motion in the car
 # frame; what it cannot is the road's own curvature change (a clothoid into a 40 m radius turns
 # c2 by 0.0125 /m within 1.3 s at 15 m/s, a rate of ~0.01 /m/s) and the sideslip change that
 # comes with it (c1 ~0.03 /s). Q is sized so the filter follows those within 2-3 steps
 # instead of gating the detector as an outlier.
-CLOSED_LOOP_TRACKER = TrackerConfig(c1_accel_psd_ps3=1e-3, c2_accel_psd_pm2ps3=3e-4)
+#
+# R is the covariance of both detectors' centre-line coefficient errors measured in the loop
+# (`python tools/measure_detector_noise.py`: clear_straight, clear_curve, paper cases 2 and 3,
+# 1,900 detections, the 80% core of a robust fit; stds 5.6 cm, 0.0098, 4.4e-4 /m), doubled
+# for the heavier tails of shade and rain.
+MEASURED_COEFFICIENT_COVARIANCE = (
+    (3.18e-3, -5.05e-4, 2.21e-5),
+    (-5.05e-4, 9.57e-5, -4.28e-6),
+    (2.21e-5, -4.28e-6, 1.94e-7),
+)
+CLOSED_LOOP_TRACKER = TrackerConfig(
+    c1_accel_psd_ps3=1e-3, c2_accel_psd_pm2ps3=3e-4,
+    coefficient_covariance=tuple(tuple(4.0 * v for v in row)
+                                 for row in MEASURED_COEFFICIENT_COVARIANCE),
+)
 
 
 @dataclass(frozen=True)
@@ -157,12 +174,21 @@ class Episode:
         return out
 
     def _track(self, estimates) -> dict[str, np.ndarray | None]:
+        """Predict and update each model's tracker. A detection the gate rejects but another
+        model's detection corroborates restarts that track: the track, not the two detectors,
+        has lost the road (a tight turn's onset outruns the constant-rate model)."""
         car = self.world.car
+        centres = {name: self._centre_of(estimates[name]) for name in self.trackers}
+        agreed = dict(zip(centres, corroborated(list(centres.values()),
+                                                CLOSED_LOOP_TRACKER.coefficient_r), strict=True))
         tracked = {}
         self._tracker_status = {}
         for name, tracker in self.trackers.items():
-            tracker.predict(self.dt_s, car.speed_mps(), car.yaw_rate_rps())
-            result = tracker.update_coefficients(self._centre_of(estimates[name]))
+            tracker.predict(self.dt_s, car.speed_mps(), car.yaw_rate_rps(),
+                            car.lateral_speed_mps())
+            result = tracker.update_coefficients(centres[name])
+            if result.status is UpdateStatus.GATED and agreed[name]:
+                result = tracker.restart(centres[name])
             self._tracker_status[name] = result.status.value
             tracked[name] = tracker.coefficients
         return tracked
@@ -195,11 +221,14 @@ class Episode:
         """The lane the controller follows.
 
         As in the paper, the selected model's own detection drives the PID (its Kalman track
-        only supplies the covariance for eq. 8); the track stands in while the detector has
-        nothing (coasting). "fused" weights each model's lane by its probability.
+        only supplies the covariance for eq. 8). The track stands in while the detector has
+        nothing or its detection failed the track's chi-square gate: one wild fit (a boundary
+        bent onto a passing car) would otherwise steer the car off its lane within a step.
+        "fused" weights each model's lane by its probability.
         """
         names = list(self.trackers)
-        lanes = {n: self._lane_of(estimates[n], tracked[n]) for n in names}
+        lanes = {n: self._lane_of(estimates[n], tracked[n], self._tracker_status[n])
+                 for n in names}
         if self.scenario.estimation.output == "fused":
             polys = [(p, lanes[n]) for p, n in zip(selection.probabilities, names, strict=True)
                      if lanes[n] is not None]
@@ -216,9 +245,13 @@ class Episode:
             return None, None
         return centre, -float(poly_eval(centre, self.scenario.estimation.offset_lookahead_m))
 
-    def _lane_of(self, estimate: LaneEstimate, tracked: np.ndarray | None) -> np.ndarray | None:
+    def _lane_of(self, estimate: LaneEstimate, tracked: np.ndarray | None, status: str
+                 ) -> np.ndarray | None:
+        """The detection if its tracker accepted it, else the (coasting) track."""
         centre = self._centre_of(estimate)
-        return np.asarray(centre) if centre is not None else tracked
+        if centre is None or status not in _ACCEPTED:
+            return tracked
+        return np.asarray(centre)
 
     def _centre_of(self, estimate: LaneEstimate) -> np.ndarray | None:
         """Centre line of a detection; one boundary is shifted by half a lane."""

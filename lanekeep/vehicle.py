@@ -98,6 +98,10 @@ class Car:
         """Forward speed (m/s), negative when reversing."""
         return float(self.velocity_body()[0])
 
+    def lateral_speed_mps(self) -> float:
+        """Sideways speed in the body frame (m/s, + = left): the sideslip of a turn."""
+        return float(self.velocity_body()[1])
+
     def yaw_rate_rps(self) -> float:
         """Yaw rate (rad/s, + = left); the free joint's angular velocity is in the body frame."""
         return float(self.data.qvel[self._qvel_adr + 5])
