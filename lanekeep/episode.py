@@ -42,8 +42,9 @@ _ACCEPTED = (UpdateStatus.UPDATED.value, UpdateStatus.INITIALIZED.value,
 #
 # R is the covariance of both detectors' centre-line coefficient errors measured in the loop
 # (`python tools/measure_detector_noise.py`: clear_straight, clear_curve, paper cases 2 and 3,
-# 1,900 detections, the 80% core of a robust fit; stds 5.6 cm, 0.0098, 4.4e-4 /m), doubled
-# for the heavier tails of shade and rain.
+# 1,900 detections, the 80% core of a robust fit; stds 5.6 cm, 0.0098, 4.4e-4 /m) with its
+# standard deviations doubled (x4): the core holds only 80% of the detections, and fits in
+# tight turns, shade and rain are worse than the average.
 MEASURED_COEFFICIENT_COVARIANCE = (
     (3.18e-3, -5.05e-4, 2.21e-5),
     (-5.05e-4, 9.57e-5, -4.28e-6),
