@@ -7,7 +7,7 @@ import pytest
 
 import lanekeep  # noqa: F401 - MUJOCO_GL before mujoco
 from detectors.config import GroundWindow
-from detectors.geometry import BirdsEye, ground_homography, visible_window
+from detectors.geometry import BirdsEye, ground_homography, remove_streaks, visible_window
 from lanekeep.cameras import CameraModel
 
 K = np.array([[369.29, 0.0, 639.5], [0.0, 369.29, 359.5], [0.0, 0.0, 1.0]])
@@ -62,3 +62,22 @@ def test_visible_window_moves_the_near_edge_out_of_the_blind_zone():
     # Bottom row 360 px below the centre: ground at 1.5 * 1108.5 / 360.5 = 4.6 m.
     assert window.x_near_m == pytest.approx(1.5 * 1108.5 / 360.5 + 0.3, abs=0.05)
     assert visible_window(FRONT, GroundWindow(4.0, 20.0)).x_near_m == 4.0
+
+
+def test_remove_streaks_drops_thin_vertical_rain_and_keeps_slanted_and_thick_paint():
+    import cv2
+
+    mask = np.zeros((136, 640), np.uint8)
+    for col in range(20, 620, 37):  # rain: 2 px wide, 20 rows tall, leaning a little
+        cv2.line(mask, (col, 10), (col + 3, 30), 255, 2)
+    cv2.line(mask, (100, 135), (300, 0), 255, 3)  # a far boundary: thin but 56 deg from vertical
+    cv2.line(mask, (560, 135), (470, 60), 255, 14)  # a near boundary: thick, 50 deg
+    kept = remove_streaks(mask, min_rows=12, max_tilt_deg=15.0)
+    rain = np.zeros_like(mask)
+    rain[5:35] = 255
+    rain[:, 90:310] = 0  # where the thin boundary crosses the rain band
+    assert cv2.countNonZero(cv2.bitwise_and(kept, rain)) < 0.05 * cv2.countNonZero(
+        cv2.bitwise_and(mask, rain))
+    assert kept[100:136, 450:600].sum() >= 0.95 * mask[100:136, 450:600].sum()  # thick paint
+    assert kept[50:136, 100:300].sum() >= 0.95 * mask[50:136, 100:300].sum()  # thin slant kept
+    assert remove_streaks(mask, 0, 15.0) is mask  # 0 switches it off

@@ -147,6 +147,13 @@ def test_ego_motion_transform_keeps_the_followed_curve_still() -> None:
     assert np.allclose(a0, np.eye(3), atol=1e-9) and np.allclose(b0, 0.0, atol=1e-9)
 
 
+def test_ego_motion_transform_moves_the_lane_by_the_sideslip() -> None:
+    """A car sliding left at 0.5 m/s over 0.1 s sees a straight lane 5 cm further right."""
+    c = np.array([0.2, 0.0, 0.0])
+    a, b = ego_motion_transform(c, SPEED_MPS, 0.0, DT_S, lateral_speed_mps=0.5)
+    np.testing.assert_allclose(a @ c + b, [0.2 - 0.05, 0.0, 0.0], atol=1e-9)
+
+
 def _arc_pose(ds: float, dyaw: float) -> tuple[float, float, float]:
     r = ds / dyaw
     return r * np.sin(dyaw), r * (1.0 - np.cos(dyaw)), dyaw
