@@ -64,13 +64,17 @@ class Preprocess:
     max_fill: float = 0.25  # binary share of the ROI above which the frame is rejected (noise)
     min_coherence: float = 0.5  # share of binary pixels that survive a 2x2 opening (paint
     # comes in blobs, sensor noise in isolated pixels); below it the frame is rejected
-    streak_min_rows: int = 12  # binary runs at least this tall and near-vertical are rain
-    # streaks, not lane paint (0 = keep them); working-resolution rows
+    streak_min_rows: int = 24  # binary runs at least this tall and near-vertical are rain
+    # streaks, not lane paint (0 = keep them); rows of a 720-row frame at full resolution
     streak_max_tilt_deg: float = 15.0  # how far from vertical a streak may lean
+    destreak_width_px: float = 6.0  # bright features narrower than this along a row (pixels of
+    # a 720-row frame at full resolution) are opened away before binarising: rain streaks
 
     def __post_init__(self) -> None:
         if not 0.1 <= self.scale <= 1.0:
             raise InvalidValue("scale", f"must be in [0.1, 1], got {self.scale}")
+        if self.destreak_width_px < 0:
+            raise InvalidValue("destreak_width_px", f"must be >= 0, got {self.destreak_width_px}")
         if self.streak_min_rows < 0:
             raise InvalidValue("streak_min_rows", f"must be >= 0, got {self.streak_min_rows}")
 

@@ -52,7 +52,7 @@ class SlidingWindowDetector:
 
     # -- stages -------------------------------------------------------------------------------
     def binarise(self, roi: np.ndarray) -> np.ndarray:
-        """Sobel-x on lightness (on a bright ridge) | white lightness | yellow hue+saturation."""
+        """Sobel-x on lightness | white lightness (both on a bright ridge) | yellow hue+sat."""
         cfg = self.config.sliding_window
         hls = cv2.cvtColor(roi, cv2.COLOR_RGB2HLS)
         hue, light, sat = hls[..., 0], hls[..., 1], hls[..., 2]
@@ -64,7 +64,9 @@ class SlidingWindowDetector:
         ridge = light.astype(np.int16) >= local.astype(np.int16) + int(cfg.min_lightness_gain)
         ridge = cv2.dilate(ridge.astype(np.uint8), np.ones((3, 3), np.uint8)) > 0
         edges = (grad >= cfg.sobel_min * norm) & ridge
-        white = (light >= cfg.white_lightness) & (sat <= cfg.white_saturation_max)
+        # White paint is a bright ridge too: a snowy verge or a sunlit kerb is as light as
+        # paint but as wide as the local block, so it reads as the background, not a stripe.
+        white = (light >= cfg.white_lightness) & (sat <= cfg.white_saturation_max) & ridge
         lo, hi = cfg.yellow_hue
         yellow = ((hue >= lo) & (hue <= hi) & (sat >= cfg.yellow_saturation)
                   & (light >= cfg.yellow_lightness))

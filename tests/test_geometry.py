@@ -6,8 +6,15 @@ import numpy as np
 import pytest
 
 import lanekeep  # noqa: F401 - MUJOCO_GL before mujoco
-from detectors.config import GroundWindow
-from detectors.geometry import BirdsEye, ground_homography, remove_streaks, visible_window
+from detectors.config import GroundWindow, Preprocess
+from detectors.geometry import (
+    BirdsEye,
+    ground_homography,
+    open_along_rows,
+    remove_streaks,
+    streak_pixels,
+    visible_window,
+)
 from lanekeep.cameras import CameraModel
 
 K = np.array([[369.29, 0.0, 639.5], [0.0, 369.29, 359.5], [0.0, 0.0, 1.0]])
@@ -72,7 +79,7 @@ def test_remove_streaks_drops_thin_vertical_rain_and_keeps_slanted_and_thick_pai
         cv2.line(mask, (col, 10), (col + 3, 30), 255, 2)
     cv2.line(mask, (100, 135), (300, 0), 255, 3)  # a far boundary: thin but 56 deg from vertical
     cv2.line(mask, (560, 135), (470, 60), 255, 14)  # a near boundary: thick, 50 deg
-    kept = remove_streaks(mask, min_rows=12, max_tilt_deg=15.0)
+    kept = remove_streaks(mask, min_rows=12, max_tilt_deg=15.0, max_width=5)
     rain = np.zeros_like(mask)
     rain[5:35] = 255
     rain[:, 90:310] = 0  # where the thin boundary crosses the rain band
@@ -81,3 +88,27 @@ def test_remove_streaks_drops_thin_vertical_rain_and_keeps_slanted_and_thick_pai
     assert kept[100:136, 450:600].sum() >= 0.95 * mask[100:136, 450:600].sum()  # thick paint
     assert kept[50:136, 100:300].sum() >= 0.95 * mask[50:136, 100:300].sum()  # thin slant kept
     assert remove_streaks(mask, 0, 15.0) is mask  # 0 switches it off
+
+
+def test_streak_sizes_scale_with_the_frame_and_the_working_scale():
+    pre = Preprocess(scale=0.5, streak_min_rows=24)
+    assert streak_pixels(pre, 720) == (12, 5)
+    assert streak_pixels(pre, 360) == (6, 2)  # a half-size camera: half the pixels
+    assert streak_pixels(Preprocess(scale=1.0, streak_min_rows=24), 720) == (24, 10)
+    assert streak_pixels(pre, 120)[0] == 0  # too few rows to tell a streak from a speck
+
+
+def test_opening_along_rows_removes_thin_rain_and_keeps_slanted_paint():
+    import cv2
+
+    grey = np.full((136, 640), 80, np.uint8)
+    for col in range(20, 620, 37):  # rain: 1 px wide, 30 rows tall, 14 deg from vertical
+        cv2.line(grey, (col, 10), (col + 7, 40), 160, 1)
+    cv2.line(grey, (100, 135), (300, 0), 220, 2)  # far paint: 2 px wide, 56 deg from vertical
+    image = np.dstack([grey] * 3)
+    opened = open_along_rows(image, 3)
+    rain_band = (slice(10, 40), slice(320, 640))  # right of the paint
+    assert opened[rain_band].max() == 80  # every streak is gone
+    paint = grey >= 200
+    assert np.all(opened[..., 0][paint][10:-10] >= 200)  # the paint keeps its brightness
+    assert open_along_rows(image, 1) is image  # width < 2: off
