@@ -134,7 +134,8 @@ def summary_table(reports: list[EpisodeReport]) -> str:
             f"{r.sources['reference'].rmse_cm:>11.1f}{r.car_rms_cm:>9.1f}"
             f"{r.lane_departures:>8d}{r.mmae_switches:>8d}"
         )
-    lines.append("(offset RMSE in cm; fused = MMAE output)")
+    lines.append("(offset RMSE in cm; models = their raw detections; fused = the MMAE output, "
+                 "by default the selected model's Kalman estimate)")
     return "\n".join(lines)
 
 

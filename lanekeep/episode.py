@@ -219,13 +219,15 @@ class Episode:
 
     def _output(self, estimates, tracked, selection
                 ) -> tuple[np.ndarray | None, float | None]:
-        """The lane the controller follows.
+        """The lane the controller follows: the MMAE output.
 
-        As in the paper, the selected model's own detection drives the PID (its Kalman track
-        only supplies the covariance for eq. 8). The track stands in while the detector has
-        nothing or its detection failed the track's chi-square gate: one wild fit (a boundary
-        bent onto a passing car) would otherwise steer the car off its lane within a step.
-        "fused" weights each model's lane by its probability.
+        By default (`model_lane = "track"`) the selected model's Kalman estimate, the state of
+        the MMAE bank's likeliest filter: it averages a model's fit noise over steps, which
+        the raw detections (the model columns of the report) do not. `model_lane =
+        "detection"` is the paper's PID input: the selected model's own detection, with its
+        track standing in while the detector has nothing or failed the track's chi-square
+        gate (one wild fit, a boundary bent onto a passing car, would otherwise steer the car
+        off its lane within a step). "fused" weights each model's lane by its probability.
         """
         names = list(self.trackers)
         lanes = {n: self._lane_of(estimates[n], tracked[n], self._tracker_status[n])
@@ -248,8 +250,13 @@ class Episode:
 
     def _lane_of(self, estimate: LaneEstimate, tracked: np.ndarray | None, status: str
                  ) -> np.ndarray | None:
-        """The detection if its tracker accepted it, else the (coasting) track."""
+        """The model's track, or ("detection" mode) its detection if the track accepted it.
+
+        Either way a rejected or missing detection leaves the (coasting) track.
+        """
         centre = self._centre_of(estimate)
+        if self.scenario.estimation.model_lane == "track" and tracked is not None:
+            return tracked
         if centre is None or status not in _ACCEPTED:
             return tracked
         return np.asarray(centre)

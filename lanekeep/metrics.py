@@ -2,7 +2,10 @@
 
 Definitions (all against ground truth from the road, never from images):
   - offset RMSE / max error (cm): the estimate's offset vs the true offset at the same
-    look-ahead x_m, over the steps where the source had a valid estimate;
+    look-ahead x_m, over the steps where the source had a valid estimate. A front model's is
+    its raw detection (the detector as the paper's Tables 3-4 score it); the fused output's is
+    the MMAE output, which is a Kalman estimate (see `Episode._output`);
+  - the lane behind ADE / FDE is a front model's Kalman track and the fused output's lane;
   - ADE / FDE (cm) of a tracked lane centre line: at each step, the lateral error
     |y_est(x) - y_true(x)| at look-ahead points x_1 < ... < x_N (default 5..30 m); ADE is its
     mean over the points and the steps, FDE its mean over the steps at the farthest point x_N

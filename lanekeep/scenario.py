@@ -197,6 +197,7 @@ class Conditions:
 
 RESIDUAL_MODES = ("distance_aligned", "one_step_delay")
 OUTPUT_MODES = ("select", "fused")
+MODEL_LANES = ("track", "detection")
 CAMERAS = ("front", "rear")
 
 
@@ -215,6 +216,9 @@ class EstimationConfig:
     reference_camera: str = "rear"
     residual_mode: str = "distance_aligned"
     output: str = "select"
+    # What a model hands the output: its Kalman estimate ("track", the MMAE filter's state) or
+    # its own detection when its track's gate accepts it ("detection", the paper's PID input).
+    model_lane: str = "track"
     offset_lookahead_m: float = 4.0  # where offsets are compared and reported (front)
     control_lookahead_m: float = 8.0  # where the PID reads the chosen lane
 
@@ -227,6 +231,8 @@ class EstimationConfig:
             raise InvalidValue("residual_mode", f"must be one of {RESIDUAL_MODES}")
         if self.output not in OUTPUT_MODES:
             raise InvalidValue("output", f"must be one of {OUTPUT_MODES}")
+        if self.model_lane not in MODEL_LANES:
+            raise InvalidValue("model_lane", f"must be one of {MODEL_LANES}")
         for key in ("offset_lookahead_m", "control_lookahead_m"):
             if not 0.0 <= getattr(self, key) <= 40.0:
                 raise InvalidValue(key, f"must be in [0, 40] m, got {getattr(self, key)}")

@@ -47,10 +47,6 @@ def test_fused_rmse_within_10cm_on_clear_roads(name):
     assert report.sources["fused"].valid_share == 1.0
 
 
-@pytest.mark.xfail(reason="open: wins 2 of 5 (cases 2, 3). Model #1 abstains in hard shade, so "
-                          "its RMSE covers only its valid 52-87% of steps while the MMAE output "
-                          "covers all (cases 1, 4); in case 5 the rear reference is itself poor",
-                   strict=False)
 def test_fused_beats_the_best_single_model_on_four_of_five_paper_cases(paper_reports):
     wins = []
     for report in paper_reports.values():
