@@ -60,8 +60,11 @@ class SlidingWindowDetector:
             light = self._compensate_shade(light)
         grad = np.abs(cv2.Sobel(light, cv2.CV_16S, 1, 0, ksize=cfg.sobel_kernel))
         norm = {1: 1.0, 3: 4.0, 5: 48.0 / 4.0, 7: 640.0 / 10.0}[cfg.sobel_kernel]
-        local = cv2.blur(light, (cfg.local_block_px, cfg.local_block_px))
-        ridge = light.astype(np.int16) >= local.astype(np.int16) + int(cfg.min_lightness_gain)
+        # A ridge is brighter than the darker of its row neighbours a block away (white
+        # top-hat along the row): paint narrower than the block is, the lit edge of anything
+        # wider (a snowy verge, the sunny side of a shadow's edge) is not.
+        row = np.ones((1, cfg.local_block_px), np.uint8)
+        ridge = cv2.morphologyEx(light, cv2.MORPH_TOPHAT, row) >= cfg.min_lightness_gain
         ridge = cv2.dilate(ridge.astype(np.uint8), np.ones((3, 3), np.uint8)) > 0
         edges = (grad >= cfg.sobel_min * norm) & ridge
         # White paint is a bright ridge too: a snowy verge or a sunlit kerb is as light as

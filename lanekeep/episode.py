@@ -52,6 +52,11 @@ MEASURED_COEFFICIENT_COVARIANCE = (
 )
 CLOSED_LOOP_TRACKER = TrackerConfig(
     c1_accel_psd_ps3=1e-3, c2_accel_psd_pm2ps3=3e-4,
+    # With the ego-motion predicted, a lane's coefficients hardly drift on their own: a new
+    # track's rates start near 0 (0.1 m/s, 0.02 /s), not free. A free c0 rate (1 m/s) takes
+    # the first innovation after a (re)start, one fit's noise over one step, for a drift and
+    # coasts the track off the road.
+    initial_rate_std=(0.1, 0.02, 1e-3),
     coefficient_covariance=tuple(tuple(4.0 * v for v in row)
                                  for row in MEASURED_COEFFICIENT_COVARIANCE),
 )
@@ -230,6 +235,7 @@ class Episode:
         off its lane within a step). "fused" weights each model's lane by its probability.
         """
         names = list(self.trackers)
+        self._chosen = int(selection.selected)
         lanes = {n: self._lane_of(estimates[n], tracked[n], self._tracker_status[n])
                  for n in names}
         if self.scenario.estimation.output == "fused":
@@ -240,13 +246,29 @@ class Episode:
             weight = sum(p for p, _ in polys)
             centre = sum(p * c for p, c in polys) / weight
         else:
-            centre = lanes[names[selection.selected]]
+            self._chosen = self._choose(selection.probabilities, names)
+            centre = lanes[names[self._chosen]]
             if centre is None:  # the selected model has nothing at all: take any live one
                 live = [lanes[n] for n in names if lanes[n] is not None]
                 centre = live[0] if live else None
         if centre is None:
             return None, None
         return centre, -float(poly_eval(centre, self.scenario.estimation.offset_lookahead_m))
+
+    def _choose(self, probabilities: np.ndarray, names: list[str]) -> int:
+        """The MMAE's likeliest model, unless its filter rejected (or had no) detection this
+        step while another's accepted one: then the likeliest of those.
+
+        The probabilities come from the rear reference, which sees a stretch of road only
+        after the front models have passed it (distance-aligned residuals lag by ~1 s at
+        15 m/s), so they cannot react to a track that starts coasting now. A coasting track
+        extrapolates; an updated one has just been checked against its own detection.
+        """
+        order = np.argsort(-np.asarray(probabilities), kind="stable")
+        accepted = [i for i in order if self._tracker_status[names[i]] in _ACCEPTED]
+        if not accepted or order[0] in accepted:
+            return int(order[0])
+        return int(accepted[0])
 
     def _lane_of(self, estimate: LaneEstimate, tracked: np.ndarray | None, status: str
                  ) -> np.ndarray | None:
@@ -330,11 +352,11 @@ class Episode:
         if outside:
             events.append("lane departure: a wheel crossed a lane boundary")
         self.metrics.add_car(car_offset_m, outside)
-        self.metrics.add_selection(selection.selected, selection.reference_repaired)
+        self.metrics.add_selection(self._chosen, selection.reference_repaired)
         return StepResult(
             index=self.index, time_s=float(world.data.time), frames=frames, estimates=estimates,
             tracked=tracked, probabilities=np.asarray(selection.probabilities),
-            selected=int(selection.selected), output_offset_m=offset, output_centre=centre,
+            selected=int(self._chosen), output_offset_m=offset, output_centre=centre,
             reference_m=selection.reference_m, reference_repaired=selection.reference_repaired,
             steer=steer, throttle=throttle, truth_offset_m=car_offset_m,
             truth_centre=truth(0.0).center, pose=(x, y, yaw), sensed_pose=sensed_pose,
