@@ -11,6 +11,7 @@ converted back to the vehicle frame before any fit, so results are in one frame 
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, replace
 
@@ -261,17 +262,26 @@ def remove_streaks(mask: np.ndarray, min_rows: int, max_tilt_deg: float,
     if min_rows <= 0:
         return mask
     streaks = np.zeros_like(mask)
-    for tilt in np.linspace(-max_tilt_deg, max_tilt_deg, 5):
-        dx = int(round(np.tan(np.radians(tilt)) * (min_rows - 1)))
-        kernel = np.zeros((min_rows, abs(dx) + 1), np.uint8)
-        cols = np.linspace(0, dx, min_rows).round().astype(int) - min(dx, 0)
-        kernel[np.arange(min_rows), cols] = 1
+    for kernel in _streak_kernels(min_rows, max_tilt_deg):
         streaks |= cv2.morphologyEx(mask, cv2.MORPH_OPEN, kernel)
     thick = cv2.morphologyEx(mask, cv2.MORPH_OPEN, np.ones((1, max_width + 1), np.uint8))
     streaks = cv2.bitwise_and(streaks, cv2.bitwise_not(thick))
     streaks = cv2.dilate(streaks, np.ones((1, 3), np.uint8))
     streaks = cv2.bitwise_and(streaks, cv2.bitwise_not(thick))
     return cv2.bitwise_and(mask, cv2.bitwise_not(streaks))
+
+
+@functools.lru_cache(maxsize=8)
+def _streak_kernels(min_rows: int, max_tilt_deg: float) -> tuple[np.ndarray, ...]:
+    """Line kernels `min_rows` tall at five tilts within +-`max_tilt_deg` (built once)."""
+    kernels = []
+    for tilt in np.linspace(-max_tilt_deg, max_tilt_deg, 5):
+        dx = int(round(np.tan(np.radians(tilt)) * (min_rows - 1)))
+        kernel = np.zeros((min_rows, abs(dx) + 1), np.uint8)
+        cols = np.linspace(0, dx, min_rows).round().astype(int) - min(dx, 0)
+        kernel[np.arange(min_rows), cols] = 1
+        kernels.append(kernel)
+    return tuple(kernels)
 
 
 STREAK_REFERENCE_ROWS = 720  # streak sizes are given in pixels of a camera this tall
@@ -285,7 +295,7 @@ def streak_pixels(preprocess, frame_rows: int) -> tuple[int, int]:
     the image and the working scale, so both scale with `frame_rows / 720 * scale`. Below 3 rows
     a "streak" is any speck, so the filter switches off; the width never falls below 1 px.
     """
-    ratio = frame_rows / STREAK_REFERENCE_ROWS * preprocess.scale
+    ratio = _working_ratio(preprocess, frame_rows)
     min_rows = int(round(preprocess.streak_min_rows * ratio))
     max_width = max(1, int(round(STREAK_MAX_WIDTH_PX * ratio)))
     return (min_rows if min_rows >= 3 else 0), max_width
@@ -293,8 +303,12 @@ def streak_pixels(preprocess, frame_rows: int) -> tuple[int, int]:
 
 def destreak_pixels(preprocess, frame_rows: int) -> int:
     """Width in working pixels below which a bright feature along a row is taken for rain."""
-    ratio = frame_rows / STREAK_REFERENCE_ROWS * preprocess.scale
-    return int(round(preprocess.destreak_width_px * ratio))
+    return int(round(preprocess.destreak_width_px * _working_ratio(preprocess, frame_rows)))
+
+
+def _working_ratio(preprocess, frame_rows: int) -> float:
+    """Working pixels per full-resolution pixel of a 720-row camera, for this frame."""
+    return frame_rows / STREAK_REFERENCE_ROWS * preprocess.scale
 
 
 def open_along_rows(image: np.ndarray, width_px: int) -> np.ndarray:
