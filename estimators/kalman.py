@@ -61,6 +61,13 @@ class TrackerConfig:
     initial_rate_std: tuple[float, float, float] = (1.0, 0.1, 1e-3)
     gate_probability: float = 0.99
     max_coast_steps: int = 10  # 1 s at the 0.1 s control period
+    # Whether a coasting track (gated or missed) keeps extrapolating its rates. With the
+    # ego-motion predicted, the rates are what one or two recent fits did not explain; carried
+    # through a coast they turn one noisy fit's curvature into a hairpin the car then follows.
+    # False: a coasting track moves with the ego-motion only (its rate means return to their
+    # prior, 0, and their spread is kept in P). Without ego-motion the rates are the car's own
+    # weaving and must be extrapolated.
+    coast_with_rates: bool = True
     ego_motion: bool = True
     ego_fit_range_m: float = 30.0  # look-ahead range refitted in the ego-motion transform
     ego_fit_points: int = 16
@@ -347,7 +354,7 @@ class LaneTracker:
         s = h @ p @ h.T + r  # S = H P H' + R
         nis = float(y[:, 0] @ np.linalg.solve(s, y[:, 0]))  # NIS = y' S^-1 y
         if nis > self._gate_threshold(len(z)):
-            self._missed_steps += 1
+            self._coast()
             return UpdateResult(UpdateStatus.GATED, nis)
         # K = P H' S^-1; x = x + K y; P = (I - K H) P (I - K H)' + K R K'  (Joseph form, done
         # by filterpy's KalmanFilter.update)
@@ -372,8 +379,19 @@ class LaneTracker:
 
     def _miss(self) -> UpdateResult:
         if self._initialized:
-            self._missed_steps += 1
+            self._coast()
         return UpdateResult(UpdateStatus.MISSED, float("nan"))
+
+    def _coast(self) -> None:
+        """Count a step with nothing fused; unless `coast_with_rates`, stop extrapolating the
+        rates: their mean goes to the prior's 0 and P's rate block widens by the dropped mean
+        (r r'), so a measurement that resumes the track may still carry any rate."""
+        self._missed_steps += 1
+        if self.config.coast_with_rates:
+            return
+        rates = self._kf.x[N_COEF:, 0].copy()
+        self._kf.x[N_COEF:, 0] = 0.0
+        self._kf.P[N_COEF:, N_COEF:] += np.outer(rates, rates)
 
     def _gate_threshold(self, dim_z: int) -> float:
         """Chi-square quantile of the gate for a dim_z-dimensional innovation."""

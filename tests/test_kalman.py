@@ -240,3 +240,37 @@ def test_offset_sign_and_variance_follow_the_curve() -> None:
     assert tracker.offset_m() == pytest.approx(1.0, abs=1e-3)  # car left of centre: positive
     assert tracker.offset_m(10.0) == pytest.approx(1.0 - 0.2 - 0.1, abs=1e-2)
     assert tracker.offset_variance_m2(20.0) > tracker.offset_variance_m2(0.0) > 0.0
+
+
+def _coast_after_a_curved_fit(coast_with_rates: bool) -> tuple[np.ndarray, np.ndarray]:
+    """Track a straight lane, fuse one fit that bends it (c2 -0.002), then coast 6 steps.
+
+    Returns the state just after that fit and after the coast.
+    """
+    cfg = TrackerConfig(c2_accel_psd_pm2ps3=3e-4, coast_with_rates=coast_with_rates)
+    rng = np.random.default_rng(4)
+    tracker = LaneTracker(cfg)
+    straight = np.array([-1.75, 0.0, 0.0])
+    for _ in range(30):
+        tracker.predict(DT_S, SPEED_MPS, 0.0)
+        tracker.update_coefficients(straight + rng.multivariate_normal(np.zeros(3),
+                                                                       cfg.coefficient_r))
+    tracker.predict(DT_S, SPEED_MPS, 0.0)
+    assert tracker.update_coefficients([-1.75, 0.02, -0.002]).status is UpdateStatus.UPDATED
+    after_fit = tracker.x
+    for _ in range(6):
+        tracker.predict(DT_S, SPEED_MPS, 0.0)
+        assert tracker.update_coefficients(None).status is UpdateStatus.MISSED
+    return after_fit, tracker.x
+
+
+def test_coasting_without_rates_does_not_extrapolate_one_fits_curvature() -> None:
+    after_fit, coasted = _coast_after_a_curved_fit(coast_with_rates=False)
+    c2_rate = after_fit[5]
+    assert c2_rate < -0.005  # the bent fit left a curvature rate behind
+    # One prediction step uses the rate (the coast is only known after it); then it is 0.
+    assert np.all(coasted[3:] == 0.0)
+    assert abs(coasted[2] - (after_fit[2] + c2_rate * DT_S)) < 2e-4
+    _, coasted_with_rates = _coast_after_a_curved_fit(coast_with_rates=True)
+    # With the rates extrapolated the same fit becomes a 2.5x tighter curve in 0.6 s.
+    assert coasted_with_rates[2] < 2.5 * coasted[2] < 0.0
