@@ -1,6 +1,6 @@
 """Score the classical detectors on labelled real frames (TuSimple rule), for tuning.
 
-    .venv/bin/python tools/tune_real.py /work/shared/real/tusimple_dev [--overlay DIR]
+    .venv/bin/python tools/tune_real.py ../shared/real/tusimple_dev [--detector sliding_window]
 
 The folder holds N.jpg and labels/N.txt (one labelled lane a line: "x y x y ..."). Prints per
 frame and mean accuracy over all labelled lanes, and the ego accuracy: the same rule on the two
