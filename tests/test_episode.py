@@ -39,6 +39,15 @@ def test_no_lane_departure_with_the_mmae_loop(name):
     assert report.car_max_cm < 120.0, report.table()
 
 
+def test_snow_keeps_its_lane_through_a_coasting_track():
+    """At 8 s in snow model #1 fuses one bad fit whose curvature rate, extrapolated while its
+    track then coasts, once steered the car 1.35 m off a 300 m curve by 9.3 s (a departure).
+    A coasting track now moves with the ego-motion only."""
+    report = _run("snow", seconds=11.0)
+    assert report.lane_departures == 0, report.table()
+    assert report.car_max_cm < 120.0, report.table()
+
+
 @pytest.mark.parametrize("name", ["clear_straight", "clear_curve"])
 def test_fused_rmse_within_10cm_on_clear_roads(name):
     report = _run(name)
