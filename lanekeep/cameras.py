@@ -12,6 +12,8 @@ x forward, y left, z up), so the projection here and the render always agree.
 from __future__ import annotations
 
 import math
+import threading
+from contextlib import contextmanager
 from dataclasses import dataclass, replace
 
 import mujoco
@@ -202,6 +204,22 @@ class RenderSettings:
     fog: bool = True  # MuJoCo fog; scenes without fog put it beyond the far plane (conditions)
 
 
+# Set while no MuJoCo render runs in this process. Mesa's llvmpipe rasterises with a thread per
+# core and waits for the slowest: a busy background thread (the recorder's writer) made a
+# 21 ms render take 56 ms on two cores. Background work waits for this before each piece.
+RENDERER_IDLE = threading.Event()
+RENDERER_IDLE.set()
+
+
+@contextmanager
+def _rendering():
+    RENDERER_IDLE.clear()
+    try:
+        yield
+    finally:
+        RENDERER_IDLE.set()
+
+
 class CameraRig:
     """One reused `mujoco.Renderer` per camera; RGB and segmentation renders.
 
@@ -247,7 +265,8 @@ class CameraRig:
         renderer.update_scene(data, camera=camera, scene_option=self._rgb_option)
         renderer.scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = self.settings.shadows
         renderer.scene.flags[mujoco.mjtRndFlag.mjRND_FOG] = self.settings.fog
-        return renderer.render()
+        with _rendering():
+            return renderer.render()
 
     def render_segmentation(self, data: mujoco.MjData, camera: str) -> np.ndarray:
         """Geom id per pixel (H, W) int32, -1 where no geom (sky)."""
@@ -256,7 +275,8 @@ class CameraRig:
         try:
             renderer.update_scene(data, camera=camera, scene_option=self._seg_option)
             renderer.scene.flags[mujoco.mjtRndFlag.mjRND_FOG] = False  # ids must stay exact
-            seg = renderer.render()
+            with _rendering():
+                seg = renderer.render()
         finally:
             renderer.disable_segmentation_rendering()
         ids = seg[..., 0].astype(np.int32)

@@ -7,11 +7,13 @@ import dataclasses
 import json
 import math
 import multiprocessing
+import os
 import sys
 import time
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
 
+from lanekeep.config_io import ConfigError
 from lanekeep.metrics import EpisodeReport, SourceReport
 
 
@@ -86,6 +88,66 @@ def _report_from_dict(d: dict) -> EpisodeReport:
     return EpisodeReport(**d)
 
 
+def worker_threads(workers: int) -> int:
+    """Threads each bench worker may use so that the workers together fill the machine once.
+
+    Mesa's llvmpipe rasterises with one thread per core and OpenCV parallelises per call; with
+    two workers on two cores both would run two threads each and fight over the cores.
+    """
+    return max(1, (os.cpu_count() or 1) // max(workers, 1))
+
+
+def _init_worker(threads: int) -> None:
+    """Runs first in every bench worker: thread counts before EGL or OpenCV start."""
+    os.environ["LP_NUM_THREADS"] = str(threads)  # Mesa llvmpipe, read when EGL starts
+    import cv2
+
+    cv2.setNumThreads(threads)
+
+
+@dataclasses.dataclass(frozen=True)
+class BenchJob:
+    """One bench episode: a scenario (name or file) and a seed (None: the scenario's own)."""
+
+    scenario: str
+    seed: int | None = None
+
+
+def longest_first(jobs: list[BenchJob], seconds: float | None) -> list[int]:
+    """Indices of `jobs` in the order to start them: the longest episodes first, so that no
+    worker starts a long one while the others are idle at the end (ties keep the order)."""
+    from lanekeep.scenario import load_scenario
+
+    def simulated_s(i: int) -> float:
+        duration = load_scenario(jobs[i].scenario).duration_s
+        return duration if seconds is None else min(duration, seconds)
+
+    return sorted(range(len(jobs)), key=simulated_s, reverse=True)
+
+
+def run_bench(jobs: list[BenchJob], workers: int, seconds: float | None = None,
+              plots: str | None = None, record_dir: str | None = None,
+              on_done=None) -> tuple[list[EpisodeReport], float]:
+    """Episodes in `workers` processes, longest first: (reports in the jobs' order, wall s).
+
+    `on_done(done, total)` is called as each episode finishes.
+    """
+    start = time.perf_counter()
+    reports: list[EpisodeReport | None] = [None] * len(jobs)
+    context = multiprocessing.get_context("spawn")
+    with ProcessPoolExecutor(max_workers=workers, mp_context=context,
+                             initializer=_init_worker,
+                             initargs=(worker_threads(workers),)) as pool:
+        futures = {pool.submit(_bench_one, jobs[i].scenario, jobs[i].seed, seconds, plots,
+                               record_dir): i
+                   for i in longest_first(jobs, seconds)}
+        for done, future in enumerate(as_completed(futures), start=1):
+            reports[futures[future]] = _report_from_dict(future.result())
+            if on_done is not None:
+                on_done(done, len(jobs))
+    return reports, time.perf_counter() - start
+
+
 def _cmd_bench(args: argparse.Namespace) -> int:
     from lanekeep.scenario import load_scenario, shipped_scenarios
 
@@ -94,17 +156,14 @@ def _cmd_bench(args: argparse.Namespace) -> int:
         load_scenario(name)  # fail fast on a bad name, before any worker starts
     if args.record_dir:
         Path(args.record_dir).mkdir(parents=True, exist_ok=True)
-    start = time.perf_counter()
-    reports: dict[str, EpisodeReport] = {}
-    context = multiprocessing.get_context("spawn")
-    with ProcessPoolExecutor(max_workers=args.workers, mp_context=context) as pool:
-        futures = {pool.submit(_bench_one, n, args.seed, args.seconds, args.plots,
-                               args.record_dir): n for n in names}
-        for done, future in enumerate(as_completed(futures), start=1):
-            reports[futures[future]] = _report_from_dict(future.result())
-            _progress(done, len(names), "bench")
+    if args.workers < 1:
+        raise ConfigError("", "--workers", f"must be >= 1, got {args.workers}")
+    jobs = [BenchJob(name, args.seed) for name in names]
+    done_reports, wall = run_bench(jobs, args.workers, args.seconds, args.plots,
+                                   args.record_dir,
+                                   on_done=lambda done, total: _progress(done, total, "bench"))
+    reports = dict(zip(names, done_reports, strict=True))
     print(file=sys.stderr)
-    wall = time.perf_counter() - start
     for name in names:
         r = reports[name]
         print(f"\n== {name} (seed {r.seed}, {r.duration_s:.0f} s, wall {r.wall_s:.0f} s) ==")

@@ -24,13 +24,15 @@ from lanekeep import world_conditions
 from lanekeep.cameras import CameraRig, RenderSettings
 from lanekeep.conditions import ImageEffects
 from lanekeep.control import SpeedController, SteeringPID
-from lanekeep.ground_truth import lane_truth
+from lanekeep.ground_truth import lane_offsets, lane_truth
 from lanekeep.metrics import EpisodeReport, Metrics
 from lanekeep.record import NullRecorder, Recorder
 from lanekeep.scenario import Scenario
+from lanekeep.timing import StageClock
 from lanekeep.world import World, build, physics_steps_per_control
 
 FUSED, REFERENCE = "fused", "reference"
+TYRES = ("front_left_tyre", "front_right_tyre", "rear_left_tyre", "rear_right_tyre")
 _ACCEPTED = (UpdateStatus.UPDATED.value, UpdateStatus.INITIALIZED.value,
              UpdateStatus.RESTARTED.value)
 
@@ -132,23 +134,33 @@ class Episode:
             detector.reset()
         self.index = 0
         self.detector_errors = 0
+        self.clock = StageClock()  # wall time per stage (`lanekeep perf`)
+        self._tyre_geoms = [self.world.model.geom(n).id for n in TYRES]
         self._wall_start = time.perf_counter()
 
     # -- the loop ------------------------------------------------------------------------------
     def step(self, action: tuple[float, float] | None = None) -> StepResult:
         """One control period. `action` = (steer, throttle) overrides the controllers."""
+        clock = self.clock
+        clock.start()
         events: list[str] = []
         sensed_pose = self.world.car.pose()  # the pose the frames are taken from
         frames = self._sense()
         estimates = self._detect(frames, events)
         tracked = self._track(estimates)
+        clock.lap("track")
         selection = self._select(estimates, tracked, events)
+        clock.lap("mmae")
         centre, offset = self._output(estimates, tracked, selection)
         steer, throttle = self._control(centre, offset) if action is None else action
+        clock.lap("control")
         self._actuate(steer, throttle)
+        clock.lap("physics")
         result = self._score(sensed_pose, frames, estimates, tracked, selection, centre,
                              offset, steer, throttle, events)
+        clock.lap("score")
         self.recorder.log_step(self, result)
+        clock.lap("record")
         self.index += 1
         return result
 
@@ -157,7 +169,9 @@ class Episode:
         frames = {}
         for name in self.rig.CAMERA_NAMES:
             rgb = self.rig.render_rgb(data, name)
+            self.clock.lap(f"render_{name}")
             frames[name] = self.effects[name](rgb, self.rng, speed_mps=self.world.car.speed_mps())
+            self.clock.lap(f"effects_{name}")
         return frames
 
     def _safe_detect(self, name: str, detector: Detector, frame: np.ndarray,
@@ -177,10 +191,13 @@ class Episode:
 
     def _detect(self, frames, events) -> dict[str, LaneEstimate]:
         est = self.scenario.estimation
-        out = {name: self._safe_detect(name, det, frames["front"], events)
-               for name, det in self.front.items()}
+        out = {}
+        for name, detector in self.front.items():
+            out[name] = self._safe_detect(name, detector, frames["front"], events)
+            self.clock.lap(f"detect_{name}")
         out[REFERENCE] = self._safe_detect(REFERENCE, self.reference,
                                            frames[est.reference_camera], events)
+        self.clock.lap("detect_reference")
         return out
 
     def _track(self, estimates) -> dict[str, np.ndarray | None]:
@@ -330,26 +347,29 @@ class Episode:
         lateral error and lane departures at its pose after the control period."""
         world, est = self.world, self.scenario.estimation
         lane = self.scenario.road.ego_lane
-        truth_at = {}
+        # One truth of the lane where the frames were taken, and its offsets at every
+        # look-ahead that an estimate reports at (one Newton solve for all of them).
+        sensed = lane_truth(world.road, *sensed_pose, lane)
+        lookaheads = sorted({round(e.x_m, 3) for e in estimates.values()}
+                            | {round(est.offset_lookahead_m, 3)})
+        offsets = dict(zip(lookaheads, lane_offsets(world.road, *sensed_pose, lane, lookaheads,
+                                                    s_car=sensed.s_m), strict=True))
 
-        def truth(x_m: float):
-            key = round(x_m, 3)
-            if key not in truth_at:
-                truth_at[key] = lane_truth(world.road, *sensed_pose, lane, lookahead_m=x_m)
-            return truth_at[key]
+        def true_offset(x_m: float) -> float:
+            return float(offsets[round(x_m, 3)])
 
         x, y, yaw = world.car.pose()
-        car_offset_m = lane_truth(world.road, x, y, yaw, lane).offset_m
+        car_offset_m = float(lane_offsets(world.road, x, y, yaw, lane, [0.0])[0])
 
         for name in self.front:
             e = estimates[name]
-            self.metrics.add_offset(name, e.offset_m if e.valid else None, truth(e.x_m).offset_m)
-            self.metrics.add_lane(name, tracked[name], truth(0.0).center)
+            self.metrics.add_offset(name, e.offset_m if e.valid else None, true_offset(e.x_m))
+            self.metrics.add_lane(name, tracked[name], sensed.center)
         ref = estimates[REFERENCE]
         self.metrics.add_offset(REFERENCE, selection.reference_m if ref.valid else None,
-                                truth(ref.x_m).offset_m)
-        self.metrics.add_offset(FUSED, offset, truth(est.offset_lookahead_m).offset_m)
-        self.metrics.add_lane(FUSED, centre, truth(0.0).center)
+                                true_offset(ref.x_m))
+        self.metrics.add_offset(FUSED, offset, true_offset(est.offset_lookahead_m))
+        self.metrics.add_lane(FUSED, centre, sensed.center)
         if centre is None:
             self.metrics.add_no_estimate()
         outside = self._wheels_outside_lane()
@@ -363,15 +383,14 @@ class Episode:
             selected=int(self._chosen), output_offset_m=offset, output_centre=centre,
             reference_m=selection.reference_m, reference_repaired=selection.reference_repaired,
             steer=steer, throttle=throttle, truth_offset_m=car_offset_m,
-            truth_centre=truth(0.0).center, pose=(x, y, yaw), sensed_pose=sensed_pose,
+            truth_centre=sensed.center, pose=(x, y, yaw), sensed_pose=sensed_pose,
             speed_mps=world.car.speed_mps(), events=events,
             tracker_status=dict(self._tracker_status),
         )
 
     def _wheels_outside_lane(self) -> bool:
         world = self.world
-        names = ("front_left_tyre", "front_right_tyre", "rear_left_tyre", "rear_right_tyre")
-        xy = np.array([world.data.geom(n).xpos[:2] for n in names])
+        xy = world.data.geom_xpos[self._tyre_geoms, :2]
         _, r = world.road.local_coordinates(xy)
         centre = world.road.lane_center_r(self.scenario.road.ego_lane)
         return bool(np.any(np.abs(np.asarray(r) - centre) > world.road.lane_width_m / 2.0))

@@ -1,121 +1,199 @@
-"""`lanekeep perf`: speed benchmarks (kept out of unit tests, which check behaviour only).
+"""`lanekeep perf`: how fast the closed loop runs on this machine (a benchmark, not a test).
 
-Measures, on this machine: ms per 1280x720 RGB and segmentation frame (shadows off/on),
-physics steps per second, each detector's ms per frame on one OpenCV thread, and the whole
-closed-loop step with recording off and on.
+It times the loop users run: a scenario's `Episode` (both cameras at the scenario's size, its
+image effects, its detectors and estimators), stage by stage from the episode's own
+`StageClock`, with recording off and then on; physics alone; and bench throughput with one
+and two worker processes through the same code as `lanekeep bench`.
+
+JSON keys (stable; times are wall-clock on this machine):
+  lanekeep_version, scenario, seed, cpus   what was measured where
+  cameras                      {"front": "1280x720", "rear": "1280x720"}
+  front_detectors, reference_detector
+  seconds                      simulated seconds of each timed loop (after one warm-up step)
+  repeats                      timed loops each with recording off and on (alternating); the
+                               figures below are each setting's fastest loop
+  stage_ms                     mean ms per control step of each stage, recording off:
+                               render_<camera>, effects_<camera>, detect_<detector>,
+                               detect_reference, track, mmae, control, physics, score, record
+  step_ms                      mean ms per control step, recording off
+  step_ms_recording            the same with a rerun recording written (every step)
+  record_ms                    mean ms per step of the `record` stage with recording on (the
+                               writer thread's JPEG encoding runs beside the loop, not in it)
+  real_time_factor             simulated seconds per wall-clock second, recording off
+  real_time_factor_recording   the same, recording on
+  recording_cost_pct           100 * (1 - real_time_factor_recording / real_time_factor)
+  physics_steps_per_s          MuJoCo steps per second of the scenario's model, nothing else
+  bench                        null with --bench-episodes 0, else {episodes, seconds_each,
+                               workers_1: {wall_s, episodes_per_s, simulated_s_per_s},
+                               workers_2: {...}, speedup}: the perf scenario with seeds
+                               0..episodes-1, each `seconds_each` long, via `lanekeep bench`'s
+                               runner (process start and world build included)
 """
 
 from __future__ import annotations
 
-import dataclasses
-import statistics
+import json
+import os
 import tempfile
 import time
-from collections.abc import Callable
 from pathlib import Path
 
-import mujoco
-import numpy as np
+from lanekeep.config_io import ConfigError
 
 
-def _time_ms(fn: Callable[[], object], repeats: int) -> float:
-    fn()  # warm-up
-    samples = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        fn()
-        samples.append((time.perf_counter() - start) * 1000.0)
-    return statistics.median(samples)
-
-
-def measure(scenario_name: str = "clear_curve", repeats: int = 10,
-            loop_steps: int = 30) -> dict[str, float]:
-    """All figures as a flat dict (ms, or steps/s)."""
-    import cv2
-
-    from detectors.registry import make_detector
-    from lanekeep.cameras import CameraRig, RenderSettings
+def _timed_loop(scenario, seconds: float, recorder=None) -> tuple[float, dict[str, float]]:
+    """(mean ms per step, mean ms per stage) over `seconds` after one warm-up step."""
     from lanekeep.episode import Episode
-    from lanekeep.render import place_on_road
-    from lanekeep.scenario import load_scenario
+
+    with Episode(scenario, recorder=recorder) as episode:
+        steps = max(1, int(round(seconds / episode.dt_s)))
+        episode.step()  # warm-up: first renders compile llvmpipe's shaders
+        episode.clock.reset()
+        start = time.perf_counter()
+        for _ in range(steps):
+            episode.step()
+        elapsed = time.perf_counter() - start
+        return 1000.0 * elapsed / steps, episode.clock.mean_ms()
+
+
+def _physics_steps_per_s(scenario, n: int = 2000) -> float:
+    import mujoco
+
     from lanekeep.world import build
 
-    results: dict[str, float] = {}
-    scenario = load_scenario(scenario_name)
     world = build(scenario)
-    place_on_road(world, 120.0)
-    for shadows in (False, True):
-        tag = "shadows_on" if shadows else "shadows_off"
-        with CameraRig(world.model, RenderSettings(1280, 720, shadows)) as rig:
-            results[f"rgb_ms_{tag}"] = _time_ms(lambda r=rig: r.render_rgb(world.data, "front"),
-                                                repeats)
-            results[f"segmentation_ms_{tag}"] = _time_ms(
-                lambda r=rig: r.render_segmentation(world.data, "front"), repeats)
-            frame = rig.render_rgb(world.data, "front").copy()
-            cameras = rig.cameras
     world.car.apply(0.0, 0.3)
-    n = 2000
     start = time.perf_counter()
     for _ in range(n):
         mujoco.mj_step(world.model, world.data)
-    results["physics_steps_per_s"] = n / (time.perf_counter() - start)
+    return n / (time.perf_counter() - start)
 
-    from lanekeep.conditions import ImageEffects
-    from lanekeep.scenario import Conditions
 
-    rng = np.random.default_rng(0)
-    for label in ("rain", "snow", "noise", "motion_blur"):
-        cond = Conditions(**{label: 1.0})
-        effect = ImageEffects(cond, 720, 1280, rng)
-        results[f"effect_ms_{label}"] = _time_ms(lambda e=effect: e(frame, rng, 15.0), repeats)
+def _bench_throughput(scenario_name: str, episodes: int, seconds: float) -> dict:
+    """Throughput of `lanekeep bench`'s runner with 1 and 2 workers: the scenario with seeds
+    0..episodes-1 (process start-up and world builds included, as in a real bench)."""
+    from lanekeep.cli_episode import BenchJob, run_bench
 
-    threads = cv2.getNumThreads()
-    cv2.setNumThreads(1)
-    try:
-        for name in dict.fromkeys(scenario.estimation.front_detectors):
-            detector = make_detector(name, cameras["front"])
-            results[f"detector_ms_{name}"] = _time_ms(lambda d=detector: d.detect(frame),
-                                                      repeats * 3)
-    finally:
-        cv2.setNumThreads(threads)
+    jobs = [BenchJob(scenario_name, seed) for seed in range(episodes)]
+    out: dict = {"episodes": episodes, "seconds_each": seconds}
+    for workers in (1, 2):
+        reports, wall = run_bench(jobs, workers, seconds=seconds)
+        simulated = sum(r.duration_s for r in reports)
+        out[f"workers_{workers}"] = {"wall_s": wall, "episodes_per_s": episodes / wall,
+                                     "simulated_s_per_s": simulated / wall}
+    out["speedup"] = out["workers_2"]["episodes_per_s"] / out["workers_1"]["episodes_per_s"]
+    return out
 
-    short = dataclasses.replace(scenario, duration_s=loop_steps * scenario.control_period_s)
-    with Episode(short) as episode:
-        episode.step()
-        start = time.perf_counter()
-        for _ in range(loop_steps - 1):
-            episode.step()
-        results["loop_step_ms_record_off"] = (time.perf_counter() - start) * 1000 / (
-            loop_steps - 1)
-    try:
-        from lanekeep.record import RerunRecorder
-    except ImportError:
-        return results
-    with tempfile.TemporaryDirectory() as tmp:
-        recorder = RerunRecorder(Path(tmp) / "perf.rrd", short)
-        with Episode(short, recorder=recorder) as episode:
-            episode.step()
-            start = time.perf_counter()
-            for _ in range(loop_steps - 1):
-                episode.step()
-            results["loop_step_ms_record_on"] = (time.perf_counter() - start) * 1000 / (
-                loop_steps - 1)
-    results["recording_overhead_pct"] = 100.0 * (
-        results["loop_step_ms_record_on"] / results["loop_step_ms_record_off"] - 1.0)
+
+def measure(scenario_name: str = "clear_curve", seconds: float = 10.0, repeats: int = 3,
+            bench_episodes: int = 4, bench_seconds: float = 10.0) -> dict:
+    """Every figure of the JSON described in the module docstring."""
+    import lanekeep
+    from lanekeep.record import RerunRecorder
+    from lanekeep.scenario import load_scenario
+
+    scenario = load_scenario(scenario_name)
+    seconds = min(seconds, scenario.duration_s - scenario.control_period_s)
+    cam = scenario.camera
+    results: dict = {
+        "lanekeep_version": lanekeep.__version__,
+        "scenario": scenario.name,
+        "seed": scenario.seed,
+        "cpus": os.cpu_count(),
+        "cameras": {"front": f"{cam.width}x{cam.height}", "rear": f"{cam.width}x{cam.height}"},
+        "front_detectors": list(scenario.estimation.front_detectors),
+        "reference_detector": scenario.estimation.reference_detector,
+        "seconds": seconds,
+    }
+    # Off and on alternate, and each keeps its fastest repeat: a background process on a
+    # shared machine slows one run by 10-20%, which would swamp a 10% recording cost.
+    off, on = [], []
+    for _ in range(repeats):
+        off.append(_timed_loop(scenario, seconds))
+        with tempfile.TemporaryDirectory() as tmp:
+            on.append(_timed_loop(scenario, seconds,
+                                  RerunRecorder(Path(tmp) / "perf.rrd", scenario)))
+    step_ms, stages = min(off, key=lambda r: r[0])
+    step_ms_rec, stages_rec = min(on, key=lambda r: r[0])
+    results["repeats"] = repeats
+    results["stage_ms"] = stages
+    results["step_ms"] = step_ms
+    results["step_ms_recording"] = step_ms_rec
+    results["record_ms"] = stages_rec.get("record", float("nan"))
+    dt_ms = 1000.0 * scenario.control_period_s
+    results["real_time_factor"] = dt_ms / step_ms
+    results["real_time_factor_recording"] = dt_ms / step_ms_rec
+    results["recording_cost_pct"] = 100.0 * (1.0 - step_ms / step_ms_rec)
+    results["physics_steps_per_s"] = _physics_steps_per_s(scenario)
+    results["bench"] = (_bench_throughput(scenario_name, bench_episodes, bench_seconds)
+                        if bench_episodes > 0 else None)
     return results
 
 
 def register(sub) -> None:
-    p = sub.add_parser("perf", help="speed benchmarks: render, physics, detectors, loop")
-    p.add_argument("--scenario", default="clear_curve")
-    p.add_argument("--repeats", type=int, default=10)
-    p.add_argument("--loop-steps", type=int, default=30)
+    p = sub.add_parser("perf", help="speed of the closed loop: per-stage ms, real-time factor, "
+                                    "recording cost, bench throughput (JSON keys: see --help)",
+                       description=__doc__,
+                       formatter_class=_raw_formatter())
+    p.add_argument("--scenario", default="clear_curve", help="scenario to time")
+    p.add_argument("--seconds", type=float, default=10.0,
+                   help="simulated seconds of each timed loop (default 10)")
+    p.add_argument("--repeats", type=int, default=3,
+                   help="timed loops with recording off and on, alternating; the fastest of "
+                        "each counts (default 3)")
+    p.add_argument("--bench-episodes", type=int, default=4,
+                   help="episodes per bench-throughput run; 0 skips it (default 4)")
+    p.add_argument("--bench-seconds", type=float, default=10.0,
+                   help="simulated seconds of each bench episode (default 10)")
+    p.add_argument("--json", default=None, help="also write the figures to this JSON file")
     p.set_defaults(func=_cmd_perf)
 
 
+def _raw_formatter():
+    import argparse
+
+    return argparse.RawDescriptionHelpFormatter
+
+
 def _cmd_perf(args) -> int:
-    results = measure(args.scenario, args.repeats, args.loop_steps)
-    width = max(len(k) for k in results)
-    for key, value in results.items():
-        print(f"{key:<{width}}  {value:10.1f}")
+    for option, value, ok in (("--seconds", args.seconds, args.seconds > 0),
+                              ("--bench-seconds", args.bench_seconds, args.bench_seconds > 0),
+                              ("--repeats", args.repeats, args.repeats >= 1),
+                              ("--bench-episodes", args.bench_episodes, args.bench_episodes >= 0)):
+        if not ok:
+            raise ConfigError("", option, f"out of range: {value}")
+    results = measure(args.scenario, args.seconds, args.repeats, args.bench_episodes,
+                      args.bench_seconds)
+    print(format_results(results))
+    if args.json:
+        Path(args.json).write_text(json.dumps(results, indent=2))
+        print(f"wrote {args.json}")
     return 0
+
+
+def format_results(r: dict) -> str:
+    """The figures as a short human-readable report."""
+    lines = [f"lanekeep {r['lanekeep_version']} perf: {r['scenario']} (seed {r['seed']}), "
+             f"cameras {r['cameras']['front']} + {r['cameras']['rear']}, detectors "
+             f"{', '.join(r['front_detectors'])} + {r['reference_detector']} (rear), "
+             f"{r['cpus']} CPUs, {r['seconds']:.1f} s simulated per loop, fastest of "
+             f"{r['repeats']}"]
+    lines.append("per control step, recording off:")
+    width = max(len(k) for k in r["stage_ms"])
+    for stage, ms in r["stage_ms"].items():
+        lines.append(f"  {stage:<{width}}  {ms:7.1f} ms")
+    lines.append(f"  {'total':<{width}}  {r['step_ms']:7.1f} ms")
+    lines.append(f"real-time factor {r['real_time_factor']:.2f} (recording off), "
+                 f"{r['real_time_factor_recording']:.2f} (recording on: "
+                 f"{r['step_ms_recording']:.1f} ms a step, cost {r['recording_cost_pct']:.1f}%)")
+    lines.append(f"physics alone: {r['physics_steps_per_s']:.0f} steps/s")
+    b = r["bench"]
+    if b is not None:
+        for w in (1, 2):
+            x = b[f"workers_{w}"]
+            lines.append(f"bench, {w} worker{'s' if w > 1 else ''}: {b['episodes']} x "
+                         f"{b['seconds_each']:.0f} s in {x['wall_s']:.1f} s = "
+                         f"{x['simulated_s_per_s']:.2f} simulated s per s")
+        lines.append(f"bench speed-up with 2 workers: {b['speedup']:.2f}x")
+    return "\n".join(lines)
+

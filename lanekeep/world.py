@@ -119,7 +119,7 @@ def _add_environment(spec: mujoco.MjSpec, road: Road, scenario: Scenario) -> Non
     spec.visual.map.znear = 0.002  # x extent = 0.2 m
     spec.visual.map.zfar = 10.0  # x extent = 1 km
     spec.visual.quality.shadowsize = 2048
-    spec.visual.quality.offsamples = 4
+    spec.visual.quality.offsamples = scenario.camera.antialias_samples
     spec.visual.headlight.ambient = [0.35, 0.35, 0.35]
     spec.visual.headlight.diffuse = [0.25, 0.25, 0.25]
     spec.visual.headlight.specular = [0.0, 0.0, 0.0]

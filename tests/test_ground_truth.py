@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from lanekeep.ground_truth import lane_boundary_points, lane_truth
+from lanekeep.ground_truth import lane_boundary_points, lane_offsets, lane_truth
 from lanekeep.road import Road, SegmentSpec
 
 R_CURVE = 150.0
@@ -104,3 +104,11 @@ def test_rear_fit_range(straight):
     assert truth.right[0] - truth.left[0] == pytest.approx(-straight.lane_width_m / math.cos(0.02))
     with pytest.raises(ValueError):
         lane_truth(straight, *pose, 0, fit_range_m=(0.0, 0.0))
+
+
+def test_lane_offsets_at_once_equal_one_truth_per_lookahead(curve):
+    x, y, yaw = _pose(curve, 60.0, 0.4, dyaw=0.05)
+    lookaheads = [-8.0, 0.0, 4.0, 12.5]
+    at_once = lane_offsets(curve, x, y, yaw, 0, lookaheads)
+    one_by_one = [lane_truth(curve, x, y, yaw, 0, lookahead_m=a).offset_m for a in lookaheads]
+    np.testing.assert_allclose(at_once, one_by_one, atol=1e-9)

@@ -128,6 +128,7 @@ def test_wrong_type_names_key(text, key, tmp_path):
         (MINIMAL + "[[road.markings]]\nkind = 'solid'", "road.markings"),
         (MINIMAL + "[conditions]\ntime_of_day = 'noon'", "conditions.time_of_day"),
         (MINIMAL + "[conditions]\nfog = 2", "conditions.fog"),
+        (MINIMAL + "[camera]\nantialias_samples = 3", "camera.antialias_samples"),
         (MINIMAL.replace('name = "tiny"', ""), "name"),
     ],
 )
@@ -154,3 +155,12 @@ def test_worn_markings_follow_the_seed():
     assert math.isclose(
         sum(p.s_end_m - p.s_start_m for p in a if p.boundary == 1), 27.0
     )  # 9 dashes of 3 m
+
+
+@pytest.mark.parametrize("samples", [0, 4])
+def test_antialias_samples_reach_the_renderer(samples, tmp_path):
+    from lanekeep.world import build
+
+    path = tmp_path / "aa.toml"
+    path.write_text(MINIMAL + f"[camera]\nantialias_samples = {samples}\n")
+    assert build(load_scenario(str(path))).model.vis.quality.offsamples == samples
