@@ -16,6 +16,8 @@ Residuals (`MMAEConfig.residual_mode`):
 * ``"distance_aligned"``: the reference at travelled distance s looks `reference_lag_m` behind
   where the front models look, so each model's offset is interpolated from its history at
   s - reference_lag_m and compared with the reference.
+* ``"same_step"``: r_n = z_ref(k) - z_n(k), for offsets the caller has already brought to
+  where the reference looks (the closed loop's odometry alignment, estimators/alignment.py).
 
 Choices the paper leaves open:
 
@@ -37,7 +39,7 @@ import numpy as np
 
 from estimators.reference import ReferenceRepair
 
-RESIDUAL_MODES = ("one_step_delay", "distance_aligned")
+RESIDUAL_MODES = ("one_step_delay", "distance_aligned", "same_step")
 LOG_2PI = float(np.log(2.0 * np.pi))
 
 
@@ -186,6 +188,8 @@ class MMAE:
         if self.config.residual_mode == "one_step_delay":
             previous, self._previous = self._previous, (z, var)
             return previous
+        if self.config.residual_mode == "same_step":
+            return z, var
         if s_m is None or not np.isfinite(s_m):
             raise ValueError("distance_aligned mode needs a finite travelled distance s_m")
         if self._history and s_m < self._history[-1][0]:

@@ -38,20 +38,17 @@ def run_episode(scenario_name: str, seed: int | None = None, seconds: float | No
                                  jpeg_quality=jpeg_quality)
     with Episode(scenario, recorder=recorder) as episode:
         trace = EpisodeTrace(list(episode.front))
-        steps = episode.total_steps if seconds is None else int(round(seconds / episode.dt_s))
-        completed = True
-        try:
-            for i in range(steps):
-                trace.add(episode.step())
-                if progress:
-                    _progress(i + 1, steps, scenario.name)
-        except KeyboardInterrupt:
-            completed = False
-            print("\ninterrupted: writing the partial report", file=sys.stderr)
-        finally:
+
+        def on_step(result, total: int) -> None:
+            trace.add(result)
             if progress:
-                print(file=sys.stderr)
-        report = episode.report(completed)
+                _progress(result.index + 1, total, scenario.name)
+
+        report = episode.run(seconds, on_step=on_step)
+        if progress:
+            print(file=sys.stderr)
+        if not report.completed:
+            print("interrupted: writing the partial report", file=sys.stderr)
         if plots_dir:
             write_plots(trace, episode.world.road, Path(plots_dir), scenario.name)
     return report

@@ -9,64 +9,34 @@ lane's offset at the control look-ahead; the speed PI holds the target speed.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
 
 import mujoco
 import numpy as np
 
-from detectors.base import Detector, LaneEstimate, poly_eval
+from detectors.base import Detector, LaneEstimate
 from detectors.registry import make_detector
-from estimators.alignment import OdometryAlignedHistory
-from estimators.consensus import corroborated
-from estimators.kalman import LaneTracker, TrackerConfig, UpdateStatus
-from estimators.mmae import MMAE, MMAEConfig
+from estimators.lane_estimator import (
+    CLOSED_LOOP_TRACKER,
+    EgoMotion,
+    EstimatorOutput,
+    EstimatorSettings,
+    LaneEstimator,
+)
 from lanekeep import world_conditions
 from lanekeep.cameras import CameraRig, RenderSettings
 from lanekeep.conditions import ImageEffects
 from lanekeep.control import SpeedController, SteeringPID
 from lanekeep.ground_truth import lane_offsets, lane_truth
 from lanekeep.metrics import EpisodeReport, Metrics
-from lanekeep.record import NullRecorder, Recorder
+from lanekeep.record import EpisodeInfo, NullRecorder, Recorder
 from lanekeep.scenario import Scenario
 from lanekeep.timing import StageClock
 from lanekeep.world import World, build, physics_steps_per_control
 
 FUSED, REFERENCE = "fused", "reference"
 TYRES = ("front_left_tyre", "front_right_tyre", "rear_left_tyre", "rear_right_tyre")
-_ACCEPTED = (UpdateStatus.UPDATED.value, UpdateStatus.INITIALIZED.value,
-             UpdateStatus.RESTARTED.value)
-
-# Tracker noise for the closed loop. Ego-motion explains most of the lane's motion in the car
-# frame; what it cannot is the road's own curvature change (a clothoid into a 40 m radius turns
-# c2 by 0.0125 /m within 1.3 s at 15 m/s, a rate of ~0.01 /m/s) and the sideslip change that
-# comes with it (c1 ~0.03 /s). Q is sized so the filter follows those within 2-3 steps
-# instead of gating the detector as an outlier.
-#
-# R is the covariance of both detectors' centre-line coefficient errors measured in the loop
-# (`python tools/measure_detector_noise.py`: clear_straight, clear_curve, paper cases 2 and 3,
-# 1,900 detections, the 80% core of a robust fit; stds 5.6 cm, 0.0098, 4.4e-4 /m) with its
-# standard deviations doubled (x4): the core holds only 80% of the detections, and fits in
-# tight turns, shade and rain are worse than the average.
-MEASURED_COEFFICIENT_COVARIANCE = (
-    (3.18e-3, -5.05e-4, 2.21e-5),
-    (-5.05e-4, 9.57e-5, -4.28e-6),
-    (2.21e-5, -4.28e-6, 1.94e-7),
-)
-CLOSED_LOOP_TRACKER = TrackerConfig(
-    c1_accel_psd_ps3=1e-3, c2_accel_psd_pm2ps3=3e-4,
-    # With the ego-motion predicted, a lane's coefficients hardly drift on their own: a new
-    # track's rates start near 0 (0.1 m/s, 0.02 /s), not free. A free c0 rate (1 m/s) takes
-    # the first innovation after a (re)start, one fit's noise over one step, for a drift and
-    # coasts the track off the road.
-    initial_rate_std=(0.1, 0.02, 1e-3),
-    # A coasting track moves with the ego-motion only: in snow one accepted bad fit gave the
-    # c2 rate 0.024 /s (2.5x the sharpest clothoid we ship), and the car, steered by the
-    # coasting track, followed a 40 m hairpin off a 300 m curve.
-    coast_with_rates=False,
-    coefficient_covariance=tuple(tuple(4.0 * v for v in row)
-                                 for row in MEASURED_COEFFICIENT_COVARIANCE),
-)
-
 
 @dataclass(frozen=True)
 class StepResult:
@@ -92,6 +62,9 @@ class StepResult:
     speed_mps: float
     events: list[str] = field(default_factory=list)
     tracker_status: dict[str, str] = field(default_factory=dict)  # UpdateStatus value per model
+    # Marking masks (uint8, 1 = paint) per camera rendered from the state after this step, the
+    # state the next step's frames come from; only when the recorder asks (`wants_masks`).
+    marking_masks_after: dict[str, np.ndarray] | None = None
 
 
 class Episode:
@@ -114,22 +87,27 @@ class Episode:
         self.front: dict[str, Detector] = {
             name: make_detector(name, self.rig.cameras["front"]) for name in est.front_detectors
         }
-        self.trackers = {name: LaneTracker(CLOSED_LOOP_TRACKER) for name in self.front}
         self.reference: Detector = make_detector(est.reference_detector,
                                                    self.rig.cameras[est.reference_camera])
-        # Distance-aligned residuals: each model's past lane estimate is carried by odometry to
-        # the point the reference measures now (estimators/alignment.py), so the MMAE compares
-        # values for the same road position at the same step (lag 0 in its own terms).
-        self.reference_x_m = float(getattr(self.reference, "x_ref", -4.0))
-        self.aligned = OdometryAlignedHistory(len(self.front))
+        self.estimator = LaneEstimator(
+            list(self.front),
+            EstimatorSettings(est.offset_lookahead_m, est.residual_mode, est.output,
+                              est.model_lane),
+            lane_width_m=self.world.road.lane_width_m,
+            reference_x_m=float(getattr(self.reference, "x_ref", -4.0)),
+            tracker=CLOSED_LOOP_TRACKER,
+        )
         self.travelled_m = 0.0
-        self.mmae = MMAE(len(self.front), MMAEConfig(residual_mode=est.residual_mode))
         geometry = self.world.car.geometry
         self.steering = SteeringPID(self.dt_s, est.control_lookahead_m, geometry.wheelbase_m,
                                     geometry.max_steer_rad)
         self.speed = SpeedController(scenario.target_speed_mps, self.dt_s)
         self.metrics = Metrics(list(self.front) + [FUSED, REFERENCE])
         self.recorder: Recorder = recorder or NullRecorder()
+        geometry = self.world.car.geometry
+        self.recorder.start(EpisodeInfo(self.world.road, dict(self.rig.cameras), list(self.front),
+                                        float(self.dt_s),
+                                        (geometry.length_m, geometry.width_m)))
         for detector in [*self.front.values(), self.reference]:
             detector.reset()
         self.index = 0
@@ -147,19 +125,18 @@ class Episode:
         sensed_pose = self.world.car.pose()  # the pose the frames are taken from
         frames = self._sense()
         estimates = self._detect(frames, events)
-        tracked = self._track(estimates)
-        clock.lap("track")
-        selection = self._select(estimates, tracked, events)
-        clock.lap("mmae")
-        centre, offset = self._output(estimates, tracked, selection)
+        estimate = self._estimate(estimates)  # laps "track" and "mmae"
+        events.extend(estimate.events)
+        centre, offset = estimate.centre, estimate.offset_m
         steer, throttle = self._control(centre, offset) if action is None else action
         clock.lap("control")
         self._actuate(steer, throttle)
         clock.lap("physics")
-        result = self._score(sensed_pose, frames, estimates, tracked, selection, centre,
-                             offset, steer, throttle, events)
+        result = self._score(sensed_pose, frames, estimates, estimate, steer, throttle, events)
         clock.lap("score")
-        self.recorder.log_step(self, result)
+        if self.recorder.wants_masks(self.index):
+            result = replace(result, marking_masks_after=self._marking_masks())
+        self.recorder.log_step(result)
         clock.lap("record")
         self.index += 1
         return result
@@ -200,122 +177,17 @@ class Episode:
         self.clock.lap("detect_reference")
         return out
 
-    def _track(self, estimates) -> dict[str, np.ndarray | None]:
-        """Predict and update each model's tracker. A detection the gate rejects but another
-        model's detection corroborates restarts that track: the track, not the two detectors,
-        has lost the road (a tight turn's onset outruns the constant-rate model)."""
+    def _ego_motion(self) -> EgoMotion:
+        """What the estimator is told of the car's motion (today: the simulator's values)."""
         car = self.world.car
-        centres = {name: self._centre_of(estimates[name]) for name in self.trackers}
-        agreed = dict(zip(centres, corroborated(list(centres.values()),
-                                                CLOSED_LOOP_TRACKER.coefficient_r), strict=True))
-        tracked = {}
-        self._tracker_status = {}
-        for name, tracker in self.trackers.items():
-            tracker.predict(self.dt_s, car.speed_mps(), car.yaw_rate_rps(),
-                            car.lateral_speed_mps())
-            result = tracker.update_coefficients(centres[name])
-            if result.status is UpdateStatus.GATED and agreed[name]:
-                result = tracker.restart(centres[name])
-            self._tracker_status[name] = result.status.value
-            tracked[name] = tracker.coefficients
-        return tracked
+        self.travelled_m += abs(car.speed_mps()) * self.dt_s  # odometry
+        return EgoMotion(self.dt_s, car.speed_mps(), car.yaw_rate_rps(),
+                         car.lateral_speed_mps(), car.pose(), self.travelled_m)
 
-    def _select(self, estimates, tracked, events):
-        x_eval = self.scenario.estimation.offset_lookahead_m
-        offsets, variances = [], []
-        for tracker in self.trackers.values():
-            offsets.append(tracker.offset_m(x_eval))
-            variances.append(tracker.offset_variance_m2(x_eval))
-        reference = estimates[REFERENCE]
-        pose = self.world.car.pose()
-        self.travelled_m += abs(self.world.car.speed_mps()) * self.dt_s  # odometry
-        if self.scenario.estimation.residual_mode == "distance_aligned":
-            self.aligned.push(pose, list(tracked.values()), variances, x_eval)
-            offsets, variances = self.aligned.offsets_at(pose, self.reference_x_m)
-        selection = self.mmae.step(
-            reference.offset_m if reference.valid else None,
-            offsets,
-            variances,
-            s_m=self.travelled_m,
-        )
-        if selection.reference_repaired:
-            events.append(f"reference repaired: {reference.offset_m:+.2f} m -> "
-                          f"{selection.reference_m:+.2f} m")
-        return selection
-
-    def _output(self, estimates, tracked, selection
-                ) -> tuple[np.ndarray | None, float | None]:
-        """The lane the controller follows: the MMAE output.
-
-        By default (`model_lane = "track"`) the selected model's Kalman estimate, the state of
-        the MMAE bank's likeliest filter: it averages a model's fit noise over steps, which
-        the raw detections (the model columns of the report) do not. `model_lane =
-        "detection"` is the paper's PID input: the selected model's own detection, with its
-        track standing in while the detector has nothing or failed the track's chi-square
-        gate (one wild fit, a boundary bent onto a passing car, would otherwise steer the car
-        off its lane within a step). "fused" weights each model's lane by its probability.
-        """
-        names = list(self.trackers)
-        self._chosen = int(selection.selected)
-        lanes = {n: self._lane_of(estimates[n], tracked[n], self._tracker_status[n])
-                 for n in names}
-        if self.scenario.estimation.output == "fused":
-            polys = [(p, lanes[n]) for p, n in zip(selection.probabilities, names, strict=True)
-                     if lanes[n] is not None]
-            if not polys:
-                return None, None
-            weight = sum(p for p, _ in polys)
-            centre = sum(p * c for p, c in polys) / weight
-        else:
-            self._chosen = self._choose(selection.probabilities, names)
-            centre = lanes[names[self._chosen]]
-            if centre is None:  # the selected model has nothing at all: take any live one
-                live = [lanes[n] for n in names if lanes[n] is not None]
-                centre = live[0] if live else None
-        if centre is None:
-            return None, None
-        return centre, -float(poly_eval(centre, self.scenario.estimation.offset_lookahead_m))
-
-    def _choose(self, probabilities: np.ndarray, names: list[str]) -> int:
-        """The MMAE's likeliest model, unless its filter rejected (or had no) detection this
-        step while another's accepted one: then the likeliest of those.
-
-        The probabilities come from the rear reference, which sees a stretch of road only
-        after the front models have passed it (distance-aligned residuals lag by ~1 s at
-        15 m/s), so they cannot react to a track that starts coasting now. A coasting track
-        extrapolates; an updated one has just been checked against its own detection.
-        """
-        order = np.argsort(-np.asarray(probabilities), kind="stable")
-        accepted = [i for i in order if self._tracker_status[names[i]] in _ACCEPTED]
-        if not accepted or order[0] in accepted:
-            return int(order[0])
-        return int(accepted[0])
-
-    def _lane_of(self, estimate: LaneEstimate, tracked: np.ndarray | None, status: str
-                 ) -> np.ndarray | None:
-        """The model's track, or ("detection" mode) its detection if the track accepted it.
-
-        Either way a rejected or missing detection leaves the (coasting) track.
-        """
-        centre = self._centre_of(estimate)
-        if self.scenario.estimation.model_lane == "track" and tracked is not None:
-            return tracked
-        if centre is None or status not in _ACCEPTED:
-            return tracked
-        return np.asarray(centre)
-
-    def _centre_of(self, estimate: LaneEstimate) -> np.ndarray | None:
-        """Centre line of a detection; one boundary is shifted by half a lane."""
-        if not estimate.valid:
-            return None
-        if estimate.center is not None:
-            return estimate.center
-        half = self.world.road.lane_width_m / 2.0
-        if estimate.left is not None:
-            return np.asarray(estimate.left) - [half, 0.0, 0.0]
-        if estimate.right is not None:
-            return np.asarray(estimate.right) + [half, 0.0, 0.0]
-        return None
+    def _estimate(self, estimates: dict[str, LaneEstimate]) -> EstimatorOutput:
+        front = {name: estimates[name] for name in self.front}
+        return self.estimator.update(front, estimates[REFERENCE], self._ego_motion(),
+                                     lap=self.clock.lap)
 
     def _control(self, centre, offset) -> tuple[float, float]:
         car = self.world.car
@@ -341,12 +213,14 @@ class Episode:
             mujoco.mj_step(model, data)
         world_conditions.update_dynamic(self.world, data.time)
 
-    def _score(self, sensed_pose, frames, estimates, tracked, selection, centre, offset, steer,
+    def _score(self, sensed_pose, frames, estimates, estimate: EstimatorOutput, steer,
                throttle, events) -> StepResult:
         """Estimates against the truth of the pose their frames were taken from; the car's own
         lateral error and lane departures at its pose after the control period."""
         world, est = self.world, self.scenario.estimation
         lane = self.scenario.road.ego_lane
+        tracked, selection = estimate.tracked, estimate.selection
+        centre, offset = estimate.centre, estimate.offset_m
         # One truth of the lane where the frames were taken, and its offsets at every
         # look-ahead that an estimate reports at (one Newton solve for all of them).
         sensed = lane_truth(world.road, *sensed_pose, lane)
@@ -376,17 +250,24 @@ class Episode:
         if outside:
             events.append("lane departure: a wheel crossed a lane boundary")
         self.metrics.add_car(car_offset_m, outside)
-        self.metrics.add_selection(self._chosen, selection.reference_repaired)
+        self.metrics.add_selection(estimate.selected, selection.reference_repaired)
         return StepResult(
             index=self.index, time_s=float(world.data.time), frames=frames, estimates=estimates,
             tracked=tracked, probabilities=np.asarray(selection.probabilities),
-            selected=int(self._chosen), output_offset_m=offset, output_centre=centre,
+            selected=int(estimate.selected), output_offset_m=offset, output_centre=centre,
             reference_m=selection.reference_m, reference_repaired=selection.reference_repaired,
             steer=steer, throttle=throttle, truth_offset_m=car_offset_m,
             truth_centre=sensed.center, pose=(x, y, yaw), sensed_pose=sensed_pose,
             speed_mps=world.car.speed_mps(), events=events,
-            tracker_status=dict(self._tracker_status),
+            tracker_status=dict(estimate.tracker_status),
         )
+
+    def _marking_masks(self) -> dict[str, np.ndarray]:
+        """Per camera, where the paint is now (segmentation render; for the recording)."""
+        data = self.world.data
+        return {name: self.world.marking_mask(self.rig.render_segmentation(data, name)
+                                              ).astype(np.uint8)
+                for name in self.rig.CAMERA_NAMES}
 
     def _wheels_outside_lane(self) -> bool:
         world = self.world
@@ -400,15 +281,20 @@ class Episode:
     def total_steps(self) -> int:
         return int(round(self.scenario.duration_s / self.dt_s))
 
-    def run(self, seconds: float | None = None, progress=None) -> EpisodeReport:
-        """Step to the end (or `seconds`); an interrupt still returns a partial report."""
+    def run(self, seconds: float | None = None,
+            on_step: Callable[[StepResult, int], None] | None = None) -> EpisodeReport:
+        """Step to the end (or `seconds`); an interrupt still returns a partial report.
+
+        `on_step(result, total_steps)` sees every step as it is made (a trace for plots, a
+        progress bar); the report says `completed = False` after Ctrl-C.
+        """
         steps = self.total_steps if seconds is None else int(round(seconds / self.dt_s))
         completed = True
         try:
             for _ in range(steps):
-                self.step()
-                if progress is not None:
-                    progress(self.index, steps)
+                result = self.step()
+                if on_step is not None:
+                    on_step(result, steps)
         except KeyboardInterrupt:
             completed = False
         return self.report(completed)

@@ -3,7 +3,8 @@
 `rerun` is imported only when a `RerunRecorder` is made, so an episode without recording never
 loads it. Everything one control step logs is stamped with the time lines `step` (sequence:
 the control step index) and `sim_time` (the simulated time at which that step's camera frames
-were taken). The episode hands the recorder the state after actuation and the pose the frames
+were taken). The episode hands the recorder its static `EpisodeInfo` once and then one
+StepResult per step, nothing else; a step carries the pose the frames
 were taken from (`StepResult.sensed_pose`); ground truth is drawn from the latter so that it
 lines up with the images.
 
@@ -11,7 +12,7 @@ Entity paths (metres; `world` is MuJoCo's frame, z up; lanes of the vehicle fram
 y left are drawn in world coordinates):
 
     scenario                              static: TOML text, seed, command that reproduces it
-    cameras/{front,rear}/image            JPEG, encoded by rerun (quality configurable)
+    cameras/{front,rear}/image            JPEG (OpenCV, quality configurable)
     cameras/{cam}/segmentation            marking mask (optional layer)
     cameras/{cam}/lanes/{model}/points    pixels each detector fitted (LaneEstimate.image_points)
     cameras/{cam}/lanes/{model}/boundaries  its left/right polynomials projected by the camera
@@ -71,10 +72,28 @@ LINE_Z_M = 0.05  # lifted above the road in the 3D view
 BATCH_FLUSH_S, BATCH_BYTES = 2.0, 8 << 20  # rerun's chunk batcher (default 0.2 s, 2 MiB)
 
 
-class Recorder(Protocol):
-    """Receives each control step of an episode."""
+@dataclass(frozen=True)
+class EpisodeInfo:
+    """What a recorder is told once, before the first step: nothing it could step with."""
 
-    def log_step(self, episode: Any, step: Any) -> None: ...
+    road: Any  # lanekeep.road.Road
+    cameras: dict[str, Any]  # camera name -> lanekeep.cameras.CameraModel
+    models: list[str]  # the front models, in the MMAE's order
+    dt_s: float
+    car_size_m: tuple[float, float]  # length, width
+
+
+class Recorder(Protocol):
+    """Receives an episode's static information once, then each control step's result."""
+
+    def start(self, info: EpisodeInfo) -> None: ...
+
+    def wants_masks(self, step_index: int) -> bool:
+        """Whether the step with this index should carry the marking masks rendered after it
+        (`StepResult.marking_masks_after`)."""
+        ...
+
+    def log_step(self, step: Any) -> None: ...
 
     def close(self) -> None: ...
 
@@ -82,7 +101,13 @@ class Recorder(Protocol):
 class NullRecorder:
     """Recording off: every call returns at once."""
 
-    def log_step(self, episode: Any, step: Any) -> None:
+    def start(self, info: EpisodeInfo) -> None:
+        return None
+
+    def wants_masks(self, step_index: int) -> bool:
+        return False
+
+    def log_step(self, step: Any) -> None:
         return None
 
     def close(self) -> None:
@@ -223,40 +248,25 @@ def scenario_document(scenario) -> str:
 
 
 # -- the recorder -------------------------------------------------------------------------------
-@dataclass(frozen=True)
-class _EpisodeView:
-    """What the writer thread needs from an episode, read once on the episode's thread."""
-
-    road: Any
-    cameras: dict[str, Any]
-    models: list[str]
-    dt_s: float
-    car_size_m: tuple[float, float]
-
-    @classmethod
-    def of(cls, episode) -> _EpisodeView:
-        geometry = episode.world.car.geometry
-        return cls(episode.world.road, dict(episode.rig.cameras), list(episode.front),
-                   float(episode.dt_s), (geometry.length_m, geometry.width_m))
-
-
 class RerunRecorder:
     """Streams every step of an episode to a rerun .rrd file, with a default blueprint.
 
-    `log_step` only queues the step (and renders the segmentation, which needs the physics
-    state): a writer thread JPEG-encodes, projects and logs, so the loop does not wait for it
-    while the GIL is free (rendering, physics, OpenCV). The queue is bounded, so a slow writer
-    slows the loop rather than filling memory. Steps are treated as immutable once handed over.
+    `start` takes the episode's static information, `log_step` queues each step: a writer
+    thread JPEG-encodes, projects and logs, so the loop does not wait for it while the GIL is
+    free (physics, OpenCV; it never runs beside a render, see lanekeep.cameras). The queue is
+    bounded, so a slow writer slows the loop rather than filling memory. Steps are treated as
+    immutable once handed over.
 
     Args:
         path: the .rrd file (streamed as the episode runs; `close()` writes its footer).
         scenario: the scenario being run; its TOML and seed are stored in the recording.
         every: log images, overlays and the 3D view on every N-th step (scalars: every step).
         jpeg_quality: quality of the camera images (rerun's JPEG encoder), 1..100.
-        segmentation: also render and log the marking mask of both cameras (two extra renders
-            per recorded step, on the episode's thread). It is rendered from the state after a
-            step, which is the state the next step's frames come from, and logged at that next
-            step: so from step `every` on (none at step 0), and one past the last step.
+        segmentation: also log the marking mask of both cameras (the episode renders them,
+            two extra renders per recorded step, when `wants_masks` says so). They are rendered
+            from the state after a step, which is the state the next step's frames come from,
+            and logged at that next step: so from step `every` on (none at step 0), and one
+            past the last step.
     """
 
     QUEUE_STEPS = 4
@@ -286,7 +296,7 @@ class RerunRecorder:
                                                          source=str(scenario.source)))
         self._rec.log("scenario", rr.TextDocument(scenario_document(scenario),
                                                   media_type=rr.MediaType.MARKDOWN), static=True)
-        self._view: _EpisodeView | None = None
+        self._view: EpisodeInfo | None = None
         self._closed = False
         self._error: BaseException | None = None
         # Writer-thread state: the path so far.
@@ -299,19 +309,23 @@ class RerunRecorder:
         self._writer.start()
 
     # -- the episode's thread ------------------------------------------------------------------
-    def log_step(self, episode: Any, step: Any) -> None:
+    def start(self, info: EpisodeInfo) -> None:
+        """The episode's static information; logged once, before the first step."""
+        if self._view is not None:
+            raise RuntimeError("a RerunRecorder records one episode; start() came twice")
+        self._view = info
+        self._queue.put(("static", info, None))
+
+    def wants_masks(self, step_index: int) -> bool:
+        return self.segmentation and (step_index + 1) % self.every == 0
+
+    def log_step(self, step: Any) -> None:
         if self._closed:
             return
-        self._raise_writer_error()
         if self._view is None:
-            self._view = _EpisodeView.of(episode)
-            self._queue.put(("static", self._view, None))
-        masks = None
-        if self.segmentation and (step.index + 1) % self.every == 0:
-            # The physics state now is the one the next step's frames will be rendered from.
-            masks = {name: episode.world.marking_mask(
-                episode.rig.render_segmentation(episode.world.data, name)).astype(np.uint8)
-                for name in step.frames}
+            raise RuntimeError("RerunRecorder.start(info) must come before the first step")
+        self._raise_writer_error()
+        masks = getattr(step, "marking_masks_after", None)
         self._queue.put(("step", step, masks))
 
     def close(self) -> None:
@@ -380,7 +394,7 @@ class RerunRecorder:
         models = self._view.models
         return colour(name, models.index(name) if name in models else 0)
 
-    def _log_static(self, view: _EpisodeView) -> None:
+    def _log_static(self, view: EpisodeInfo) -> None:
         rr, rec, road = self._rr, self._rec, view.road
         s = np.append(np.arange(0.0, road.length_m, ROAD_STEP_M), road.length_m)
         strips = [_lifted(road.position(s, road.boundary_r(i))) for i in range(road.n_lanes + 1)]

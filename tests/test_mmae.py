@@ -255,3 +255,12 @@ def test_distance_aligned_mode_compares_the_same_road_position() -> None:
     assert out_a.selected == 0 and out_a.probabilities[0] > 0.99
     with pytest.raises(ValueError, match="s_m"):
         aligned.step(0.0, [0.0, 0.0], [1e-4, 1e-4])
+
+
+def test_same_step_mode_compares_the_offsets_it_is_given_now() -> None:
+    """The closed loop aligns the models' offsets itself (odometry); the MMAE then compares
+    them with this step's reference: r_n = z_ref(k) - z_n(k)."""
+    mmae = MMAE(2, MMAEConfig(residual_mode="same_step"))
+    out = mmae.step(0.10, [0.12, 0.40], [1e-4, 1e-4])
+    np.testing.assert_allclose(out.residuals_m, [0.10 - 0.12, 0.10 - 0.40])
+    assert out.updated and out.selected == 0

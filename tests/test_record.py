@@ -17,7 +17,7 @@ import pytest
 import lanekeep  # noqa: F401 - EGL before mujoco
 from detectors.base import LaneEstimate
 from lanekeep.cameras import CameraRig, RenderSettings
-from lanekeep.record import RerunRecorder
+from lanekeep.record import EpisodeInfo, RerunRecorder
 from lanekeep.scenario import load_scenario
 from lanekeep.world import build
 
@@ -82,8 +82,11 @@ def fake():
     rig = CameraRig(world.model, RenderSettings(320, 180))
     frames = {n: rig.render_rgb(world.data, n) for n in rig.CAMERA_NAMES}
     marking = world.marking_mask(rig.render_segmentation(world.data, "front"))
-    episode = SimpleNamespace(world=world, rig=rig, front=dict.fromkeys(MODELS), dt_s=0.1)
-    yield SimpleNamespace(scenario=scenario, episode=episode, frames=frames, marking=marking)
+    geometry = world.car.geometry
+    info = EpisodeInfo(world.road, dict(rig.cameras), list(MODELS), 0.1,
+                       (geometry.length_m, geometry.width_m))
+    yield SimpleNamespace(scenario=scenario, info=info, world=world, frames=frames,
+                          marking=marking)
     rig.close()
 
 
@@ -98,8 +101,8 @@ def make_step(fake, index: int, **changes) -> SimpleNamespace:
         tracked={m: np.zeros(3) for m in MODELS}, probabilities=np.array([0.7, 0.3]),
         selected=0, output_offset_m=0.05, output_centre=np.zeros(3), reference_m=0.04,
         reference_repaired=False, steer=0.01, throttle=0.2, truth_offset_m=0.0,
-        truth_centre=np.zeros(3), pose=fake.scenario.start_pose(fake.episode.world.road),
-        sensed_pose=fake.scenario.start_pose(fake.episode.world.road), speed_mps=15.0,
+        truth_centre=np.zeros(3), pose=fake.scenario.start_pose(fake.world.road),
+        sensed_pose=fake.scenario.start_pose(fake.world.road), speed_mps=15.0,
         events=[], tracker_status=dict.fromkeys(MODELS, "updated"),
     )
     step.update(changes)
@@ -108,8 +111,9 @@ def make_step(fake, index: int, **changes) -> SimpleNamespace:
 
 def record(fake, path: Path, steps: list, **kwargs) -> Path:
     with RerunRecorder(path, fake.scenario, **kwargs) as recorder:
+        recorder.start(fake.info)
         for step in steps:
-            recorder.log_step(fake.episode, step)
+            recorder.log_step(step)
     return path
 
 
@@ -147,7 +151,7 @@ def test_ground_truth_overlay_lies_on_the_rendered_markings(fake, tmp_path):
     """Truth is drawn from the pose the frames were taken from (`sensed_pose`). Step 1 claims
     its frames came from a pose 1.5 m off, so its truth, drawn on the same start-pose frame,
     must miss the markings: the check can tell right from wrong."""
-    x, y, yaw = fake.scenario.start_pose(fake.episode.world.road)
+    x, y, yaw = fake.scenario.start_pose(fake.world.road)
     moved = (x - 1.5 * np.sin(yaw), y + 1.5 * np.cos(yaw), yaw + 0.03)
     steps = [make_step(fake, 0, pose=moved), make_step(fake, 1, pose=moved, sensed_pose=moved)]
     data = read_back(record(fake, tmp_path / "x.rrd", steps))
@@ -208,11 +212,21 @@ def test_scenario_and_events_are_logged(fake, tmp_path):
 
 def test_writer_failure_reaches_the_episode_and_the_file_still_closes(fake, tmp_path):
     recorder = RerunRecorder(tmp_path / "x.rrd", fake.scenario)
-    recorder.log_step(fake.episode, make_step(fake, 0, sensed_pose=None))  # the writer fails on it
+    recorder.start(fake.info)
+    recorder.log_step(make_step(fake, 0, sensed_pose=None))  # the writer fails on it
     with pytest.raises(RuntimeError, match="recording to .* failed"):
         recorder.close()
     assert verify(tmp_path / "x.rrd").returncode == 0
     recorder.close()  # a second close is a no-op
+
+
+def test_a_step_before_start_or_a_second_start_is_an_error(fake, tmp_path):
+    with RerunRecorder(tmp_path / "x.rrd", fake.scenario) as recorder:
+        with pytest.raises(RuntimeError, match="start"):
+            recorder.log_step(make_step(fake, 0))
+        recorder.start(fake.info)
+        with pytest.raises(RuntimeError, match="start"):
+            recorder.start(fake.info)
 
 
 @pytest.mark.parametrize("kwargs", [{"every": 0}, {"jpeg_quality": 0}, {"jpeg_quality": 101}])
@@ -286,7 +300,8 @@ class Untouchable:
     def __getattr__(self, name):
         raise AssertionError(f"NullRecorder read .{name}")
 
-NullRecorder().log_step(Untouchable(), Untouchable())
+NullRecorder().start(Untouchable())
+NullRecorder().log_step(Untouchable())
 with Episode(load_scenario("clear_straight"), render_size=(320, 180)) as episode:
     assert isinstance(episode.recorder, NullRecorder)
     episode.step()

@@ -6,7 +6,7 @@
 Runs each scenario's episode, collects every valid detection's centre line [c0, c1, c2] minus
 the true centre line at the pose its frame was taken from, and prints the covariance of the
 errors' core (an iterated 97.5% chi-square trim, which keeps ~80%: the tails are heavy) and the
-share of detections a tracker gate would reject with it. `lanekeep.episode`'s
+share of detections a tracker gate would reject with it. `estimators.lane_estimator`'s
 MEASURED_COEFFICIENT_COVARIANCE came from this command with the four scenarios above.
 """
 
@@ -31,7 +31,7 @@ def coefficient_errors(name: str) -> list[np.ndarray]:
             step = episode.step()
             truth = lane_truth(episode.world.road, *step.sensed_pose, scenario.road.ego_lane).center
             for detector in episode.front:
-                centre = episode._centre_of(step.estimates[detector])
+                centre = episode.estimator.centre_of(step.estimates[detector])
                 if centre is not None:
                     errors.append(np.asarray(centre) - truth)
     return errors

@@ -1,0 +1,70 @@
+"""The closed loop's estimator behind one call: centring, tracking, choice, timing laps."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from detectors.base import LaneEstimate
+from estimators.lane_estimator import EgoMotion, EstimatorSettings, LaneEstimator
+
+WIDTH = 3.7
+NAMES = ["hough", "sliding_window"]
+
+
+def _lane(c0: float, heading: float = 0.0) -> LaneEstimate:
+    """A detection of a straight lane whose centre is at y = c0 (both boundaries)."""
+    left = np.array([c0 + WIDTH / 2, heading, 0.0])
+    right = np.array([c0 - WIDTH / 2, heading, 0.0])
+    return LaneEstimate(valid=True, offset_m=-c0, x_m=4.0, left=left, right=right)
+
+
+def _ego(k: int, speed: float = 15.0) -> EgoMotion:
+    return EgoMotion(0.1, speed, 0.0, 0.0, (speed * 0.1 * k, 0.0, 0.0), speed * 0.1 * (k + 1))
+
+
+def _estimator() -> LaneEstimator:
+    return LaneEstimator(NAMES, EstimatorSettings(), WIDTH, reference_x_m=-4.0)
+
+
+def test_one_boundary_is_centred_with_the_lane_width():
+    estimator = _estimator()
+    left_only = LaneEstimate(valid=True, x_m=4.0, left=np.array([1.85, 0.0, 0.0]))
+    np.testing.assert_allclose(estimator.centre_of(left_only), [0.0, 0.0, 0.0])
+    assert estimator.centre_of(LaneEstimate.invalid("none")) is None
+
+
+def test_a_steady_lane_is_tracked_and_handed_on_with_its_offset():
+    estimator = _estimator()
+    laps: list[str] = []
+    for k in range(20):
+        out = estimator.update({n: _lane(0.2) for n in NAMES}, _lane(0.2), _ego(k),
+                               lap=laps.append)
+    assert set(out.tracked) == set(NAMES)
+    assert out.tracker_status == {n: "updated" for n in NAMES}
+    np.testing.assert_allclose(out.centre[0], 0.2, atol=1e-4)  # converged within 0.1 mm
+    assert abs(out.offset_m - (-0.2)) < 1e-4
+    assert out.selected in (0, 1)
+    assert laps == ["track", "mmae"] * 20
+
+
+def test_output_leaves_a_model_whose_detector_has_nothing_for_one_that_was_updated():
+    estimator = _estimator()
+    for k in range(10):
+        out = estimator.update({n: _lane(0.0) for n in NAMES}, _lane(0.0), _ego(k))
+    favourite = out.selected
+    other = 1 - favourite
+    detections = {NAMES[favourite]: LaneEstimate.invalid("lost"), NAMES[other]: _lane(0.05)}
+    out = estimator.update(detections, _lane(0.0), _ego(10))
+    assert out.tracker_status[NAMES[favourite]] == "missed"
+    assert out.selected == other
+    np.testing.assert_allclose(out.centre, out.tracked[NAMES[other]])
+
+
+def test_reset_forgets_the_tracks():
+    estimator = _estimator()
+    estimator.update({n: _lane(0.3) for n in NAMES}, _lane(0.3), _ego(0))
+    estimator.reset()
+    out = estimator.update({n: LaneEstimate.invalid("none") for n in NAMES},
+                           LaneEstimate.invalid("none"), _ego(1))
+    assert out.centre is None and out.offset_m is None
+    assert all(c is None for c in out.tracked.values())
