@@ -15,6 +15,8 @@ from typing import Protocol, runtime_checkable
 
 import numpy as np
 
+from detectors.config import GroundWindow
+
 
 def poly_eval(coeffs: np.ndarray, x: np.ndarray | float) -> np.ndarray | float:
     """y(x) for coefficients [c0, c1, c2] (low order first)."""
@@ -69,9 +71,19 @@ class LaneEstimate:
 
 @runtime_checkable
 class Detector(Protocol):
-    """Maps an RGB frame (H, W, 3) uint8 to a LaneEstimate; may keep state between frames."""
+    """Maps an RGB frame (H, W, 3) uint8 to a LaneEstimate; may keep state between frames.
+
+    Detectors are made by `detectors.registry.make_detector(name, camera, config, distortion)`,
+    which calls the detector's factory as `factory(camera, config=..., distortion=...)`.
+    """
 
     name: str
+    x_ref: float  # vehicle-frame x (m) of the offset it reports (negative behind the car)
+
+    @property
+    def window(self) -> GroundWindow:
+        """The patch of ground it looks at (its lanes are meant for this x range)."""
+        ...
 
     def detect(self, frame: np.ndarray) -> LaneEstimate: ...
 

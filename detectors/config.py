@@ -1,8 +1,9 @@
 """Tuned numbers of the classical detectors: frozen dataclasses read from `detectors.toml`.
 
-Every threshold and window size lives in the shipped TOML (detectors/detectors.toml); the
-dataclass defaults only say what a field means. Loading is strict (unknown keys raise, naming
-the key), as for scenario files.
+Every threshold and window size lives in the shipped TOML (detectors/detectors.toml), and
+the dataclass defaults are the same tuned values (a test holds them equal), so
+`DetectorsConfig()` and a partial TOML file are tuned too. Loading is strict (unknown keys
+raise, naming the key), as for scenario files.
 """
 
 from __future__ import annotations
@@ -25,7 +26,7 @@ class GroundWindow:
     """
 
     x_near_m: float = 4.0
-    x_far_m: float = 26.0
+    x_far_m: float = 20.0
     y_half_m: float = 6.0
     m_per_col: float = 0.05
     m_per_row: float = 0.1
@@ -52,7 +53,7 @@ class Profiles:
 
     front: GroundWindow = GroundWindow()
     rear: GroundWindow = GroundWindow(x_near_m=-4.0, x_far_m=-16.0)
-    dashcam: GroundWindow = GroundWindow(x_near_m=6.0, x_far_m=40.0)
+    dashcam: GroundWindow = GroundWindow(x_near_m=6.0, x_far_m=40.0, m_per_row=0.15)
 
 
 @dataclass(frozen=True)
@@ -85,9 +86,9 @@ class LaneRules:
 
     lane_width_m: float = 3.7
     width_tolerance_m: float = 0.8  # |measured - lane_width| above this: keep only the better side
-    min_half_width: float = 0.2  # a boundary's |y| at the near edge, in lane widths
+    min_half_width: float = 0.1  # a boundary's |y| at the near edge, in lane widths
     max_half_width: float = 1.1
-    min_span_m: float = 3.0  # a boundary must cover this much x
+    min_span_m: float = 2.0  # a boundary must cover this much x
     quadratic_span_m: float = 8.0  # fit a parabola only over at least this x span
     max_curvature_1pm: float = 0.05  # |2 c2| above this: a bad fit (R < 20 m)
 
@@ -101,8 +102,8 @@ class HoughConfig:
     """Model #1: adaptive brightness threshold, bird's-eye view, probabilistic Hough."""
 
     adaptive_block_px: int = 25  # odd, in working-resolution pixels
-    adaptive_c: float = 10.0  # a pixel must exceed its local mean by this (grey levels)
-    min_grey: int = 90  # and be at least this bright
+    adaptive_c: float = 35.0  # a pixel must exceed its local mean by this (grey levels)
+    min_grey: int = 120  # and be at least this bright
     rho_px: float = 1.0
     theta_deg: float = 1.0
     votes: int = 12
@@ -129,7 +130,7 @@ class SlidingWindowConfig:
     # Paint in a building's shadow keeps its contrast ratio to the asphalt, not its level.
     illumination_block_px: int = 61
     illumination_target: float = 80.0
-    illumination_max_gain: float = 1.0
+    illumination_max_gain: float = 4.0
     sobel_min: float = 25.0  # |d lightness / dx| in grey levels per pixel (Sobel-scaled / 4)
     min_lightness_gain: float = 10.0  # gradient pixels must sit in a brighter-than-local ridge
     local_block_px: int = 25

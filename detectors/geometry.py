@@ -20,7 +20,7 @@ import numpy as np
 
 from detectors.base import LaneEstimate, poly_eval
 from detectors.config import GroundWindow, LaneRules
-from lanekeep.cameras import CameraModel
+from lanekeep.camera_model import CameraModel
 
 
 def check_frame(frame: np.ndarray, camera: CameraModel) -> None:

@@ -17,37 +17,15 @@ import math
 import cv2
 import numpy as np
 
-from detectors.base import LaneEstimate, poly_eval
-from detectors.config import DetectorsConfig, load_config
-from detectors.geometry import (
-    Boundary,
-    assemble,
-    binary_bird_eye,
-    detector_view,
-    fit_boundary,
-    parallel,
-    support_confidence,
-)
-from lanekeep.cameras import CameraModel
+from detectors.base import poly_eval
+from detectors.classical import ClassicalDetector
+from detectors.geometry import Boundary, fit_boundary, parallel
 
 
-class HoughDetector:
+class HoughDetector(ClassicalDetector):
     """Model #1 on one camera; stateless between frames."""
 
-    def __init__(
-        self,
-        camera: CameraModel,
-        config: DetectorsConfig | None = None,
-        distortion: np.ndarray | None = None,
-        name: str = "hough",
-    ) -> None:
-        self.name = name
-        self.camera = camera
-        self.config = config or load_config()
-        self.view, self.x_ref = detector_view(camera, self.config, distortion)
-
-    def reset(self) -> None:
-        """Nothing is carried between frames."""
+    default_name = "hough"
 
     # -- stages -------------------------------------------------------------------------------
     def binarise(self, roi: np.ndarray) -> np.ndarray:
@@ -163,12 +141,5 @@ class HoughDetector:
         x0, y0 = pts.mean(axis=0)
         return np.array([y0 - heading * x0, heading, 0.0])
 
-    # -- the detector ------------------------------------------------------------------------
-    def detect(self, frame: np.ndarray) -> LaneEstimate:
-        bev, noise = binary_bird_eye(frame, self.camera, self.view, self.config.preprocess,
-                                     self.binarise)
-        if bev is None:
-            return LaneEstimate.invalid(noise, self.x_ref)
-        left, right = self.boundaries(self.segments(bev))
-        return assemble(left, right, self.x_ref, self.config.lane, self.camera,
-                        support_confidence(left, right, self.view))
+    def find_boundaries(self, bev: np.ndarray) -> tuple[Boundary | None, Boundary | None]:
+        return self.boundaries(self.segments(bev))

@@ -14,7 +14,7 @@ from detectors.base import Detector
 from detectors.config import DetectorsConfig
 from detectors.hough import HoughDetector
 from detectors.sliding_window import SlidingWindowDetector
-from lanekeep.cameras import CameraModel
+from lanekeep.camera_model import CameraModel
 
 Factory = Callable[..., Detector]
 

@@ -17,33 +17,17 @@ import cv2
 import numpy as np
 
 from detectors.base import LaneEstimate, poly_eval
-from detectors.config import DetectorsConfig, load_config
-from detectors.geometry import (
-    Boundary,
-    assemble,
-    binary_bird_eye,
-    detector_view,
-    fit_boundary,
-    parallel,
-    support_confidence,
-)
-from lanekeep.cameras import CameraModel
+from detectors.classical import ClassicalDetector
+from detectors.geometry import Boundary, fit_boundary, parallel
 
 
-class SlidingWindowDetector:
+class SlidingWindowDetector(ClassicalDetector):
     """Model #2 on one camera; remembers the last good fit to search around it."""
 
-    def __init__(
-        self,
-        camera: CameraModel,
-        config: DetectorsConfig | None = None,
-        distortion: np.ndarray | None = None,
-        name: str = "sliding_window",
-    ) -> None:
-        self.name = name
-        self.camera = camera
-        self.config = config or load_config()
-        self.view, self.x_ref = detector_view(camera, self.config, distortion)
+    default_name = "sliding_window"
+
+    def __init__(self, *args, **kwargs) -> None:
+        super().__init__(*args, **kwargs)
         self._previous: list[np.ndarray | None] = [None, None]
 
     def reset(self) -> None:
@@ -169,18 +153,12 @@ class SlidingWindowDetector:
                 fits[k] = fit if ok else None
         return parallel(fits[0], fits[1], rules, x_cam)
 
-    # -- the detector ------------------------------------------------------------------------
-    def detect(self, frame: np.ndarray) -> LaneEstimate:
-        bev, noise = binary_bird_eye(frame, self.camera, self.view, self.config.preprocess,
-                                     self.binarise)
-        if bev is None:
-            self.reset()
-            return LaneEstimate.invalid(noise, self.x_ref)
-        left, right = self.boundaries(bev)
-        estimate = assemble(left, right, self.x_ref, self.config.lane, self.camera,
-                            support_confidence(left, right, self.view))
+    def find_boundaries(self, bev: np.ndarray) -> tuple[Boundary | None, Boundary | None]:
+        return self.boundaries(bev)
+
+    def remember(self, estimate: LaneEstimate) -> None:
+        """A valid fit is where the next frame's pixels are looked for; else search afresh."""
         if estimate.valid:
             self._previous = [estimate.left, estimate.right]
         else:
             self.reset()
-        return estimate

@@ -15,7 +15,7 @@ import math
 import numpy as np
 
 from detectors.base import LaneEstimate, poly_eval
-from lanekeep.cameras import CameraModel
+from lanekeep.camera_model import CameraModel
 
 PIXEL_THRESHOLD = 20.0
 ABSENT = -2

@@ -31,7 +31,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from lanekeep.cameras import CameraModel
+from lanekeep.camera_model import CameraModel
 from lanekeep.config_io import InvalidValue, from_dict
 
 

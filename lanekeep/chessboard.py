@@ -13,7 +13,8 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from lanekeep.cameras import CameraModel, CameraRig, RenderSettings
+from lanekeep.camera_model import CameraModel
+from lanekeep.cameras import CameraRig, RenderSettings
 from mjcf import SCENE_XML
 
 

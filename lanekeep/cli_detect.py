@@ -72,7 +72,7 @@ def cmd_detect(args: argparse.Namespace) -> int:
         estimate = detector.detect(image)
         ms = (time.perf_counter() - start) * 1000.0
         h_samples = h_samples_for(h)
-        window = detector.view.window
+        window = detector.window
         x_range = (float(camera.position_m[0]) + 1.0, window.x_far_m * 1.3)
         lanes = estimate_lanes(estimate, camera, h_samples, x_range)
         if args.format == "tusimple":

@@ -94,7 +94,7 @@ class Episode:
             EstimatorSettings(est.offset_lookahead_m, est.residual_mode, est.output,
                               est.model_lane),
             lane_width_m=self.world.road.lane_width_m,
-            reference_x_m=float(getattr(self.reference, "x_ref", -4.0)),
+            reference_x_m=float(self.reference.x_ref),
             tracker=CLOSED_LOOP_TRACKER,
         )
         self.travelled_m = 0.0

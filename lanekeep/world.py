@@ -12,9 +12,7 @@ MuJoCo collides meshes by their convex hull, which for a curved ribbon is meanin
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 import mujoco
 import numpy as np
@@ -25,27 +23,16 @@ from lanekeep.road import Road
 from lanekeep.road_mesh import Ribbon, ribbon
 from lanekeep.scenario import Scenario
 from lanekeep.vehicle import Car
+from lanekeep.world_conditions import ConditionsInfo, add_conditions
+from lanekeep.world_parts import (
+    MARKING_Z_M,
+    ROAD_Z_M,
+    WorldLayout,
+    add_material,
+    add_mesh_geom,
+    add_texture,
+)
 from mjcf import CAR_XML
-
-if TYPE_CHECKING:
-    from lanekeep.world_conditions import ConditionsInfo  # conditions hook
-
-# Heights of the visual layers above the contact plane (m); 1 cm apart avoids z-fighting with
-# the depth-buffer resolution at 100 m (about 3 mm with znear 0.2 m).
-ROAD_Z_M = 0.01
-MARKING_Z_M = 0.02
-OVERLAY_Z_M = 0.03  # shadows, puddles (conditions)
-
-
-@dataclass(frozen=True)
-class WorldLayout:
-    """Sizes of what lies beside the lanes."""
-
-    shoulder_m: float = 1.5  # asphalt beyond the outer edge line
-    gravel_m: float = 1.2  # gravel strip beyond the asphalt
-    tile_m: float = 4.0  # asphalt texture period
-    texture_px: int = 512
-    paint_brightness_levels: int = 4  # worn paint is quantised into this many materials
 
 
 @dataclass
@@ -72,44 +59,6 @@ class World:
         lookup = np.append(self.marking_boundary, -1)  # index -1 (sky) maps to -1
         boundaries = lookup[segmentation]
         return boundaries >= 0 if boundary is None else boundaries == boundary
-
-
-def _add_texture(spec: mujoco.MjSpec, name: str, rgb: np.ndarray) -> None:
-    tex = spec.add_texture(
-        name=name,
-        type=mujoco.mjtTexture.mjTEXTURE_2D,
-        width=rgb.shape[1],
-        height=rgb.shape[0],
-        nchannel=3,
-    )
-    tex.data = np.ascontiguousarray(rgb).tobytes()
-
-
-def _add_material(spec: mujoco.MjSpec, name: str, texture: str | None, **attrs) -> None:
-    mat = spec.add_material(name=name, **attrs)
-    if texture is not None:
-        mat.textures[mujoco.mjtTextureRole.mjTEXROLE_RGB] = texture
-
-
-def add_mesh_geom(
-    spec: mujoco.MjSpec, name: str, mesh: Ribbon, material: str, group: int
-) -> None:
-    spec.add_mesh(
-        name=name,
-        uservert=mesh.vertices.astype(np.float32).ravel().tolist(),
-        userface=mesh.faces.ravel().tolist(),
-        usertexcoord=mesh.texcoords.astype(np.float32).ravel().tolist(),
-        inertia=mujoco.mjtMeshInertia.mjMESH_INERTIA_SHELL,
-    )
-    spec.worldbody.add_geom(
-        name=name,
-        type=mujoco.mjtGeom.mjGEOM_MESH,
-        meshname=name,
-        material=material,
-        contype=0,
-        conaffinity=0,
-        group=group,
-    )
 
 
 def _add_environment(spec: mujoco.MjSpec, road: Road, scenario: Scenario) -> None:
@@ -198,7 +147,7 @@ def _add_markings(
         brightness = 0.35 + 0.65 * level / max(levels - 1, 1)
         material = f"paint_b{boundary}_l{level}"
         if material not in {m.name for m in spec.materials}:
-            _add_material(
+            add_material(
                 spec, material, "paint",
                 rgba=[*(colour * brightness), 1.0], specular=0.2, shininess=0.3,
             )
@@ -219,19 +168,17 @@ def build_spec(
     spec.visual.global_.offwidth = max(scenario.camera.width, 1280)
     spec.visual.global_.offheight = max(scenario.camera.height, 720)
     rng = np.random.default_rng(scenario.seed)
-    _add_texture(spec, "asphalt", textures.asphalt(rng, layout.texture_px))
-    _add_texture(spec, "gravel", textures.gravel(rng))
-    _add_texture(spec, "grass", textures.grass(rng))
-    _add_texture(spec, "paint", textures.paint(rng))
-    _add_material(spec, "asphalt", "asphalt", specular=0.05, shininess=0.1)
-    _add_material(spec, "gravel", "gravel", specular=0.0)
-    _add_material(spec, "grass", "grass", texrepeat=[150.0, 150.0], specular=0.0)
+    add_texture(spec, "asphalt", textures.asphalt(rng, layout.texture_px))
+    add_texture(spec, "gravel", textures.gravel(rng))
+    add_texture(spec, "grass", textures.grass(rng))
+    add_texture(spec, "paint", textures.paint(rng))
+    add_material(spec, "asphalt", "asphalt", specular=0.05, shininess=0.1)
+    add_material(spec, "gravel", "gravel", specular=0.0)
+    add_material(spec, "grass", "grass", texrepeat=[150.0, 150.0], specular=0.0)
     _add_environment(spec, road, scenario)
     _add_road_surface(spec, road, layout)
     marking_names = _add_markings(spec, road, layout)
-    from lanekeep.world_conditions import add_conditions  # conditions hook (imports this module)
-
-    return spec, marking_names, add_conditions(spec, scenario, road)
+    return spec, marking_names, add_conditions(spec, scenario, road, layout)
 
 
 def build(scenario: Scenario, layout: WorldLayout | None = None) -> World:
@@ -258,7 +205,3 @@ def build(scenario: Scenario, layout: WorldLayout | None = None) -> World:
 def physics_steps_per_control(world: World) -> int:
     """Physics steps in one control period (validated integer in `build`)."""
     return int(round(world.scenario.control_period_s / world.model.opt.timestep))
-
-
-def yaw_to_quat(yaw: float) -> list[float]:
-    return [math.cos(yaw / 2.0), 0.0, 0.0, math.sin(yaw / 2.0)]

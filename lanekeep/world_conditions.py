@@ -37,10 +37,7 @@ from lanekeep.cameras import GROUP_SHADOW, GROUP_WORLD
 from lanekeep.road import Road
 from lanekeep.road_mesh import Ribbon, ribbon
 from lanekeep.scenario import Conditions, Scenario, ShadowZone, VehicleSpec
-from lanekeep.world import OVERLAY_Z_M, ROAD_Z_M, WorldLayout, add_mesh_geom
-
-SHOULDER_M = WorldLayout.shoulder_m
-GRAVEL_M = WorldLayout.gravel_m
+from lanekeep.world_parts import OVERLAY_Z_M, ROAD_Z_M, WorldLayout, add_mesh_geom, yaw_quat
 
 SKY_DAY = ((0.45, 0.62, 0.88), (0.88, 0.92, 0.97))  # zenith, horizon (as in world.py)
 # time of day -> (sun diffuse, sun ambient, camera headlight ambient/diffuse, sky zenith/horizon)
@@ -121,10 +118,6 @@ def _polygon_mesh(polygons: list[np.ndarray], z_m: float) -> Ribbon:
     return Ribbon(v, np.concatenate(faces).astype(np.int32), v[:, :2] / 4.0)
 
 
-def _yaw_quat(yaw: float) -> list[float]:
-    return [math.cos(yaw / 2.0), 0.0, 0.0, math.sin(yaw / 2.0)]
-
-
 def fog_visibility_m(fog: float) -> float:
     """Meteorological visibility (5% contrast) of a fog density in (0, 1]."""
     near, far = FOG_VISIBILITY_M
@@ -191,15 +184,15 @@ def _add_car_lights(spec: mujoco.MjSpec) -> None:
                   attenuation=[0.3, 0.1, 0.0], castshadow=False)
 
 
-def _densify_asphalt(spec: mujoco.MjSpec, road: Road) -> None:
+def _densify_asphalt(spec: mujoco.MjSpec, road: Road, layout: WorldLayout) -> None:
     """Re-mesh the asphalt ribbons as a grid so per-vertex spot lighting looks right."""
-    right = road.boundary_r(0) - SHOULDER_M
-    left = road.boundary_r(road.n_lanes) + SHOULDER_M
+    right = road.boundary_r(0) - layout.shoulder_m
+    left = road.boundary_r(road.n_lanes) + layout.shoulder_m
     n = max(1, math.ceil((left - right) / GRID_STEP_M))
     cuts = np.linspace(right, left, n + 1)
     for i, (s0, s1) in enumerate(road.segment_bounds()):
         grid = Ribbon.concatenate([
-            ribbon(road, s0, s1, a, b, ROAD_Z_M, 4.0, max_step_m=2 * GRID_STEP_M)
+            ribbon(road, s0, s1, a, b, ROAD_Z_M, layout.tile_m, max_step_m=2 * GRID_STEP_M)
             for a, b in zip(cuts[:-1], cuts[1:], strict=True)
         ])
         mesh = spec.mesh(f"road_{i}")
@@ -209,11 +202,11 @@ def _densify_asphalt(spec: mujoco.MjSpec, road: Road) -> None:
 
 
 # -- shadows and their casters ---------------------------------------------------------------
-def _verge_r(road: Road, side: str) -> float:
+def _verge_r(road: Road, side: str, layout: WorldLayout) -> float:
     """Frenet r of the outer edge of the gravel on one side."""
     if side == "left":
-        return road.boundary_r(road.n_lanes) + SHOULDER_M + GRAVEL_M
-    return road.boundary_r(0) - SHOULDER_M - GRAVEL_M
+        return road.boundary_r(road.n_lanes) + layout.shoulder_m + layout.gravel_m
+    return road.boundary_r(0) - layout.shoulder_m - layout.gravel_m
 
 
 def _shadow_per_height(road: Road, s: float, to_sun: np.ndarray) -> tuple[np.ndarray, float]:
@@ -225,9 +218,9 @@ def _shadow_per_height(road: Road, s: float, to_sun: np.ndarray) -> tuple[np.nda
 
 
 def _add_zone(spec: mujoco.MjSpec, road: Road, zone: ShadowZone, index: int, to_sun: np.ndarray,
-              rng: np.random.Generator, info: ConditionsInfo) -> None:
+              rng: np.random.Generator, info: ConditionsInfo, layout: WorldLayout) -> None:
     sign = 1.0 if zone.side == "left" else -1.0
-    face_r = _verge_r(road, zone.side) + sign * 1.0  # casters stand 1 m beyond the gravel
+    face_r = _verge_r(road, zone.side, layout) + sign * 1.0  # casters stand 1 m beyond the gravel
     width = road.boundary_r(road.n_lanes) - road.boundary_r(0)
     target_r = road.boundary_r(road.n_lanes if zone.side == "right" else 0)
     target_r += sign * width * (1.0 - zone.reach)
@@ -259,7 +252,7 @@ def _add_zone(spec: mujoco.MjSpec, road: Road, zone: ShadowZone, index: int, to_
             shade = rng.uniform(0.45, 0.8)
             spec.worldbody.add_geom(
                 name=name, type=mujoco.mjtGeom.mjGEOM_BOX, group=GROUP_WORLD,
-                pos=[*centre, 0.5 * height], quat=_yaw_quat(th),
+                pos=[*centre, 0.5 * height], quat=yaw_quat(th),
                 size=[0.5 * length, 0.5 * depth, 0.5 * height],
                 rgba=[shade, shade * rng.uniform(0.85, 1.0), shade * rng.uniform(0.75, 0.95), 1.0],
                 contype=0, conaffinity=0,
@@ -301,11 +294,12 @@ def _add_zone(spec: mujoco.MjSpec, road: Road, zone: ShadowZone, index: int, to_
 
 
 # -- road surface ------------------------------------------------------------------------------
-def _add_bumps(spec: mujoco.MjSpec, road: Road, cond: Conditions, info: ConditionsInfo) -> None:
+def _add_bumps(spec: mujoco.MjSpec, road: Road, cond: Conditions, info: ConditionsInfo,
+               layout: WorldLayout) -> None:
     h = cond.speed_bump_height_m
     radius = (BUMP_LENGTH_M**2 / 4.0 + h**2) / (2.0 * h)  # circle through the chord ends
-    right = road.boundary_r(0) - SHOULDER_M
-    left = road.boundary_r(road.n_lanes) + SHOULDER_M
+    right = road.boundary_r(0) - layout.shoulder_m
+    left = road.boundary_r(road.n_lanes) + layout.shoulder_m
     half = 0.5 * (left - right)
     n_stripes = int(half // 0.6)
     for i, s in enumerate(cond.speed_bumps_m):
@@ -314,7 +308,7 @@ def _add_bumps(spec: mujoco.MjSpec, road: Road, cond: Conditions, info: Conditio
         th = float(road.heading_at(s))
         # Cylinder axis (local z) along the road normal: rotate z onto (-sin th, cos th, 0).
         quat = np.zeros(4)  # Rz(th) Rx(-pi/2): z -> y -> road normal
-        mujoco.mju_mulQuat(quat, np.array(_yaw_quat(th)),
+        mujoco.mju_mulQuat(quat, np.array(yaw_quat(th)),
                            np.array([math.cos(-math.pi / 4), math.sin(-math.pi / 4), 0.0, 0.0]))
         xy = road.position(s, 0.5 * (left + right))
         name = f"cond_bump_{i}"
@@ -335,15 +329,15 @@ def _add_bumps(spec: mujoco.MjSpec, road: Road, cond: Conditions, info: Conditio
 
 
 def _add_wet(spec: mujoco.MjSpec, road: Road, cond: Conditions, rng: np.random.Generator,
-             info: ConditionsInfo) -> None:
+             info: ConditionsInfo, layout: WorldLayout) -> None:
     w = cond.wet
     asphalt = spec.material("asphalt")
     asphalt.rgba = [1.0 - 0.45 * w, 1.0 - 0.45 * w, 1.0 - 0.4 * w, 1.0]
     asphalt.specular = 0.05 + 0.6 * w
     asphalt.shininess = 0.1 + 0.85 * w
     spec.material("gravel").rgba = [1.0 - 0.35 * w, 1.0 - 0.35 * w, 1.0 - 0.33 * w, 1.0]
-    right = road.boundary_r(0) - SHOULDER_M + 0.3
-    left = road.boundary_r(road.n_lanes) + SHOULDER_M - 0.3
+    right = road.boundary_r(0) - layout.shoulder_m + 0.3
+    left = road.boundary_r(road.n_lanes) + layout.shoulder_m - 0.3
     n = int(round(road.length_m / 12.0 * w))
     ang = np.linspace(0.0, 2 * np.pi, 16, endpoint=False)
     polygons = []
@@ -362,7 +356,7 @@ def _add_wet(spec: mujoco.MjSpec, road: Road, cond: Conditions, rng: np.random.G
 
 
 def _add_snow(spec: mujoco.MjSpec, road: Road, cond: Conditions,
-              rng: np.random.Generator) -> None:
+              rng: np.random.Generator, layout: WorldLayout) -> None:
     tex = textures.gravel(rng)
     snow = np.clip(235 + (tex.astype(np.int16) - tex.mean()) * 0.25, 0, 255).astype(np.uint8)
     t = spec.add_texture(name="cond_snow", type=mujoco.mjtTexture.mjTEXTURE_2D,
@@ -375,10 +369,10 @@ def _add_snow(spec: mujoco.MjSpec, road: Road, cond: Conditions,
     inner = 0.25 + 0.9 * (1.0 - cond.snow)  # distance kept clear of the edge lines (m)
     for i, (s0, s1) in enumerate(road.segment_bounds()):
         drifts = Ribbon.concatenate([
-            ribbon(road, s0, s1, road.boundary_r(0) - SHOULDER_M, road.boundary_r(0) - inner,
-                   OVERLAY_Z_M, 4.0),
+            ribbon(road, s0, s1, road.boundary_r(0) - layout.shoulder_m,
+                   road.boundary_r(0) - inner, OVERLAY_Z_M, layout.tile_m),
             ribbon(road, s0, s1, road.boundary_r(road.n_lanes) + inner,
-                   road.boundary_r(road.n_lanes) + SHOULDER_M, OVERLAY_Z_M, 4.0),
+                   road.boundary_r(road.n_lanes) + layout.shoulder_m, OVERLAY_Z_M, layout.tile_m),
         ])
         add_mesh_geom(spec, f"cond_snowdrift_{i}", drifts, "cond_snowdrift", GROUP_SHADOW)
 
@@ -393,7 +387,7 @@ def _add_vehicle(spec: mujoco.MjSpec, road: Road, v: VehicleSpec, index: int) ->
     name = f"cond_vehicle_{index}"
     x, y = road.position(v.s_m, r)
     yaw = float(road.heading_at(v.s_m)) + (math.pi if v.speed_mps < 0 else 0.0)
-    body = spec.worldbody.add_body(name=name, mocap=True, pos=[x, y, 0.0], quat=_yaw_quat(yaw))
+    body = spec.worldbody.add_body(name=name, mocap=True, pos=[x, y, 0.0], quat=yaw_quat(yaw))
     L, W, H = v.length_m, v.width_m, v.height_m  # noqa: N806
     clearance = 0.25
     lower = 0.55 * (H - clearance)
@@ -429,7 +423,7 @@ def update_dynamic(world, t_s: float) -> None:
         s = v.s_m + v.speed_mps * t_s
         data.mocap_pos[v.mocap_id, :2] = road.position(s, v.r_m)
         yaw = float(road.heading_at(s)) + (math.pi if v.speed_mps < 0 else 0.0)
-        data.mocap_quat[v.mocap_id] = _yaw_quat(yaw)
+        data.mocap_quat[v.mocap_id] = yaw_quat(yaw)
     mujoco.mj_kinematics(world.model, data)
 
 
@@ -457,8 +451,11 @@ def occluded_marking_share(world, rig, camera: str = "front") -> float:
 
 
 # -- entry point -------------------------------------------------------------------------------
-def add_conditions(spec: mujoco.MjSpec, scenario: Scenario, road: Road) -> ConditionsInfo:
-    """Add the scenario's conditions to a spec that already holds the car, road and markings."""
+def add_conditions(spec: mujoco.MjSpec, scenario: Scenario, road: Road,
+                   layout: WorldLayout | None = None) -> ConditionsInfo:
+    """Add the scenario's conditions to a spec that already holds the car, road and markings
+    (laid out by `layout`: shoulders, gravel, texture period)."""
+    layout = layout or WorldLayout()
     cond = scenario.conditions
     rng = np.random.default_rng([scenario.seed, 0xC0D])
     info = ConditionsInfo(headlights=cond.headlights)
@@ -467,23 +464,23 @@ def add_conditions(spec: mujoco.MjSpec, scenario: Scenario, road: Road) -> Condi
         info.fog_visibility_m = fog_visibility_m(cond.fog)
     if cond.headlights:
         _add_car_lights(spec)
-        _densify_asphalt(spec, road)
+        _densify_asphalt(spec, road, layout)
     to_sun = sun_direction(cond, road)
     for i, zone in enumerate(cond.shadows):
         spec.add_material(name=f"cond_shadow_{i}", rgba=[0.0, 0.0, 0.0, zone.darkness],
                           specular=0.0, shininess=0.0)
-        _add_zone(spec, road, zone, i, to_sun, rng, info)
+        _add_zone(spec, road, zone, i, to_sun, rng, info, layout)
     if cond.speed_bumps_m:
         spec.add_material(name="cond_bump", rgba=[0.95, 0.75, 0.1, 1.0], specular=0.2)
-        _add_bumps(spec, road, cond, info)
+        _add_bumps(spec, road, cond, info, layout)
     if cond.wet > 0.0:
         # At a camera's grazing angle water mirrors the sky: sky-coloured, self-lit, glossy.
         horizon = LIGHTING[cond.time_of_day][3][1]
         spec.add_material(name="cond_puddle", rgba=[*(0.4 * np.array(horizon)), 0.55],
                           emission=0.3, specular=0.9, shininess=1.0)
-        _add_wet(spec, road, cond, rng, info)
+        _add_wet(spec, road, cond, rng, info, layout)
     if cond.snow > 0.0:
-        _add_snow(spec, road, cond, rng)
+        _add_snow(spec, road, cond, rng, layout)
     for i, vehicle in enumerate(cond.vehicles):
         info.vehicles.append(_add_vehicle(spec, road, vehicle, i))
     return info

@@ -8,7 +8,7 @@ import mujoco
 import numpy as np
 import pytest
 
-from lanekeep.cameras import CameraModel, CameraRig, RenderSettings
+from lanekeep.cameras import CameraRig, RenderSettings, camera_from_model
 from lanekeep.chessboard import Board, find_corners, render_chessboards
 from lanekeep.render import place_on_road
 from lanekeep.scenario import load_scenario
@@ -33,8 +33,8 @@ def test_calibrate_camera_on_rendered_chessboards_recovers_k():
 
 def test_paper_camera_geometry():
     model = mujoco.MjModel.from_xml_path(str(SCENE_XML))
-    front = CameraModel.from_model(model, "front")
-    rear = CameraModel.from_model(model, "rear")
+    front = camera_from_model(model, "front")
+    rear = camera_from_model(model, "rear")
     assert front.fovx_deg == pytest.approx(120.0, abs=0.1)
     assert rear.fovx_deg == pytest.approx(150.0, abs=0.1)
     assert math.degrees(front.pitch_rad) == pytest.approx(10.0, abs=1e-3)
@@ -59,7 +59,7 @@ def test_horizon_row_matches_analytic_value():
 def test_ground_projection_round_trip():
     model = mujoco.MjModel.from_xml_path(str(SCENE_XML))
     for name in ("front", "rear"):
-        cam = CameraModel.from_model(model, name)
+        cam = camera_from_model(model, name)
         sign = 1.0 if name == "front" else -1.0
         xy = np.stack([sign * np.linspace(4, 40, 10), np.linspace(-3, 3, 10)], axis=1)
         px, in_front = cam.project_ground(xy)

@@ -146,3 +146,27 @@ def test_tusimple_output_round_trips_through_the_scorer(rendered):
     ys = np.array(h_samples)
     slanted = [[int(600 - (v - 160)) for v in ys]]
     assert score_frame(shift(slanted, 25), slanted, h_samples)[0] == 1.0
+
+
+def test_config_defaults_are_the_tuned_values():
+    """`DetectorsConfig()` (and any key a user's TOML leaves out) is the shipped tuning."""
+    from detectors.config import DetectorsConfig, load_config
+
+    assert DetectorsConfig() == load_config()
+
+
+def test_detectors_import_no_mujoco():
+    """Perception runs on frames alone: the detectors and their camera model load without
+    MuJoCo (a real-camera user need not have it)."""
+    import subprocess
+    import sys
+
+    program = ("import sys\n"
+               "import detectors.registry, detectors.hough, detectors.sliding_window\n"
+               "import detectors.geometry, detectors.tusimple\n"
+               "assert 'mujoco' not in sys.modules, 'mujoco was imported'\n"
+               "print('ok')\n")
+    result = subprocess.run([sys.executable, "-c", program], capture_output=True, text=True,
+                            timeout=120)
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.strip() == "ok"

@@ -15,7 +15,7 @@ from detectors.geometry import (
     streak_pixels,
     visible_window,
 )
-from lanekeep.cameras import CameraModel
+from lanekeep.camera_model import CameraModel
 
 K = np.array([[369.29, 0.0, 639.5], [0.0, 369.29, 359.5], [0.0, 0.0, 1.0]])
 FRONT = CameraModel.from_mounting("front", K, 1280, 720, 1.5, math.radians(10.0), x_m=1.0)

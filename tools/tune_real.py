@@ -70,7 +70,7 @@ def main() -> int:
                 dash.min_horizon_fraction, dash.max_horizon_fraction)
             detector = make_detector(name, camera, config)
             estimate = detector.detect(image)
-            x_range = (float(camera.position_m[0]) + 1.0, detector.view.window.x_far_m * 1.3)
+            x_range = (float(camera.position_m[0]) + 1.0, detector.window.x_far_m * 1.3)
             pred = estimate_lanes(estimate, camera, h_samples, x_range)
             gt = read_labels(label, h_samples)
             acc, _ = score_frame(pred, gt, h_samples)

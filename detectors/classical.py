@@ -1,0 +1,71 @@
+"""What the paper's two classical models share: construction, the image stage, assembly.
+
+A classical detector is its binarisation of the region of interest (`binarise`) and its way of
+finding the two boundaries in the binary bird's-eye view (`find_boundaries`); everything
+around them, the ground window and look-ahead, the shared image stage (crop, scale, rain
+streaks, noise tests, warp) and the assembly into a `LaneEstimate`, is here once.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from detectors.base import LaneEstimate
+from detectors.config import DetectorsConfig, GroundWindow, load_config
+from detectors.geometry import (
+    Boundary,
+    assemble,
+    binary_bird_eye,
+    detector_view,
+    support_confidence,
+)
+from lanekeep.camera_model import CameraModel
+
+
+class ClassicalDetector:
+    """Base of models #1 and #2: `detect(frame)` = image stage -> boundaries -> estimate."""
+
+    default_name = "classical"
+
+    def __init__(
+        self,
+        camera: CameraModel,
+        config: DetectorsConfig | None = None,
+        distortion: np.ndarray | None = None,
+        name: str | None = None,
+    ) -> None:
+        self.name = name or self.default_name
+        self.camera = camera
+        self.config = config or load_config()
+        self.view, self.x_ref = detector_view(camera, self.config, distortion)
+
+    @property
+    def window(self) -> GroundWindow:
+        """The patch of ground the detector looks at (vehicle frame)."""
+        return self.view.window
+
+    def reset(self) -> None:
+        """Forget state carried between frames (none unless a model keeps some)."""
+
+    def binarise(self, roi: np.ndarray) -> np.ndarray:
+        """Paint candidates (0/255) in the region of interest at the working scale."""
+        raise NotImplementedError
+
+    def find_boundaries(self, bev: np.ndarray) -> tuple[Boundary | None, Boundary | None]:
+        """(left, right) boundaries in the binary bird's-eye view, None where not found."""
+        raise NotImplementedError
+
+    def remember(self, estimate: LaneEstimate) -> None:
+        """Keep what the next frame needs from this frame's estimate (nothing by default)."""
+
+    def detect(self, frame: np.ndarray) -> LaneEstimate:
+        bev, noise = binary_bird_eye(frame, self.camera, self.view, self.config.preprocess,
+                                     self.binarise)
+        if bev is None:
+            self.reset()
+            return LaneEstimate.invalid(noise, self.x_ref)
+        left, right = self.find_boundaries(bev)
+        estimate = assemble(left, right, self.x_ref, self.config.lane, self.camera,
+                            support_confidence(left, right, self.view))
+        self.remember(estimate)
+        return estimate

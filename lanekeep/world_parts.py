@@ -1,0 +1,73 @@
+"""Building blocks of the MuJoCo world that the road and the conditions both use (a leaf:
+it imports nothing of the world builders, so lanekeep.world and lanekeep.world_conditions can
+both import it without importing each other)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+
+from lanekeep.road_mesh import Ribbon
+
+# Heights of the visual layers above the contact plane (m); 1 cm apart avoids z-fighting with
+# the depth-buffer resolution at 100 m (about 3 mm with znear 0.2 m).
+ROAD_Z_M = 0.01
+MARKING_Z_M = 0.02
+OVERLAY_Z_M = 0.03  # shadows, puddles (conditions)
+
+
+@dataclass(frozen=True)
+class WorldLayout:
+    """Sizes of what lies beside the lanes."""
+
+    shoulder_m: float = 1.5  # asphalt beyond the outer edge line
+    gravel_m: float = 1.2  # gravel strip beyond the asphalt
+    tile_m: float = 4.0  # asphalt texture period
+    texture_px: int = 512
+    paint_brightness_levels: int = 4  # worn paint is quantised into this many materials
+
+
+def add_texture(spec: mujoco.MjSpec, name: str, rgb: np.ndarray) -> None:
+    tex = spec.add_texture(
+        name=name,
+        type=mujoco.mjtTexture.mjTEXTURE_2D,
+        width=rgb.shape[1],
+        height=rgb.shape[0],
+        nchannel=3,
+    )
+    tex.data = np.ascontiguousarray(rgb).tobytes()
+
+
+def add_material(spec: mujoco.MjSpec, name: str, texture: str | None, **attrs) -> None:
+    mat = spec.add_material(name=name, **attrs)
+    if texture is not None:
+        mat.textures[mujoco.mjtTextureRole.mjTEXROLE_RGB] = texture
+
+
+def add_mesh_geom(
+    spec: mujoco.MjSpec, name: str, mesh: Ribbon, material: str, group: int
+) -> None:
+    spec.add_mesh(
+        name=name,
+        uservert=mesh.vertices.astype(np.float32).ravel().tolist(),
+        userface=mesh.faces.ravel().tolist(),
+        usertexcoord=mesh.texcoords.astype(np.float32).ravel().tolist(),
+        inertia=mujoco.mjtMeshInertia.mjMESH_INERTIA_SHELL,
+    )
+    spec.worldbody.add_geom(
+        name=name,
+        type=mujoco.mjtGeom.mjGEOM_MESH,
+        meshname=name,
+        material=material,
+        contype=0,
+        conaffinity=0,
+        group=group,
+    )
+
+
+def yaw_quat(yaw: float) -> list[float]:
+    """MuJoCo quaternion (w, x, y, z) of a rotation by `yaw` about z."""
+    return [math.cos(yaw / 2.0), 0.0, 0.0, math.sin(yaw / 2.0)]
