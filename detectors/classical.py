@@ -11,14 +11,10 @@ from __future__ import annotations
 import numpy as np
 
 from detectors.base import LaneEstimate
+from detectors.birds_eye import detector_view
+from detectors.boundaries import Boundary, assemble, support_confidence
 from detectors.config import DetectorsConfig, GroundWindow, load_config
-from detectors.geometry import (
-    Boundary,
-    assemble,
-    binary_bird_eye,
-    detector_view,
-    support_confidence,
-)
+from detectors.image_stage import binary_bird_eye
 from lanekeep.camera_model import CameraModel
 
 

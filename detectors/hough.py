@@ -18,8 +18,8 @@ import cv2
 import numpy as np
 
 from detectors.base import poly_eval
+from detectors.boundaries import Boundary, fit_boundary, parallel
 from detectors.classical import ClassicalDetector
-from detectors.geometry import Boundary, fit_boundary, parallel
 
 
 class HoughDetector(ClassicalDetector):

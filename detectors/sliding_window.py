@@ -17,8 +17,8 @@ import cv2
 import numpy as np
 
 from detectors.base import LaneEstimate, poly_eval
+from detectors.boundaries import Boundary, fit_boundary, parallel
 from detectors.classical import ClassicalDetector
-from detectors.geometry import Boundary, fit_boundary, parallel
 
 
 class SlidingWindowDetector(ClassicalDetector):

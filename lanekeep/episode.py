@@ -12,7 +12,6 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 
-import mujoco
 import numpy as np
 
 from detectors.base import Detector, LaneEstimate
@@ -24,7 +23,6 @@ from estimators.lane_estimator import (
     EstimatorSettings,
     LaneEstimator,
 )
-from lanekeep import world_conditions
 from lanekeep.cameras import CameraRig, RenderSettings
 from lanekeep.conditions import ImageEffects
 from lanekeep.control import SpeedController, SteeringPID
@@ -33,7 +31,7 @@ from lanekeep.metrics import EpisodeReport, Metrics
 from lanekeep.record import EpisodeInfo, NullRecorder, Recorder
 from lanekeep.scenario import Scenario
 from lanekeep.timing import StageClock
-from lanekeep.world import World, build, physics_steps_per_control
+from lanekeep.world import World, build
 
 FUSED, REFERENCE = "fused", "reference"
 TYRES = ("front_left_tyre", "front_right_tyre", "rear_left_tyre", "rear_right_tyre")
@@ -83,7 +81,6 @@ class Episode:
         self.effects = {name: ImageEffects(scenario.conditions, height, width, self.rng)
                         for name in self.rig.CAMERA_NAMES}
         self.dt_s = scenario.control_period_s
-        self.substeps = physics_steps_per_control(self.world)
         self.front: dict[str, Detector] = {
             name: make_detector(name, self.rig.cameras["front"]) for name in est.front_detectors
         }
@@ -130,7 +127,7 @@ class Episode:
         centre, offset = estimate.centre, estimate.offset_m
         steer, throttle = self._control(centre, offset) if action is None else action
         clock.lap("control")
-        self._actuate(steer, throttle)
+        self.world.step(steer, throttle, self.dt_s)
         clock.lap("physics")
         result = self._score(sensed_pose, frames, estimates, estimate, steer, throttle, events)
         clock.lap("score")
@@ -205,13 +202,6 @@ class Episode:
             curvature = 2.0 * centre[2] / (1.0 + slope * slope) ** 1.5
             steer = self.steering(control_offset, car.speed_mps(), curvature_1pm=curvature)
         return steer, self.speed(car.speed_mps())
-
-    def _actuate(self, steer: float, throttle: float) -> None:
-        self.world.car.apply(steer, throttle)
-        model, data = self.world.model, self.world.data
-        for _ in range(self.substeps):
-            mujoco.mj_step(model, data)
-        world_conditions.update_dynamic(self.world, data.time)
 
     def _score(self, sensed_pose, frames, estimates, estimate: EstimatorOutput, steer,
                throttle, events) -> StepResult:

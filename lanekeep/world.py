@@ -23,7 +23,7 @@ from lanekeep.road import Road
 from lanekeep.road_mesh import Ribbon, ribbon
 from lanekeep.scenario import Scenario
 from lanekeep.vehicle import Car
-from lanekeep.world_conditions import ConditionsInfo, add_conditions
+from lanekeep.world_conditions import ConditionsInfo, add_conditions, update_dynamic
 from lanekeep.world_parts import (
     MARKING_Z_M,
     ROAD_Z_M,
@@ -53,6 +53,18 @@ class World:
         x, y, yaw = self.scenario.start_pose(self.road)
         self.car.place(x, y, yaw, self.scenario.start.speed_mps)
         self.car.apply(0.0, 0.0)
+
+    def step(self, steer: float, throttle: float, seconds: float) -> None:
+        """Apply the command and advance the world by `seconds`: the car's physics, then the
+        other vehicles to their poses at the new time (so the next render sees them)."""
+        self.car.apply(steer, throttle)
+        steps = seconds / self.model.opt.timestep
+        if abs(steps - round(steps)) > 1e-9 or round(steps) < 1:
+            raise ValueError(f"{seconds} s is not a whole number of physics steps "
+                             f"({self.model.opt.timestep} s)")
+        for _ in range(int(round(steps))):
+            mujoco.mj_step(self.model, self.data)
+        update_dynamic(self, self.data.time)
 
     def marking_mask(self, segmentation: np.ndarray, boundary: int | None = None) -> np.ndarray:
         """Boolean mask of marking pixels (of one boundary, or of any) in a geom-id image."""

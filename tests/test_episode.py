@@ -28,6 +28,7 @@ def paper_reports():
     return {name: _run(name) for name in PAPER_CASES}
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", shipped_scenarios())
 def test_no_lane_departure_with_the_mmae_loop(name):
     """8 s of every shipped scenario with the shipped 1280x720 cameras (the full-length runs are
@@ -39,6 +40,7 @@ def test_no_lane_departure_with_the_mmae_loop(name):
     assert report.car_max_cm < 120.0, report.table()
 
 
+@pytest.mark.slow
 def test_snow_keeps_its_lane_through_a_coasting_track():
     """At 8 s in snow model #1 fuses one bad fit whose curvature rate, extrapolated while its
     track then coasts, once steered the car 1.35 m off a 300 m curve by 9.3 s (a departure).
@@ -48,6 +50,7 @@ def test_snow_keeps_its_lane_through_a_coasting_track():
     assert report.car_max_cm < 120.0, report.table()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["clear_straight", "clear_curve"])
 def test_fused_rmse_within_10cm_on_clear_roads(name):
     report = _run(name)
@@ -56,6 +59,7 @@ def test_fused_rmse_within_10cm_on_clear_roads(name):
     assert report.sources["fused"].valid_share == 1.0
 
 
+@pytest.mark.slow
 def test_fused_beats_the_best_single_model_on_four_of_five_paper_cases(paper_reports):
     wins = []
     for report in paper_reports.values():

@@ -6,15 +6,9 @@ import numpy as np
 import pytest
 
 import lanekeep  # noqa: F401 - MUJOCO_GL before mujoco
+from detectors.birds_eye import BirdsEye, ground_homography, visible_window
 from detectors.config import GroundWindow, Preprocess
-from detectors.geometry import (
-    BirdsEye,
-    ground_homography,
-    open_along_rows,
-    remove_streaks,
-    streak_pixels,
-    visible_window,
-)
+from detectors.image_stage import open_along_rows, remove_streaks, streak_pixels
 from lanekeep.camera_model import CameraModel
 
 K = np.array([[369.29, 0.0, 639.5], [0.0, 369.29, 359.5], [0.0, 0.0, 1.0]])

@@ -1,0 +1,123 @@
+"""Boundary fits in the vehicle frame and their assembly into a `LaneEstimate`."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from detectors.base import LaneEstimate, poly_eval
+from detectors.birds_eye import BirdsEye
+from detectors.config import LaneRules
+from lanekeep.camera_model import CameraModel
+
+
+@dataclass(frozen=True)
+class Boundary:
+    """A fitted boundary: y(x) coefficients [c0, c1, c2], its support and its image points."""
+
+    coeffs: np.ndarray
+    n_points: int
+    x_span_m: float
+    points_xy: np.ndarray  # (N, 2) vehicle-frame points the fit used
+
+
+def fit_boundary(xy: np.ndarray, rules: LaneRules, camera_x_m: float = 0.0) -> Boundary | None:
+    """Weighted least-squares y(x): a parabola over long spans, a line over short ones.
+
+    A pixel's lateral uncertainty grows with its distance from the camera, so each point is
+    weighted by 1 / distance (polyfit weights multiply the residuals). None if unfit.
+    """
+    if len(xy) < 3:
+        return None
+    x, y = xy[:, 0], xy[:, 1]
+    weights = 1.0 / np.maximum(np.abs(x - camera_x_m), 1.0)
+    span = float(x.max() - x.min())
+    if span < rules.min_span_m:
+        return None
+    degree = 2 if span >= rules.quadratic_span_m else 1
+    c = np.polyfit(x, y, degree, w=weights)[::-1]
+    coeffs = np.zeros(3)
+    coeffs[: degree + 1] = c
+    if abs(2.0 * coeffs[2]) > rules.max_curvature_1pm or not np.all(np.isfinite(coeffs)):
+        return None
+    return Boundary(coeffs, len(xy), span, xy)
+
+
+def parallel(
+    left: Boundary | None, right: Boundary | None, rules: LaneRules, camera_x_m: float = 0.0
+) -> tuple[Boundary | None, Boundary | None]:
+    """Lane boundaries are parallel: a short boundary (a single dash, say) takes the direction
+    and curvature of a long one and keeps only its own lateral position."""
+    if left is None or right is None:
+        return left, right
+
+    def refit(short: Boundary, long: Boundary) -> Boundary:
+        x, y = short.points_xy[:, 0], short.points_xy[:, 1]
+        c = long.coeffs
+        w = 1.0 / np.maximum(np.abs(x - camera_x_m), 1.0) ** 2
+        c0 = float(np.sum(w * (y - c[1] * x - c[2] * x * x)) / np.sum(w))
+        return replace(short, coeffs=np.array([c0, c[1], c[2]]))
+
+    if left.x_span_m < rules.quadratic_span_m and right.x_span_m >= 2.0 * left.x_span_m:
+        left = refit(left, right)
+    elif right.x_span_m < rules.quadratic_span_m and left.x_span_m >= 2.0 * right.x_span_m:
+        right = refit(right, left)
+    return left, right
+
+
+def assemble(
+    left: Boundary | None,
+    right: Boundary | None,
+    x_ref: float,
+    rules: LaneRules,
+    camera: CameraModel,
+    confidence: float,
+    lane_width_m: float | None = None,
+) -> LaneEstimate:
+    """Offset at `x_ref` from the two boundaries, or from one and the lane width."""
+    width = lane_width_m or rules.lane_width_m
+    if left is not None and right is not None:
+        measured = float(poly_eval(left.coeffs, x_ref) - poly_eval(right.coeffs, x_ref))
+        if abs(measured - width) > rules.width_tolerance_m:
+            # Inconsistent pair: keep the side with more support.
+            if left.n_points * left.x_span_m >= right.n_points * right.x_span_m:
+                right = None
+            else:
+                left = None
+            confidence *= 0.5
+    if left is None and right is None:
+        return LaneEstimate.invalid("no lane boundary found", x_m=x_ref)
+    if left is not None and right is not None:
+        centre = (poly_eval(left.coeffs, x_ref) + poly_eval(right.coeffs, x_ref)) / 2.0
+    elif left is not None:
+        centre = poly_eval(left.coeffs, x_ref) - width / 2.0
+        confidence *= 0.6
+    else:
+        centre = poly_eval(right.coeffs, x_ref) + width / 2.0
+        confidence *= 0.6
+    offset = -float(centre)
+    if not math.isfinite(offset) or abs(offset) > width:
+        return LaneEstimate.invalid("lane centre out of reach", x_m=x_ref)
+    image_points = {}
+    for side, b in (("left", left), ("right", right)):
+        if b is not None:
+            uv, ok = camera.project_ground(b.points_xy)
+            image_points[side] = uv[ok]
+    return LaneEstimate(
+        valid=True,
+        offset_m=offset,
+        x_m=float(x_ref),
+        left=None if left is None else left.coeffs.copy(),
+        right=None if right is None else right.coeffs.copy(),
+        confidence=float(np.clip(confidence, 0.0, 1.0)),
+        image_points=image_points,
+    )
+
+
+def support_confidence(left: Boundary | None, right: Boundary | None, view: BirdsEye) -> float:
+    """Share of the ground window's depth the found boundaries cover (both sides summed, <= 1)."""
+    support = sum(b.x_span_m for b in (left, right) if b is not None)
+    span = abs(view.window.x_far_m - view.window.x_near_m)
+    return min(1.0, support / span)
