@@ -9,7 +9,7 @@ raise, naming the key), as for scenario files.
 from __future__ import annotations
 
 import tomllib
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 from importlib import resources
 from pathlib import Path
 
@@ -165,6 +165,17 @@ class DashcamDefaults:
     max_horizon_fraction: float = 0.75
 
 
+# Top-level tables that belong to detectors registered with their own settings class
+# (detectors.registry.register_detector); their contents are checked when such a detector is
+# made, against its class.
+_DETECTOR_TABLES: set[str] = set()
+
+
+def register_table(name: str) -> None:
+    """Let detectors.toml files carry a `[name]` table for a registered detector."""
+    _DETECTOR_TABLES.add(name)
+
+
 @dataclass(frozen=True)
 class DetectorsConfig:
     profiles: Profiles = Profiles()
@@ -173,6 +184,8 @@ class DetectorsConfig:
     hough: HoughConfig = HoughConfig()
     sliding_window: SlidingWindowConfig = SlidingWindowConfig()
     dashcam: DashcamDefaults = DashcamDefaults()
+    # Raw tables of registered detectors, by name (not part of the strict schema above).
+    tables: dict[str, dict] = field(default_factory=dict, metadata={"toml": False})
 
     def window_for(self, camera_name: str) -> GroundWindow:
         """The ground window of a camera: by name, real cameras use the dashcam profile."""
@@ -189,4 +202,6 @@ def load_config(path: str | Path | None = None) -> DetectorsConfig:
     else:
         text = Path(path).read_text()
         source = str(path)
-    return from_dict(DetectorsConfig, tomllib.loads(text), source=source)
+    data = tomllib.loads(text)
+    tables = {name: data.pop(name) for name in list(data) if name in _DETECTOR_TABLES}
+    return replace(from_dict(DetectorsConfig, data, source=source), tables=tables)

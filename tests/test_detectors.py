@@ -13,7 +13,7 @@ import pytest
 
 import lanekeep  # noqa: F401 - MUJOCO_GL before mujoco
 from detectors.base import LaneEstimate, poly_eval
-from detectors.registry import known_detectors, make_detector
+from detectors.registry import make_detector
 from detectors.tusimple import estimate_lanes, h_samples_for, record, score_frame
 from lanekeep.cameras import CameraRig
 from lanekeep.ground_truth import lane_truth
@@ -102,7 +102,7 @@ def test_sliding_window_on_the_rear_camera_reports_the_lane_behind(straight_worl
     assert boundary_err.max() <= 0.15
 
 
-@pytest.mark.parametrize("name", known_detectors())
+@pytest.mark.parametrize("name", ["hough", "sliding_window"])  # the shipped ones
 def test_hard_frames_are_invalid_never_nan(rendered, name):
     camera = rendered["clear_straight"][2]["front"]
     detector = make_detector(name, camera)

@@ -1,0 +1,1 @@
+"""Example plug-in modules the tests load (not shipped)."""
