@@ -14,8 +14,10 @@ told of the car's motion comes in `EgoMotion`, never from the simulator directly
 
 from __future__ import annotations
 
+import tomllib
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from importlib import resources
 
 import numpy as np
 
@@ -24,40 +26,42 @@ from estimators.alignment import OdometryAlignedHistory
 from estimators.consensus import corroborated
 from estimators.kalman import LaneTracker, TrackerConfig, UpdateStatus
 from estimators.mmae import MMAE, MMAEConfig, MMAEOutput
+from lanekeep.config_io import ConfigError, from_dict
 
 ACCEPTED = (UpdateStatus.UPDATED.value, UpdateStatus.INITIALIZED.value,
             UpdateStatus.RESTARTED.value)
 
-# Tracker noise for the closed loop. Ego-motion explains most of the lane's motion in the car
-# frame; what it cannot is the road's own curvature change (a clothoid into a 40 m radius turns
-# c2 by 0.0125 /m within 1.3 s at 15 m/s, a rate of ~0.01 /m/s) and the sideslip change that
-# comes with it (c1 ~0.03 /s). Q is sized so the filter follows those within 2-3 steps
-# instead of gating the detector as an outlier.
-#
-# R is the covariance of both detectors' centre-line coefficient errors measured in the loop
-# (`python tools/measure_detector_noise.py`: clear_straight, clear_curve, paper cases 2 and 3,
-# 1,900 detections, the 80% core of a robust fit; stds 5.6 cm, 0.0098, 4.4e-4 /m) with its
-# standard deviations doubled (x4): the core holds only 80% of the detections, and fits in
-# tight turns, shade and rain are worse than the average.
-MEASURED_COEFFICIENT_COVARIANCE = (
-    (3.18e-3, -5.05e-4, 2.21e-5),
-    (-5.05e-4, 9.57e-5, -4.28e-6),
-    (2.21e-5, -4.28e-6, 1.94e-7),
-)
-CLOSED_LOOP_TRACKER = TrackerConfig(
-    c1_accel_psd_ps3=1e-3, c2_accel_psd_pm2ps3=3e-4,
-    # With the ego-motion predicted, a lane's coefficients hardly drift on their own: a new
-    # track's rates start near 0 (0.1 m/s, 0.02 /s), not free. A free c0 rate (1 m/s) takes
-    # the first innovation after a (re)start, one fit's noise over one step, for a drift and
-    # coasts the track off the road.
-    initial_rate_std=(0.1, 0.02, 1e-3),
-    # A coasting track moves with the ego-motion only: in snow one accepted bad fit gave the
-    # c2 rate 0.024 /s (2.5x the sharpest clothoid we ship), and the car, steered by the
-    # coasting track, followed a 40 m hairpin off a 300 m curve.
-    coast_with_rates=False,
-    coefficient_covariance=tuple(tuple(4.0 * v for v in row)
-                                 for row in MEASURED_COEFFICIENT_COVARIANCE),
-)
+TRACKER_TOML = "closed_loop_tracker.toml"
+
+
+def closed_loop_tracker(text: str | None = None) -> TrackerConfig:
+    """The closed loop's tracker tuning from estimators/closed_loop_tracker.toml (or `text`):
+    its [tracker] table, with R = r_scale x the measured coefficient covariance."""
+    source = TRACKER_TOML
+    if text is None:
+        text = resources.files("estimators").joinpath(TRACKER_TOML).read_text()
+    data = tomllib.loads(text)
+    try:
+        covariance = np.asarray(data.pop("measured_coefficient_covariance"), dtype=float)
+        scale = float(data.pop("r_scale"))
+        table = data.pop("tracker")
+    except KeyError as err:
+        raise ConfigError(source, str(err.args[0]), "required key is missing") from None
+    if data:
+        raise ConfigError(source, sorted(data)[0], "unknown key")
+    if "coefficient_covariance" in table:
+        raise ConfigError(source, "tracker.coefficient_covariance",
+                          "comes from measured_coefficient_covariance x r_scale")
+    table["coefficient_covariance"] = [[scale * v for v in row] for row in covariance.tolist()]
+    try:
+        return from_dict(TrackerConfig, table, path="tracker", source=source)
+    except ValueError as err:
+        if isinstance(err, ConfigError):
+            raise
+        raise ConfigError(source, "tracker", str(err)) from None
+
+
+CLOSED_LOOP_TRACKER = closed_loop_tracker()
 
 
 def _no_lap(stage: str) -> None:

@@ -68,3 +68,23 @@ def test_reset_forgets_the_tracks():
                            LaneEstimate.invalid("none"), _ego(1))
     assert out.centre is None and out.offset_m is None
     assert all(c is None for c in out.tracked.values())
+
+
+def test_the_tracker_tuning_file_is_read_strictly():
+    from importlib import resources
+
+    import pytest
+
+    from estimators.lane_estimator import TRACKER_TOML, closed_loop_tracker
+    from lanekeep.config_io import ConfigError
+
+    text = resources.files("estimators").joinpath(TRACKER_TOML).read_text()
+    config = closed_loop_tracker(text)
+    assert config.coast_with_rates is False
+    np.testing.assert_allclose(config.coefficient_r[0, 0], 4.0 * 3.18e-3)
+    with pytest.raises(ConfigError, match="tracker.c1_accel_psd"):
+        closed_loop_tracker(text.replace("c1_accel_psd_ps3 =", "c1_accel_psd =", 1))
+    with pytest.raises(ConfigError, match="r_scale"):
+        closed_loop_tracker(text.replace("r_scale = 4.0", ""))
+    with pytest.raises(ConfigError, match="gate_probability"):
+        closed_loop_tracker(text + "gate_probability = 1.5\n")

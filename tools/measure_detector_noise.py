@@ -6,8 +6,9 @@
 Runs each scenario's episode, collects every valid detection's centre line [c0, c1, c2] minus
 the true centre line at the pose its frame was taken from, and prints the covariance of the
 errors' core (an iterated 97.5% chi-square trim, which keeps ~80%: the tails are heavy) and the
-share of detections a tracker gate would reject with it. `estimators.lane_estimator`'s
-MEASURED_COEFFICIENT_COVARIANCE came from this command with the four scenarios above.
+share of detections a tracker gate would reject with it. The
+measured_coefficient_covariance of estimators/closed_loop_tracker.toml came from this command
+with the four scenarios above.
 """
 
 from __future__ import annotations
