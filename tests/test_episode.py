@@ -2,6 +2,7 @@
 paper's five cases, determinism, and dm_env conformance."""
 
 import dataclasses
+import functools
 
 import pytest
 from absl.testing import absltest
@@ -23,9 +24,20 @@ def _run(name, seconds=None, render_size=None, **changes):
         return episode.run(seconds)
 
 
+# Episodes that several tests read, run once per session (deterministic, so sharing them
+# changes no result): the full-length clear roads and paper cases, and 11 s of snow.
+LONGER_RUNS = {**{name: None for name in (*PAPER_CASES, "clear_straight", "clear_curve")},
+               "snow": 11.0}
+
+
+@functools.cache
+def _shared_run(name: str, seconds: float | None):
+    return _run(name, seconds)
+
+
 @pytest.fixture(scope="module")
 def paper_reports():
-    return {name: _run(name) for name in PAPER_CASES}
+    return {name: _shared_run(name, None) for name in PAPER_CASES}
 
 
 @pytest.mark.slow
@@ -33,9 +45,15 @@ def paper_reports():
 def test_no_lane_departure_with_the_mmae_loop(name):
     """8 s of every shipped scenario with the shipped 1280x720 cameras (the full-length runs are
     `lanekeep bench`). Not at a reduced size: the detectors' pixel parameters and the trackers'
-    measured noise belong to the shipped camera, and a half-size camera is another sensor."""
-    report = _run(name, seconds=8.0)
-    assert report.steps == 80
+    measured noise belong to the shipped camera, and a half-size camera is another sensor.
+    Where a longer run of the scenario is made for another test, this one reads it: its first
+    8 s are these 8 s, and the check holds for all of it."""
+    if name in LONGER_RUNS:
+        report = _shared_run(name, LONGER_RUNS[name])
+        assert report.steps >= 80
+    else:
+        report = _run(name, seconds=8.0)
+        assert report.steps == 80
     assert report.lane_departures == 0, report.table()
     assert report.car_max_cm < 120.0, report.table()
 
@@ -45,7 +63,7 @@ def test_snow_keeps_its_lane_through_a_coasting_track():
     """At 8 s in snow model #1 fuses one bad fit whose curvature rate, extrapolated while its
     track then coasts, once steered the car 1.35 m off a 300 m curve by 9.3 s (a departure).
     A coasting track now moves with the ego-motion only."""
-    report = _run("snow", seconds=11.0)
+    report = _shared_run("snow", 11.0)
     assert report.lane_departures == 0, report.table()
     assert report.car_max_cm < 120.0, report.table()
 
@@ -53,7 +71,7 @@ def test_snow_keeps_its_lane_through_a_coasting_track():
 @pytest.mark.slow
 @pytest.mark.parametrize("name", ["clear_straight", "clear_curve"])
 def test_fused_rmse_within_10cm_on_clear_roads(name):
-    report = _run(name)
+    report = _shared_run(name, None)
     assert report.completed and report.lane_departures == 0
     assert report.sources["fused"].rmse_cm <= 10.0, report.table()
     assert report.sources["fused"].valid_share == 1.0
