@@ -130,3 +130,24 @@ def lane_offsets(road: Road, x: float, y: float, yaw: float, lane: int, lookahea
     """
     points = line_points(road, x, y, yaw, road.lane_center_r(lane), lookaheads_m, s_car=s_car)
     return -points[:, 1]
+
+
+class LanePolylines:
+    """The lane's boundaries and centre as dense polylines around one pose, in its vehicle
+    frame: exact points of the road geometry at Frenet s from `behind_m` to `ahead_m` of the
+    car, for drawing (the recorder's overlays); offsets for scoring come from `lane_offsets`."""
+
+    def __init__(self, road: Road, lane: int, pose: tuple[float, float, float],
+                 behind_m: float = 25.0, ahead_m: float = 45.0, step_m: float = 0.5) -> None:
+        x, y, yaw = pose
+        s_car, _ = road.local_coordinates(np.array([x, y], dtype=float))
+        s = s_car + np.arange(-behind_m, ahead_m + step_m, step_m)
+        r = np.array([road.boundary_r(lane + 1), road.boundary_r(lane), road.lane_center_r(lane)])
+        d = road.position(s[None, :], r[:, None]) - (x, y)
+        c, sn = math.cos(yaw), math.sin(yaw)
+        local = np.stack([d[..., 0] * c + d[..., 1] * sn, -d[..., 0] * sn + d[..., 1] * c], -1)
+        self.left, self.right, self.centre = local
+
+    def boundaries(self, x_lo: float, x_hi: float) -> list[np.ndarray]:
+        """Left and right boundary points with vehicle-frame x in [x_lo, x_hi]."""
+        return [b[(b[:, 0] >= x_lo) & (b[:, 0] <= x_hi)] for b in (self.left, self.right)]

@@ -51,6 +51,7 @@ import numpy as np
 
 from detectors.base import poly_eval
 from lanekeep.cameras import RENDERER_IDLE
+from lanekeep.ground_truth import LanePolylines, lane_offsets
 
 APPLICATION_ID = "lanekeep"
 REFERENCE, TRUTH, OUTPUT = "reference", "truth", "output"
@@ -120,14 +121,6 @@ def colour(name: str, index: int = 0) -> tuple[int, int, int]:
 
 
 # -- geometry -----------------------------------------------------------------------------------
-def world_to_vehicle(xy: np.ndarray, pose: tuple[float, float, float]) -> np.ndarray:
-    """World XY (..., 2) into the vehicle ground frame of `pose` = (x, y, yaw)."""
-    x, y, yaw = pose
-    d = np.asarray(xy, dtype=float) - (x, y)
-    c, s = math.cos(yaw), math.sin(yaw)
-    return np.stack([d[..., 0] * c + d[..., 1] * s, -d[..., 0] * s + d[..., 1] * c], axis=-1)
-
-
 def vehicle_to_world(xy: np.ndarray, pose: tuple[float, float, float]) -> np.ndarray:
     """Vehicle-frame XY (..., 2) of `pose` into world XY."""
     x, y, yaw = pose
@@ -136,23 +129,20 @@ def vehicle_to_world(xy: np.ndarray, pose: tuple[float, float, float]) -> np.nda
     return np.stack([x + v[..., 0] * c - v[..., 1] * s, y + v[..., 0] * s + v[..., 1] * c], -1)
 
 
-class TrueLane:
-    """The ego lane from the road geometry, sampled around one pose, in that vehicle frame."""
+class _Truth:
+    """What the recording draws and plots as the truth, from lanekeep.ground_truth: exact
+    offsets at the look-aheads it needs (as the metrics score them), and polylines to draw."""
 
-    def __init__(self, road, lane: int, pose: tuple[float, float, float]) -> None:
-        s_car, _ = road.local_coordinates(np.array(pose[:2]))
-        s = s_car + np.arange(-TRUTH_BEHIND_M, TRUTH_AHEAD_M + TRUTH_STEP_M, TRUTH_STEP_M)
-        r = np.array([road.boundary_r(lane + 1), road.boundary_r(lane), road.lane_center_r(lane)])
-        left, right, centre = world_to_vehicle(road.position(s[None, :], r[:, None]), pose)
-        self.left, self.right, self.centre = left, right, centre
+    def __init__(self, road, lane: int, pose: tuple[float, float, float],
+                 lookaheads_m: list[float]) -> None:
+        offsets = lane_offsets(road, *pose, lane, lookaheads_m)
+        self._offsets = dict(zip(lookaheads_m, offsets.tolist(), strict=True))
+        self.lines = LanePolylines(road, lane, pose, TRUTH_BEHIND_M, TRUTH_AHEAD_M,
+                                   TRUTH_STEP_M)
 
     def offset_m(self, x_m: float) -> float:
-        """True offset of the car from the lane centre at look-ahead x (+ = car left of centre)."""
-        order = np.argsort(self.centre[:, 0])
-        return -float(np.interp(x_m, self.centre[order, 0], self.centre[order, 1]))
-
-    def boundaries(self, x_lo: float, x_hi: float) -> list[np.ndarray]:
-        return [b[(b[:, 0] >= x_lo) & (b[:, 0] <= x_hi)] for b in (self.left, self.right)]
+        """True offset of the car from the lane centre at look-ahead x (+ = car left)."""
+        return self._offsets[float(x_m)]
 
 
 def _camera_x_range(camera) -> tuple[float, float]:
@@ -372,7 +362,7 @@ class RerunRecorder:
         self._path.append(pose[:2])
         rec.set_time("step", sequence=int(step.index))
         rec.set_time("sim_time", duration=max(0.0, float(step.time_s) - view.dt_s))
-        truth = TrueLane(view.road, self.scenario.road.ego_lane, pose)
+        truth = _Truth(view.road, self.scenario.road.ego_lane, pose, self._truth_points(step))
         self._log_scalars(step, truth)
         self._log_events(step)
         if step.index % self.every == 0:
@@ -383,6 +373,12 @@ class RerunRecorder:
             rec.set_time("sim_time", duration=float(step.time_s))
             for name, mask in masks.items():
                 rec.log(f"cameras/{name}/segmentation", rr.SegmentationImage(mask, opacity=0.5))
+
+    def _truth_points(self, step) -> list[float]:
+        """The look-aheads whose true offsets this step's plots need."""
+        xs = {0.0, self.scenario.estimation.offset_lookahead_m}
+        xs |= {float(e.x_m) for e in step.estimates.values()}
+        return sorted(xs)
 
     def _sources(self) -> dict[str, str]:
         """Estimate name -> the camera its frame came from."""
@@ -417,7 +413,7 @@ class RerunRecorder:
         for path, name in series.items():
             rec.log(path, rr.SeriesLines(colors=[self._colour(name)], names=[name]), static=True)
 
-    def _log_scalars(self, step, truth: TrueLane) -> None:
+    def _log_scalars(self, step, truth: _Truth) -> None:
         rr, rec = self._rr, self._rec
         est = self.scenario.estimation
         rec.log(f"plots/offset/{TRUTH}", rr.Scalars(truth.offset_m(est.offset_lookahead_m)))
@@ -476,13 +472,14 @@ class RerunRecorder:
         x_range = _camera_x_range(cameras["front"])
         yield OUTPUT, "front", None if centre is None else [_poly_points(centre, x_range)]
 
-    def _log_cameras(self, step, truth: TrueLane) -> None:
+    def _log_cameras(self, step, truth: _Truth) -> None:
         rr, rec, cameras = self._rr, self._rec, self._view.cameras
         for cam_name, frame in step.frames.items():
             RENDERER_IDLE.wait()
             rec.log(f"cameras/{cam_name}/image", self._jpeg(frame))
             x_range = _camera_x_range(cameras[cam_name])
-            strips = [_to_pixels(cameras[cam_name], b) for b in truth.boundaries(*x_range)]
+            strips = [_to_pixels(cameras[cam_name], b)
+                      for b in truth.lines.boundaries(*x_range)]
             rec.log(f"cameras/{cam_name}/lanes/{TRUTH}",
                     rr.LineStrips2D(strips, colors=[colour(TRUTH)], radii=1.5))
         for name, cam_name, lines in self._lanes(step):

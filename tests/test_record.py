@@ -255,6 +255,10 @@ def test_recorded_episode_reads_back_and_lines_up_with_its_segmentation(tmp_path
     assert steps_of(data, "/plots/offset/truth", "Scalars:scalars") == list(range(20))
     for name in (*episode.front, "reference"):
         assert f"/plots/offset/{name}" in data
+    # One ground truth: the plotted errors are the ones the report scores.
+    errors = [v[0] for _, v in data["/plots/error/fused"]["Scalars:scalars"]]
+    rms_cm = 100.0 * float(np.sqrt(np.mean(np.square(errors))))
+    assert rms_cm == pytest.approx(report.sources["fused"].rmse_cm, rel=1e-9)
     for step in recorded[1:]:
         mask = np.asarray(value_at(data, "/cameras/front/segmentation",
                                    "SegmentationImage:buffer", step), dtype=np.uint8)
