@@ -65,7 +65,16 @@ class RenderSettings:
     width: int = 1280
     height: int = 720
     shadows: bool = False
-    fog: bool = True  # MuJoCo fog; scenes without fog put it beyond the far plane (conditions)
+    # MuJoCo fog. Scenes without fog put it beyond the far plane (world_conditions), where it
+    # changes no pixel; turning it off there saves ~5% of a render (41.5 vs 39.4 ms a pair).
+    fog: bool = True
+
+    @classmethod
+    def of(cls, scenario, width: int | None = None, height: int | None = None
+           ) -> RenderSettings:
+        """The settings a scenario's cameras render with (its size unless given)."""
+        return cls(width or scenario.camera.width, height or scenario.camera.height,
+                   scenario.camera.shadows, fog=scenario.conditions.fog > 0.0)
 
 
 # Set while no MuJoCo render runs in this process. Mesa's llvmpipe rasterises with a thread per

@@ -26,7 +26,7 @@ from estimators.lane_estimator import (
 from lanekeep.cameras import CameraRig, RenderSettings
 from lanekeep.conditions import ImageEffects
 from lanekeep.control import SpeedController, SteeringPID
-from lanekeep.ground_truth import lane_offsets, lane_truth
+from lanekeep.ground_truth import lane_centre_fit, lane_offsets
 from lanekeep.metrics import EpisodeReport, Metrics
 from lanekeep.record import EpisodeInfo, NullRecorder, Recorder
 from lanekeep.scenario import Scenario
@@ -75,7 +75,7 @@ class Episode:
         self.world: World = build(scenario)
         width, height = render_size or (scenario.camera.width, scenario.camera.height)
         self.rig = CameraRig(self.world.model,
-                             RenderSettings(width, height, scenario.camera.shadows))
+                             RenderSettings.of(scenario, width, height))
         self.rng = np.random.default_rng(scenario.seed)
         # One effects pipeline per camera: lens drops persist and slide between frames.
         self.effects = {name: ImageEffects(scenario.conditions, height, width, self.rng)
@@ -213,11 +213,11 @@ class Episode:
         centre, offset = estimate.centre, estimate.offset_m
         # One truth of the lane where the frames were taken, and its offsets at every
         # look-ahead that an estimate reports at (one Newton solve for all of them).
-        sensed = lane_truth(world.road, *sensed_pose, lane)
+        true_centre, s_car = lane_centre_fit(world.road, *sensed_pose, lane)
         lookaheads = sorted({round(e.x_m, 3) for e in estimates.values()}
                             | {round(est.offset_lookahead_m, 3)})
         offsets = dict(zip(lookaheads, lane_offsets(world.road, *sensed_pose, lane, lookaheads,
-                                                    s_car=sensed.s_m), strict=True))
+                                                    s_car=s_car), strict=True))
 
         def true_offset(x_m: float) -> float:
             return float(offsets[round(x_m, 3)])
@@ -228,12 +228,12 @@ class Episode:
         for name in self.front:
             e = estimates[name]
             self.metrics.add_offset(name, e.offset_m if e.valid else None, true_offset(e.x_m))
-            self.metrics.add_lane(name, tracked[name], sensed.center)
+            self.metrics.add_lane(name, tracked[name], true_centre)
         ref = estimates[REFERENCE]
         self.metrics.add_offset(REFERENCE, selection.reference_m if ref.valid else None,
                                 true_offset(ref.x_m))
         self.metrics.add_offset(FUSED, offset, true_offset(est.offset_lookahead_m))
-        self.metrics.add_lane(FUSED, centre, sensed.center)
+        self.metrics.add_lane(FUSED, centre, true_centre)
         if centre is None:
             self.metrics.add_no_estimate()
         outside = self._wheels_outside_lane()
@@ -247,7 +247,7 @@ class Episode:
             selected=int(estimate.selected), output_offset_m=offset, output_centre=centre,
             reference_m=selection.reference_m, reference_repaired=selection.reference_repaired,
             steer=steer, throttle=throttle, truth_offset_m=car_offset_m,
-            truth_centre=sensed.center, pose=(x, y, yaw), sensed_pose=sensed_pose,
+            truth_centre=true_centre, pose=(x, y, yaw), sensed_pose=sensed_pose,
             speed_mps=world.car.speed_mps(), events=events,
             tracker_status=dict(estimate.tracker_status),
         )

@@ -121,6 +121,17 @@ def lane_truth(
     )
 
 
+def lane_centre_fit(road: Road, x: float, y: float, yaw: float, lane: int,
+                    fit_range_m: tuple[float, float] = (0.0, 30.0)) -> tuple[np.ndarray, float]:
+    """`lane_truth(...).center` and `.s_m` alone: the centre line's fit and the car's Frenet s,
+    without the two boundary fits (the same numbers, a third of the work)."""
+    lo, hi = fit_range_m
+    s_car, _ = road.local_coordinates(np.array([x, y], dtype=float))
+    xs = np.linspace(lo, hi, max(3, math.ceil((hi - lo) / FIT_STEP_M) + 1))
+    points = line_points(road, x, y, yaw, road.lane_center_r(lane), xs, s_car=s_car)
+    return _fit(points), float(s_car)
+
+
 def lane_offsets(road: Road, x: float, y: float, yaw: float, lane: int, lookaheads_m,
                  s_car: float | None = None) -> np.ndarray:
     """The car's true offsets from lane `lane`'s centre at several look-aheads at once.

@@ -47,8 +47,7 @@ def render_snapshot(scenario: Scenario, out_dir: Path, at_s: float | None = None
     place_on_road(world, s, offset_m, heading_deg)
     out_dir.mkdir(parents=True, exist_ok=True)
     written = []
-    settings = RenderSettings(scenario.camera.width, scenario.camera.height,
-                              scenario.camera.shadows)
+    settings = RenderSettings.of(scenario)
     with CameraRig(world.model, settings) as rig:
         for cam in rig.CAMERA_NAMES:
             rgb = rig.render_rgb(world.data, cam)

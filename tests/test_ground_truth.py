@@ -112,3 +112,13 @@ def test_lane_offsets_at_once_equal_one_truth_per_lookahead(curve):
     at_once = lane_offsets(curve, x, y, yaw, 0, lookaheads)
     one_by_one = [lane_truth(curve, x, y, yaw, 0, lookahead_m=a).offset_m for a in lookaheads]
     np.testing.assert_allclose(at_once, one_by_one, atol=1e-9)
+
+
+def test_centre_fit_alone_equals_the_full_truths_centre(curve):
+    from lanekeep.ground_truth import lane_centre_fit
+
+    x, y, yaw = _pose(curve, 80.0, -0.3, dyaw=-0.02)
+    full = lane_truth(curve, x, y, yaw, 0)
+    centre, s_car = lane_centre_fit(curve, x, y, yaw, 0)
+    np.testing.assert_array_equal(centre, full.center)
+    assert s_car == full.s_m
