@@ -23,15 +23,17 @@ from lanekeep.road import Road
 from lanekeep.road_mesh import Ribbon, ribbon
 from lanekeep.scenario import Scenario
 from lanekeep.vehicle import Car
-from lanekeep.world_conditions import ConditionsInfo, add_conditions, update_dynamic
+from lanekeep.world_conditions import add_conditions
 from lanekeep.world_parts import (
     MARKING_Z_M,
     ROAD_Z_M,
+    ConditionsInfo,
     WorldLayout,
     add_material,
     add_mesh_geom,
     add_texture,
 )
+from lanekeep.world_traffic import update_dynamic
 from mjcf import CAR_XML
 
 

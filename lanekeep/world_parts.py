@@ -5,7 +5,7 @@ both import it without importing each other)."""
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import mujoco
 import numpy as np
@@ -71,3 +71,45 @@ def add_mesh_geom(
 def yaw_quat(yaw: float) -> list[float]:
     """MuJoCo quaternion (w, x, y, z) of a rotation by `yaw` about z."""
     return [math.cos(yaw / 2.0), 0.0, 0.0, math.sin(yaw / 2.0)]
+
+
+@dataclass
+
+
+class VehicleTrack:
+    """A moving occluder: mocap body `name` at Frenet (s_m + speed_mps * t, r_m)."""
+
+    name: str
+    s_m: float
+    r_m: float
+    speed_mps: float
+    mocap_id: int = -1  # resolved on first use
+
+
+@dataclass
+class ConditionsInfo:
+    """What add_conditions put in the world, for the episode, the tests and the reports."""
+
+    shadow_polygons: list[np.ndarray] = field(default_factory=list)  # world XY (n, 2) each
+    caster_names: list[str] = field(default_factory=list)
+    bump_geoms: list[str] = field(default_factory=list)  # collision geoms of the speed bumps
+    puddle_polygons: list[np.ndarray] = field(default_factory=list)
+    vehicles: list[VehicleTrack] = field(default_factory=list)
+    fog_visibility_m: float = math.inf
+    headlights: bool = False
+
+    def shaded(self, xy: np.ndarray) -> np.ndarray:
+        """Whether world points (..., 2) lie in any cast shadow."""
+        xy = np.asarray(xy, dtype=float)
+        out = np.zeros(xy.shape[:-1], bool)
+        for poly in self.shadow_polygons:
+            out |= inside_convex(poly, xy)
+        return out
+
+
+def inside_convex(poly: np.ndarray, xy: np.ndarray) -> np.ndarray:
+    """Points inside a counter-clockwise convex polygon."""
+    edges = np.roll(poly, -1, axis=0) - poly
+    rel = xy[..., None, :] - poly
+    cross = edges[:, 0] * rel[..., 1] - edges[:, 1] * rel[..., 0]
+    return np.all(cross >= 0.0, axis=-1)

@@ -15,7 +15,7 @@ from lanekeep.cameras import CameraRig, RenderSettings
 from lanekeep.render import place_on_road
 from lanekeep.scenario import Conditions, ScenarioError, load_scenario, parse_scenario
 from lanekeep.world import build
-from lanekeep.world_conditions import occluded_marking_share, update_dynamic
+from lanekeep.world_traffic import occluded_marking_share, update_dynamic
 
 W, H = 320, 180
 

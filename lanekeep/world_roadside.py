@@ -1,0 +1,229 @@
+"""What lies on and beside the road in a scenario: hard shadows and their casters, speed
+bumps, wet asphalt and puddles, snow (see lanekeep/world_conditions.py for the whole list)."""
+
+
+from __future__ import annotations
+
+import math
+
+import cv2
+import mujoco
+import numpy as np
+
+from lanekeep import textures
+from lanekeep.cameras import GROUP_SHADOW, GROUP_WORLD
+from lanekeep.road import Road
+from lanekeep.road_mesh import Ribbon, ribbon
+from lanekeep.scenario import Conditions, ShadowZone
+from lanekeep.world_parts import (
+    OVERLAY_Z_M,
+    ConditionsInfo,
+    WorldLayout,
+    add_mesh_geom,
+    yaw_quat,
+)
+
+BUMP_LENGTH_M = 0.6  # chord of a speed bump along the road
+
+
+
+def _convex_hull(points_xy: np.ndarray) -> np.ndarray:
+    """Counter-clockwise (seen from above, z up) convex hull of 2D points."""
+    hull = cv2.convexHull(points_xy.astype(np.float32)).reshape(-1, 2).astype(float)
+    x, y = hull[:, 0], hull[:, 1]
+    area = 0.5 * np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y)
+    return hull if area > 0 else hull[::-1]
+
+
+def _polygon_mesh(polygons: list[np.ndarray], z_m: float) -> Ribbon:
+    """Triangle fans of convex CCW polygons at height z, one mesh."""
+    verts, faces, offset = [], [], 0
+    for poly in polygons:
+        n = len(poly)
+        verts.append(np.c_[poly, np.full(n, z_m)])
+        i = np.arange(1, n - 1)
+        faces.append(np.stack([np.zeros_like(i), i, i + 1], 1) + offset)
+        offset += n
+    v = np.concatenate(verts)
+    return Ribbon(v, np.concatenate(faces).astype(np.int32), v[:, :2] / 4.0)
+
+
+def cast_shadow(points: np.ndarray, to_sun: np.ndarray) -> np.ndarray:
+    """Ground (z = 0) shadow of a convex body given by points (n, 3): CCW hull polygon (m, 2)."""
+    ground = points[:, :2] - points[:, 2:3] * to_sun[:2] / to_sun[2]
+    return _convex_hull(np.concatenate([ground, points[points[:, 2] < 0.05, :2]]))
+
+
+def _verge_r(road: Road, side: str, layout: WorldLayout) -> float:
+    """Frenet r of the outer edge of the gravel on one side."""
+    if side == "left":
+        return road.boundary_r(road.n_lanes) + layout.shoulder_m + layout.gravel_m
+    return road.boundary_r(0) - layout.shoulder_m - layout.gravel_m
+
+
+def _shadow_per_height(road: Road, s: float, to_sun: np.ndarray) -> tuple[np.ndarray, float]:
+    """Ground offset of a shadow per metre of height (world XY), and its Frenet r component."""
+    offset = -to_sun[:2] / to_sun[2]
+    th = float(road.heading_at(s))
+    normal = np.array([-math.sin(th), math.cos(th)])
+    return offset, float(offset @ normal)
+
+
+def add_shadow_zone(spec: mujoco.MjSpec, road: Road, zone: ShadowZone, index: int,
+                    to_sun: np.ndarray, rng: np.random.Generator, info: ConditionsInfo,
+                    layout: WorldLayout) -> None:
+    sign = 1.0 if zone.side == "left" else -1.0
+    face_r = _verge_r(road, zone.side, layout) + sign * 1.0  # casters stand 1 m beyond the gravel
+    width = road.boundary_r(road.n_lanes) - road.boundary_r(0)
+    target_r = road.boundary_r(road.n_lanes if zone.side == "right" else 0)
+    target_r += sign * width * (1.0 - zone.reach)
+    polygons = []
+    s = zone.s_start_m
+    k = 0
+    while s < zone.s_end_m:
+        if zone.kind == "buildings":
+            length = min(rng.uniform(10.0, 24.0), zone.s_end_m - s)
+            depth = rng.uniform(8.0, 14.0)
+        else:  # trees: canopy diameter along the road
+            length = depth = rng.uniform(5.0, 8.0)
+        s_mid = s + 0.5 * length
+        offset, lateral = _shadow_per_height(road, s_mid, to_sun)
+        if lateral * sign >= -1e-3:
+            raise ValueError(
+                f"conditions.shadows[{index}]: with this sun the shadows of casters on the "
+                f"{zone.side} fall away from the road (set sun_azimuth_deg towards the "
+                f"{zone.side})"
+            )
+        reach_height = abs(face_r - target_r) / abs(lateral) * rng.uniform(1.0, 1.15)
+        th = float(road.heading_at(s_mid))
+        t_hat = np.array([math.cos(th), math.sin(th)])
+        n_hat = np.array([-math.sin(th), math.cos(th)])
+        centre = road.position(s_mid, face_r + sign * 0.5 * depth)
+        name = f"cond_{zone.kind}_{index}_{k}"
+        if zone.kind == "buildings":
+            height = float(np.clip(reach_height, 3.0, 80.0))
+            shade = rng.uniform(0.45, 0.8)
+            spec.worldbody.add_geom(
+                name=name, type=mujoco.mjtGeom.mjGEOM_BOX, group=GROUP_WORLD,
+                pos=[*centre, 0.5 * height], quat=yaw_quat(th),
+                size=[0.5 * length, 0.5 * depth, 0.5 * height],
+                rgba=[shade, shade * rng.uniform(0.85, 1.0), shade * rng.uniform(0.75, 0.95), 1.0],
+                contype=0, conaffinity=0,
+            )
+            corners = np.array([[a, b] for a in (-0.5, 0.5) for b in (-0.5, 0.5)])
+            foot = centre + corners[:, :1] * length * t_hat + corners[:, 1:] * depth * n_hat
+            box = np.concatenate([np.c_[foot, np.zeros(4)], np.c_[foot, np.full(4, height)]])
+            polygons.append(cast_shadow(box, to_sun))
+        else:
+            radius = 0.5 * length
+            crown = float(np.clip(reach_height, 2.0 * radius + 2.0, 25.0))  # canopy centre
+            trunk = crown - 0.8 * radius
+            spec.worldbody.add_geom(
+                name=f"{name}_trunk", type=mujoco.mjtGeom.mjGEOM_CYLINDER, group=GROUP_WORLD,
+                pos=[*centre, 0.5 * trunk], size=[0.25, 0.5 * trunk, 0],
+                rgba=[0.3, 0.22, 0.15, 1.0], contype=0, conaffinity=0,
+            )
+            spec.worldbody.add_geom(
+                name=name, type=mujoco.mjtGeom.mjGEOM_ELLIPSOID, group=GROUP_WORLD,
+                pos=[*centre, crown], size=[radius, radius, 0.8 * radius],
+                rgba=[0.12, rng.uniform(0.3, 0.42), 0.1, 1.0], contype=0, conaffinity=0,
+            )
+            ang = np.linspace(0.0, 2 * np.pi, 24, endpoint=False)
+            ring = np.stack([np.cos(ang), np.sin(ang)], 1)
+            canopy = np.concatenate([
+                np.c_[centre + radius * ring, np.full(24, crown)],
+                np.c_[centre + 0.6 * radius * ring, np.full(24, crown + 0.6 * radius)],
+                np.c_[centre + 0.6 * radius * ring, np.full(24, crown - 0.6 * radius)],
+            ])
+            polygons.append(cast_shadow(canopy, to_sun))
+        info.caster_names.append(name)
+        gap = length * (1.0 - zone.coverage) / zone.coverage * rng.uniform(0.6, 1.4)
+        s += length + gap
+        k += 1
+    if polygons:
+        add_mesh_geom(spec, f"cond_shadow_{index}", _polygon_mesh(polygons, OVERLAY_Z_M),
+                  f"cond_shadow_{index}", GROUP_SHADOW)
+        info.shadow_polygons.extend(polygons)
+
+
+def add_bumps(spec: mujoco.MjSpec, road: Road, cond: Conditions, info: ConditionsInfo,
+               layout: WorldLayout) -> None:
+    h = cond.speed_bump_height_m
+    radius = (BUMP_LENGTH_M**2 / 4.0 + h**2) / (2.0 * h)  # circle through the chord ends
+    right = road.boundary_r(0) - layout.shoulder_m
+    left = road.boundary_r(road.n_lanes) + layout.shoulder_m
+    half = 0.5 * (left - right)
+    n_stripes = int(half // 0.6)
+    for i, s in enumerate(cond.speed_bumps_m):
+        if not 0.0 <= s <= road.length_m:
+            raise ValueError(f"conditions.speed_bumps_m[{i}] = {s} is beyond the road")
+        th = float(road.heading_at(s))
+        # Cylinder axis (local z) along the road normal: rotate z onto (-sin th, cos th, 0).
+        quat = np.zeros(4)  # Rz(th) Rx(-pi/2): z -> y -> road normal
+        mujoco.mju_mulQuat(quat, np.array(yaw_quat(th)),
+                           np.array([math.cos(-math.pi / 4), math.sin(-math.pi / 4), 0.0, 0.0]))
+        xy = road.position(s, 0.5 * (left + right))
+        name = f"cond_bump_{i}"
+        spec.worldbody.add_geom(
+            name=name, type=mujoco.mjtGeom.mjGEOM_CYLINDER, group=GROUP_WORLD,
+            pos=[*xy, h - radius], quat=quat.tolist(), size=[radius, half, 0],
+            material="cond_bump", condim=3, friction=[1.0, 0.005, 0.0001],
+        )
+        info.bump_geoms.append(name)
+        for j in range(-n_stripes, n_stripes + 1, 2):  # black stripes, visual only
+            sxy = road.position(s, 0.5 * (left + right) + 0.6 * j)
+            spec.worldbody.add_geom(
+                name=f"{name}_stripe_{j + n_stripes}", type=mujoco.mjtGeom.mjGEOM_CYLINDER,
+                group=GROUP_WORLD, pos=[*sxy, h - radius], quat=quat.tolist(),
+                size=[radius + 0.004, 0.15, 0], rgba=[0.05, 0.05, 0.05, 1.0],
+                contype=0, conaffinity=0,
+            )
+
+
+def add_wet(spec: mujoco.MjSpec, road: Road, cond: Conditions, rng: np.random.Generator,
+             info: ConditionsInfo, layout: WorldLayout) -> None:
+    w = cond.wet
+    asphalt = spec.material("asphalt")
+    asphalt.rgba = [1.0 - 0.45 * w, 1.0 - 0.45 * w, 1.0 - 0.4 * w, 1.0]
+    asphalt.specular = 0.05 + 0.6 * w
+    asphalt.shininess = 0.1 + 0.85 * w
+    spec.material("gravel").rgba = [1.0 - 0.35 * w, 1.0 - 0.35 * w, 1.0 - 0.33 * w, 1.0]
+    right = road.boundary_r(0) - layout.shoulder_m + 0.3
+    left = road.boundary_r(road.n_lanes) + layout.shoulder_m - 0.3
+    n = int(round(road.length_m / 12.0 * w))
+    ang = np.linspace(0.0, 2 * np.pi, 16, endpoint=False)
+    polygons = []
+    for _ in range(n):
+        s, r = rng.uniform(0.0, road.length_m), rng.uniform(right, left)
+        a, b = rng.uniform(0.4, 1.5), rng.uniform(0.3, 0.8)
+        th = float(road.heading_at(s)) + rng.uniform(-0.3, 0.3)
+        c, sn = math.cos(th), math.sin(th)
+        local = np.stack([a * np.cos(ang), b * np.sin(ang)], 1)
+        rot = local @ np.array([[c, sn], [-sn, c]])
+        polygons.append(road.position(s, r) + rot)
+    if polygons:
+        add_mesh_geom(spec, "cond_puddles", _polygon_mesh(polygons, OVERLAY_Z_M - 0.002),
+                  "cond_puddle", GROUP_SHADOW)
+        info.puddle_polygons = polygons
+
+
+def add_snow(spec: mujoco.MjSpec, road: Road, cond: Conditions,
+              rng: np.random.Generator, layout: WorldLayout) -> None:
+    tex = textures.gravel(rng)
+    snow = np.clip(235 + (tex.astype(np.int16) - tex.mean()) * 0.25, 0, 255).astype(np.uint8)
+    t = spec.add_texture(name="cond_snow", type=mujoco.mjtTexture.mjTEXTURE_2D,
+                         width=snow.shape[1], height=snow.shape[0], nchannel=3)
+    t.data = np.ascontiguousarray(snow).tobytes()
+    for name in ("grass", "gravel"):
+        spec.material(name).textures[mujoco.mjtTextureRole.mjTEXROLE_RGB] = "cond_snow"
+    spec.add_material(name="cond_snowdrift", rgba=[0.95, 0.96, 0.98, 0.35 + 0.55 * cond.snow],
+                      specular=0.1, shininess=0.1)
+    inner = 0.25 + 0.9 * (1.0 - cond.snow)  # distance kept clear of the edge lines (m)
+    for i, (s0, s1) in enumerate(road.segment_bounds()):
+        drifts = Ribbon.concatenate([
+            ribbon(road, s0, s1, road.boundary_r(0) - layout.shoulder_m,
+                   road.boundary_r(0) - inner, OVERLAY_Z_M, layout.tile_m),
+            ribbon(road, s0, s1, road.boundary_r(road.n_lanes) + inner,
+                   road.boundary_r(road.n_lanes) + layout.shoulder_m, OVERLAY_Z_M, layout.tile_m),
+        ])
+        add_mesh_geom(spec, f"cond_snowdrift_{i}", drifts, "cond_snowdrift", GROUP_SHADOW)
