@@ -55,9 +55,9 @@ def closed_loop_tracker(text: str | None = None) -> TrackerConfig:
     table["coefficient_covariance"] = [[scale * v for v in row] for row in covariance.tolist()]
     try:
         return from_dict(TrackerConfig, table, path="tracker", source=source)
-    except ValueError as err:
-        if isinstance(err, ConfigError):
-            raise
+    except ConfigError:
+        raise
+    except ValueError as err:  # TrackerConfig's own checks
         raise ConfigError(source, "tracker", str(err)) from None
 
 
@@ -142,10 +142,11 @@ class LaneEstimator:
         ("mmae"), for a caller's stage timing (lanekeep.timing.StageClock.lap).
         """
         events: list[str] = []
-        tracked, status = self._track(detections, ego)
+        centres = {name: self.centre_of(detections[name]) for name in self.names}
+        tracked, status = self._track(centres, ego)
         lap("track")
         selection = self._select(reference, tracked, ego, events)
-        selected, centre, offset = self._output(detections, tracked, status, selection)
+        selected, centre, offset = self._output(centres, tracked, status, selection)
         lap("mmae")
         return EstimatorOutput(tracked, status, selection, selected, centre, offset, events)
 
@@ -163,12 +164,12 @@ class LaneEstimator:
         return None
 
     # -- the stages ----------------------------------------------------------------------------
-    def _track(self, detections, ego: EgoMotion
+    def _track(self, centres: dict[str, np.ndarray | None], ego: EgoMotion
                ) -> tuple[dict[str, np.ndarray | None], dict[str, str]]:
-        """Predict and update each model's tracker. A detection the gate rejects but another
-        model's detection corroborates restarts that track: the track, not the two detectors,
-        has lost the road (a tight turn's onset outruns the constant-rate model)."""
-        centres = {name: self.centre_of(detections[name]) for name in self.names}
+        """Predict and update each model's tracker with its detection's centre line. A
+        detection the gate rejects but another model's detection corroborates restarts that
+        track: the track, not the two detectors, has lost the road (a tight turn's onset
+        outruns the constant-rate model)."""
         agreed = dict(zip(centres, corroborated(list(centres.values()),
                                                 self.tracker_config.coefficient_r),
                           strict=True))
@@ -203,7 +204,7 @@ class LaneEstimator:
                           f"{selection.reference_m:+.2f} m")
         return selection
 
-    def _output(self, detections, tracked, status, selection
+    def _output(self, centres, tracked, status, selection
                 ) -> tuple[int, np.ndarray | None, float | None]:
         """The lane the controller follows: the MMAE output.
 
@@ -217,7 +218,7 @@ class LaneEstimator:
         """
         names = self.names
         chosen = int(selection.selected)
-        lanes = {n: self._lane_of(detections[n], tracked[n], status[n]) for n in names}
+        lanes = {n: self._lane_of(centres[n], tracked[n], status[n]) for n in names}
         if self.settings.output == "fused":
             polys = [(p, lanes[n]) for p, n in zip(selection.probabilities, names, strict=True)
                      if lanes[n] is not None]
@@ -250,13 +251,11 @@ class LaneEstimator:
             return int(order[0])
         return int(accepted[0])
 
-    def _lane_of(self, estimate: LaneEstimate, tracked: np.ndarray | None, status: str
+    def _lane_of(self, centre: np.ndarray | None, tracked: np.ndarray | None, status: str
                  ) -> np.ndarray | None:
-        """The model's track, or ("detection" mode) its detection if the track accepted it.
-
-        Either way a rejected or missing detection leaves the (coasting) track.
+        """The model's track, or ("detection" mode) its detection's centre if the track
+        accepted it. Either way a rejected or missing detection leaves the (coasting) track.
         """
-        centre = self.centre_of(estimate)
         if self.settings.model_lane == "track" and tracked is not None:
             return tracked
         if centre is None or status not in ACCEPTED:

@@ -149,9 +149,11 @@ class LanePolylines:
     car, for drawing (the recorder's overlays); offsets for scoring come from `lane_offsets`."""
 
     def __init__(self, road: Road, lane: int, pose: tuple[float, float, float],
-                 behind_m: float = 25.0, ahead_m: float = 45.0, step_m: float = 0.5) -> None:
+                 behind_m: float = 25.0, ahead_m: float = 45.0, step_m: float = 0.5,
+                 s_car: float | None = None) -> None:
         x, y, yaw = pose
-        s_car, _ = road.local_coordinates(np.array([x, y], dtype=float))
+        if s_car is None:
+            s_car, _ = road.local_coordinates(np.array([x, y], dtype=float))
         s = s_car + np.arange(-behind_m, ahead_m + step_m, step_m)
         r = np.array([road.boundary_r(lane + 1), road.boundary_r(lane), road.lane_center_r(lane)])
         d = road.position(s[None, :], r[:, None]) - (x, y)

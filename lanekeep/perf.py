@@ -32,6 +32,7 @@ JSON keys (stable; times are wall-clock on this machine):
 
 from __future__ import annotations
 
+import argparse
 import json
 import os
 import tempfile
@@ -134,7 +135,7 @@ def register(sub) -> None:
     p = sub.add_parser("perf", help="speed of the closed loop: per-stage ms, real-time factor, "
                                     "recording cost, bench throughput (JSON keys: see --help)",
                        description=__doc__,
-                       formatter_class=_raw_formatter())
+                       formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--scenario", default="clear_curve", help="scenario to time")
     p.add_argument("--seconds", type=float, default=10.0,
                    help="simulated seconds of each timed loop (default 10)")
@@ -147,12 +148,6 @@ def register(sub) -> None:
                    help="simulated seconds of each bench episode (default 10)")
     p.add_argument("--json", default=None, help="also write the figures to this JSON file")
     p.set_defaults(func=_cmd_perf)
-
-
-def _raw_formatter():
-    import argparse
-
-    return argparse.RawDescriptionHelpFormatter
 
 
 def _cmd_perf(args) -> int:

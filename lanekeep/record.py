@@ -35,6 +35,7 @@ Scalars and events are logged every step; images, overlays and the 3D view every
 
 from __future__ import annotations
 
+import functools
 import math
 import queue
 import signal
@@ -135,10 +136,16 @@ class _Truth:
 
     def __init__(self, road, lane: int, pose: tuple[float, float, float],
                  lookaheads_m: list[float]) -> None:
-        offsets = lane_offsets(road, *pose, lane, lookaheads_m)
+        self._road, self._lane, self._pose = road, lane, pose
+        self._s_car, _ = road.local_coordinates(np.array(pose[:2], dtype=float))
+        offsets = lane_offsets(road, *pose, lane, lookaheads_m, s_car=self._s_car)
         self._offsets = dict(zip(lookaheads_m, offsets.tolist(), strict=True))
-        self.lines = LanePolylines(road, lane, pose, TRUTH_BEHIND_M, TRUTH_AHEAD_M,
-                                   TRUTH_STEP_M)
+
+    @functools.cached_property
+    def lines(self) -> LanePolylines:
+        """Made only on steps whose images are logged."""
+        return LanePolylines(self._road, self._lane, self._pose, TRUTH_BEHIND_M,
+                             TRUTH_AHEAD_M, TRUTH_STEP_M, s_car=self._s_car)
 
     def offset_m(self, x_m: float) -> float:
         """True offset of the car from the lane centre at look-ahead x (+ = car left)."""

@@ -60,11 +60,7 @@ class World:
         """Apply the command and advance the world by `seconds`: the car's physics, then the
         other vehicles to their poses at the new time (so the next render sees them)."""
         self.car.apply(steer, throttle)
-        steps = seconds / self.model.opt.timestep
-        if abs(steps - round(steps)) > 1e-9 or round(steps) < 1:
-            raise ValueError(f"{seconds} s is not a whole number of physics steps "
-                             f"({self.model.opt.timestep} s)")
-        for _ in range(int(round(steps))):
+        for _ in range(physics_steps(seconds, self.model.opt.timestep)):
             mujoco.mj_step(self.model, self.data)
         update_dynamic(self, self.data.time)
 
@@ -200,13 +196,13 @@ def build(scenario: Scenario, layout: WorldLayout | None = None) -> World:
     road = scenario.build_road()
     spec, marking_names, conditions = build_spec(scenario, road, layout)
     model = spec.compile()
-    timestep = model.opt.timestep
-    ratio = scenario.control_period_s / timestep
-    if abs(ratio - round(ratio)) > 1e-9 or round(ratio) < 1:
+    try:
+        physics_steps(scenario.control_period_s, model.opt.timestep)
+    except ValueError:
         raise ValueError(
             f"control_period_s = {scenario.control_period_s} is not an integer multiple of the "
-            f"physics timestep {timestep} s"
-        )
+            f"physics timestep {model.opt.timestep} s"
+        ) from None
     marking_boundary = np.full(model.ngeom, -1, dtype=np.int32)
     for name, boundary in marking_names.items():
         marking_boundary[model.geom(name).id] = boundary
@@ -214,6 +210,14 @@ def build(scenario: Scenario, layout: WorldLayout | None = None) -> World:
     world = World(scenario, road, model, data, Car(model, data), marking_boundary, conditions)
     world.reset()
     return world
+
+
+def physics_steps(seconds: float, timestep: float) -> int:
+    """How many physics steps make `seconds`; ValueError unless a whole number (>= 1)."""
+    ratio = seconds / timestep
+    if abs(ratio - round(ratio)) > 1e-9 or round(ratio) < 1:
+        raise ValueError(f"{seconds} s is not a whole number of physics steps ({timestep} s)")
+    return int(round(ratio))
 
 
 def physics_steps_per_control(world: World) -> int:

@@ -54,6 +54,10 @@ def measure(name: str, seed_offset: int, every: int, seconds: float | None) -> d
             world.model.vis.quality.offsamples = 4 if variant == "msaa4" else 0
             rig = CameraRig(world.model, RenderSettings(1280, 720, scenario.camera.shadows))
             rigs[variant] = rig
+            # Each variant's own effects, made alike (lens drops persist between frames).
+            effects[variant] = {cam: ImageEffects(scenario.conditions, 720, 1280,
+                                                  np.random.default_rng(scenario.seed))
+                                for cam in rig.CAMERA_NAMES}
             detectors[variant] = {
                 **{d: make_detector(d, rig.cameras["front"]) for d in est.front_detectors},
                 "reference": make_detector(est.reference_detector,
@@ -68,10 +72,6 @@ def measure(name: str, seed_offset: int, every: int, seconds: float | None) -> d
                     speed = world.car.speed_mps()
                     for variant in VARIANTS:
                         rng = np.random.default_rng([scenario.seed, index])
-                        effects.setdefault(variant, {
-                            cam: ImageEffects(scenario.conditions, 720, 1280,
-                                              np.random.default_rng(scenario.seed))
-                            for cam in rigs[variant].CAMERA_NAMES})
                         frames = {}
                         for cam in rigs[variant].CAMERA_NAMES:
                             start = time.perf_counter()
