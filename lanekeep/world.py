@@ -5,13 +5,14 @@ The car comes from mjcf/car.xml; everything else is added procedurally:
     gravel shoulders, and a grass ground plane that also carries the tyre contacts;
   - lane markings: one mesh geom per boundary, road segment and paint brightness, so that the
     segmentation render gives exact per-boundary masks (`World.marking_boundary[geom_id]`);
-  - lights and a gradient sky.
+  - lights, a gradient sky and fog as lanekeep/world_appearance.py decides from the scenario.
 Road and markings are visual only (contype 0): the flat ground plane carries the car, since
 MuJoCo collides meshes by their convex hull, which for a curved ribbon is meaningless.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import mujoco
@@ -23,6 +24,7 @@ from lanekeep.road import Road
 from lanekeep.road_mesh import Ribbon, ribbon
 from lanekeep.scenario import Scenario
 from lanekeep.vehicle import Car
+from lanekeep.world_appearance import MODEL_EXTENT_M, Lighting, appearance_of
 from lanekeep.world_conditions import add_conditions
 from lanekeep.world_parts import (
     MARKING_Z_M,
@@ -71,23 +73,27 @@ class World:
         return boundaries >= 0 if boundary is None else boundaries == boundary
 
 
-def _add_environment(spec: mujoco.MjSpec, road: Road, scenario: Scenario) -> None:
-    """Sky, sun, headlight, clip planes, ground plane."""
-    spec.stat.extent = 100.0
+def _add_environment(spec: mujoco.MjSpec, road: Road, scenario: Scenario,
+                     lighting: Lighting) -> None:
+    """Sky, sun, headlight, fog, clip planes, ground plane."""
+    spec.stat.extent = MODEL_EXTENT_M
     spec.stat.center = [0.0, 0.0, 0.0]
     spec.visual.map.znear = 0.002  # x extent = 0.2 m
     spec.visual.map.zfar = 10.0  # x extent = 1 km
+    spec.visual.map.fogstart, spec.visual.map.fogend = lighting.fog_start, lighting.fog_end
+    spec.visual.rgba.fog = [*lighting.sky_horizon, 1.0]
+    spec.visual.rgba.haze = [*lighting.sky_horizon, 1.0]
     spec.visual.quality.shadowsize = 2048
     spec.visual.quality.offsamples = scenario.camera.antialias_samples
-    spec.visual.headlight.ambient = [0.35, 0.35, 0.35]
-    spec.visual.headlight.diffuse = [0.25, 0.25, 0.25]
+    spec.visual.headlight.ambient = [lighting.headlight_ambient] * 3
+    spec.visual.headlight.diffuse = [lighting.headlight_diffuse] * 3
     spec.visual.headlight.specular = [0.0, 0.0, 0.0]
     spec.add_texture(
         name="sky",
         type=mujoco.mjtTexture.mjTEXTURE_SKYBOX,
         builtin=mujoco.mjtBuiltin.mjBUILTIN_GRADIENT,
-        rgb1=[0.45, 0.62, 0.88],
-        rgb2=[0.88, 0.92, 0.97],
+        rgb1=list(lighting.sky_zenith),
+        rgb2=list(lighting.sky_horizon),
         width=512,
         height=512,
     )
@@ -95,10 +101,10 @@ def _add_environment(spec: mujoco.MjSpec, road: Road, scenario: Scenario) -> Non
         name="sun",
         type=mujoco.mjtLightType.mjLIGHT_DIRECTIONAL,
         pos=[0.0, 0.0, 100.0],
-        dir=[0.35, 0.25, -1.0],
-        diffuse=[0.75, 0.75, 0.72],
-        ambient=[0.15, 0.15, 0.15],
-        specular=[0.1, 0.1, 0.1],
+        dir=list(lighting.sun_dir),
+        diffuse=list(lighting.sun_diffuse),
+        ambient=list(lighting.sun_ambient),
+        specular=[lighting.sun_specular] * 3,
         castshadow=scenario.camera.shadows,
     )
     # Ground plane around the whole road; it carries the tyre contacts.
@@ -117,12 +123,26 @@ def _add_environment(spec: mujoco.MjSpec, road: Road, scenario: Scenario) -> Non
     )
 
 
-def _add_road_surface(spec: mujoco.MjSpec, road: Road, layout: WorldLayout) -> None:
+def _asphalt_mesh(road: Road, s0: float, s1: float, right: float, left: float,
+                  layout: WorldLayout, grid_step_m: float | None) -> Ribbon:
+    """One segment's asphalt: a single ribbon, or (per-vertex spot lighting) a grid of strips
+    `grid_step_m` wide, each cut at most twice as long."""
+    if grid_step_m is None:
+        return ribbon(road, s0, s1, right, left, ROAD_Z_M, layout.tile_m)
+    cuts = np.linspace(right, left, max(1, math.ceil((left - right) / grid_step_m)) + 1)
+    return Ribbon.concatenate([
+        ribbon(road, s0, s1, a, b, ROAD_Z_M, layout.tile_m, max_step_m=2 * grid_step_m)
+        for a, b in zip(cuts[:-1], cuts[1:], strict=True)
+    ])
+
+
+def _add_road_surface(spec: mujoco.MjSpec, road: Road, layout: WorldLayout,
+                      grid_step_m: float | None) -> None:
     """Asphalt and gravel ribbons, one mesh per road segment for each."""
     edge_right, edge_left = road.boundary_r(0), road.boundary_r(road.n_lanes)
     asphalt_right, asphalt_left = edge_right - layout.shoulder_m, edge_left + layout.shoulder_m
     for i, (s0, s1) in enumerate(road.segment_bounds()):
-        asphalt = ribbon(road, s0, s1, asphalt_right, asphalt_left, ROAD_Z_M, layout.tile_m)
+        asphalt = _asphalt_mesh(road, s0, s1, asphalt_right, asphalt_left, layout, grid_step_m)
         add_mesh_geom(spec, f"road_{i}", asphalt, "asphalt", GROUP_WORLD)
         gravel = Ribbon.concatenate(
             [
@@ -182,11 +202,16 @@ def build_spec(
     add_texture(spec, "gravel", textures.gravel(rng))
     add_texture(spec, "grass", textures.grass(rng))
     add_texture(spec, "paint", textures.paint(rng))
-    add_material(spec, "asphalt", "asphalt", specular=0.05, shininess=0.1)
-    add_material(spec, "gravel", "gravel", specular=0.0)
-    add_material(spec, "grass", "grass", texrepeat=[150.0, 150.0], specular=0.0)
-    _add_environment(spec, road, scenario)
-    _add_road_surface(spec, road, layout)
+    look = appearance_of(scenario, road)
+    surf = look.surfaces
+    add_material(spec, "asphalt", "asphalt", rgba=list(surf.asphalt_rgba),
+                 specular=surf.asphalt_specular, shininess=surf.asphalt_shininess)
+    add_material(spec, "gravel", surf.verge_texture_gravel, rgba=list(surf.gravel_rgba),
+                 specular=0.0)
+    add_material(spec, "grass", surf.verge_texture_grass, texrepeat=[150.0, 150.0],
+                 specular=0.0)
+    _add_environment(spec, road, scenario, look.lighting)
+    _add_road_surface(spec, road, layout, look.asphalt_grid_step_m)
     marking_names = _add_markings(spec, road, layout)
     return spec, marking_names, add_conditions(spec, scenario, road, layout)
 

@@ -1,26 +1,28 @@
 """What a scenario's conditions add to the MuJoCo world: light, shadows, bumps, wet, fog, traffic.
 
-Called by `world.build_spec` after the road and markings exist (`add_conditions`); everything is
-seeded from the scenario seed, so one scenario always builds the same world. The work is split
-by concern: lanekeep/world_lighting.py (sun, sky, car lights, fog), world_roadside.py
+Called by `world.build_spec` (`add_conditions`) after the road and markings exist; their look,
+the sky, sun and fog are decided from the scenario before the build (world_appearance.py).
+Everything is seeded from the scenario seed, so one scenario always builds the same world. The
+work is split by concern: lanekeep/world_lighting.py (car lights), world_roadside.py
 (shadows and casters, bumps, wet, snow), world_traffic.py (other vehicles).
 
   - Sun and time of day: the sun's direction comes from `Conditions.sun_*`; dawn, dusk and night
-    dim the sun, the ambient light and the sky and switch on the car's headlights (two white spot
-    lights, lit road ~35 m ahead) and a dim red tail light (the rear camera sees ~8 m of road).
-    MuJoCo lights per vertex, so with headlights the asphalt ribbons are re-meshed as a 0.5 m grid.
+    dim the sun, the ambient light and the sky (decided before the build, world_appearance.py)
+    and switch on the car's headlights (two white spot lights, lit road ~35 m ahead) and a dim
+    red tail light (the rear camera sees ~8 m of road). MuJoCo lights per vertex, so with
+    headlights world.py meshes the asphalt as a 0.5 m grid.
   - Hard shadows: shadow maps double the render cost on a CPU, so a building's or tree's shadow is
     its silhouette cast along the sun onto the ground: a convex polygon drawn as a black
     translucent overlay (group GROUP_SHADOW, hidden from the segmentation render so the marking
     masks stay exact). The casters (boxes, trees) stand beside the road and are rendered too.
   - Speed bumps: cylinders across the road sunk into the ground (a circular cap ~0.6 m long and
     `speed_bump_height_m` high) that the tyres collide with; yellow with black stripes.
-  - Wet road: darker, glossier asphalt (MuJoCo renders `reflectance` on planes only, and a
-    reflective plane costs a second scene pass, so wetness is a material change) and puddles as
+  - Wet road: darker, glossier asphalt (a material tint, world_appearance.py) and puddles as
     dark glossy overlays (group GROUP_SHADOW).
   - Fog: MuJoCo's linear fog up to the visibility distance, in the sky's horizon colour.
     Scenes without fog put it beyond the far clip plane, so the render flag can stay on.
-  - Snow: white verges (grass and gravel textures) and snow drifts over the asphalt shoulders.
+  - Snow: white verges (the grass and gravel materials use the snow texture made here) and snow
+    drifts over the asphalt shoulders.
   - Other vehicles: mocap bodies (body box + cabin + axles) moved along their lanes by
     `update_dynamic(world, t_s)`; `occluded_marking_share` measures how much paint they hide.
 """
@@ -35,8 +37,6 @@ from lanekeep.scenario import Scenario
 from lanekeep.world_lighting import (
     LIGHTING,
     add_car_lights,
-    add_light_and_sky,
-    densify_asphalt,
     fog_visibility_m,
     sun_direction,
 )
@@ -53,12 +53,10 @@ def add_conditions(spec: mujoco.MjSpec, scenario: Scenario, road: Road,
     cond = scenario.conditions
     rng = np.random.default_rng([scenario.seed, 0xC0D])
     info = ConditionsInfo(headlights=cond.headlights)
-    add_light_and_sky(spec, cond, road)
     if cond.fog > 0.0:
         info.fog_visibility_m = fog_visibility_m(cond.fog)
     if cond.headlights:
         add_car_lights(spec)
-        densify_asphalt(spec, road, layout)
     to_sun = sun_direction(cond, road)
     for i, zone in enumerate(cond.shadows):
         spec.add_material(name=f"cond_shadow_{i}", rgba=[0.0, 0.0, 0.0, zone.darkness],

@@ -74,8 +74,6 @@ def yaw_quat(yaw: float) -> list[float]:
 
 
 @dataclass
-
-
 class VehicleTrack:
     """A moving occluder: mocap body `name` at Frenet (s_m + speed_mps * t, r_m)."""
 

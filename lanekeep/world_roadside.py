@@ -15,11 +15,13 @@ from lanekeep.cameras import GROUP_SHADOW, GROUP_WORLD
 from lanekeep.road import Road
 from lanekeep.road_mesh import Ribbon, ribbon
 from lanekeep.scenario import Conditions, ShadowZone
+from lanekeep.world_appearance import SNOW_TEXTURE
 from lanekeep.world_parts import (
     OVERLAY_Z_M,
     ConditionsInfo,
     WorldLayout,
     add_mesh_geom,
+    add_texture,
     yaw_quat,
 )
 
@@ -182,12 +184,9 @@ def add_bumps(spec: mujoco.MjSpec, road: Road, cond: Conditions, info: Condition
 
 def add_wet(spec: mujoco.MjSpec, road: Road, cond: Conditions, rng: np.random.Generator,
              info: ConditionsInfo, layout: WorldLayout) -> None:
+    """Puddles as dark glossy overlays (the wet asphalt itself is a material tint decided in
+    lanekeep/world_appearance.py)."""
     w = cond.wet
-    asphalt = spec.material("asphalt")
-    asphalt.rgba = [1.0 - 0.45 * w, 1.0 - 0.45 * w, 1.0 - 0.4 * w, 1.0]
-    asphalt.specular = 0.05 + 0.6 * w
-    asphalt.shininess = 0.1 + 0.85 * w
-    spec.material("gravel").rgba = [1.0 - 0.35 * w, 1.0 - 0.35 * w, 1.0 - 0.33 * w, 1.0]
     right = road.boundary_r(0) - layout.shoulder_m + 0.3
     left = road.boundary_r(road.n_lanes) + layout.shoulder_m - 0.3
     n = int(round(road.length_m / 12.0 * w))
@@ -209,13 +208,11 @@ def add_wet(spec: mujoco.MjSpec, road: Road, cond: Conditions, rng: np.random.Ge
 
 def add_snow(spec: mujoco.MjSpec, road: Road, cond: Conditions,
               rng: np.random.Generator, layout: WorldLayout) -> None:
+    """The snow texture that the verge materials use (lanekeep/world_appearance.py) and snow
+    drifts over the asphalt shoulders."""
     tex = textures.gravel(rng)
     snow = np.clip(235 + (tex.astype(np.int16) - tex.mean()) * 0.25, 0, 255).astype(np.uint8)
-    t = spec.add_texture(name="cond_snow", type=mujoco.mjtTexture.mjTEXTURE_2D,
-                         width=snow.shape[1], height=snow.shape[0], nchannel=3)
-    t.data = np.ascontiguousarray(snow).tobytes()
-    for name in ("grass", "gravel"):
-        spec.material(name).textures[mujoco.mjtTextureRole.mjTEXROLE_RGB] = "cond_snow"
+    add_texture(spec, SNOW_TEXTURE, snow)
     spec.add_material(name="cond_snowdrift", rgba=[0.95, 0.96, 0.98, 0.35 + 0.55 * cond.snow],
                       specular=0.1, shininess=0.1)
     inner = 0.25 + 0.9 * (1.0 - cond.snow)  # distance kept clear of the edge lines (m)
