@@ -1,6 +1,6 @@
 """The closed loop's estimator: per-model Kalman tracks, the MMAE and the output policy, one call.
 
-    estimator = LaneEstimator(["hough", "sliding_window"], EstimatorSettings(), 3.7, -4.0)
+    estimator = LaneEstimator(["hough", "sliding_window"], EstimatorSettings(), -4.0)
     out = estimator.update(detections, reference_detection, ego_motion)
     out.centre, out.offset_m  # the lane the controller follows
 
@@ -9,7 +9,9 @@ tracker (predicted with the ego-motion first; a gated detection that another mod
 corroborates restarts the track); each track's offset at the look-ahead is carried by
 odometry to where the rear reference looks (distance-aligned residuals); the MMAE weighs the
 models against the reference; the output is the chosen model's lane. What the estimator is
-told of the car's motion comes in `EgoMotion`, never from the simulator directly.
+told of the car's motion comes in `EgoMotion` (dead-reckoned from the car's sensors,
+estimators/odometry.py), never from the simulator; the lane width that centres a one-boundary
+detection is measured from the detections themselves.
 """
 
 from __future__ import annotations
@@ -26,6 +28,7 @@ from estimators.alignment import OdometryAlignedHistory
 from estimators.consensus import corroborated
 from estimators.kalman import LaneTracker, TrackerConfig, UpdateStatus
 from estimators.mmae import MMAE, MMAEConfig, MMAEOutput
+from estimators.odometry import EgoMotion
 from lanekeep.config_io import ConfigError, from_dict
 
 ACCEPTED = (UpdateStatus.UPDATED.value, UpdateStatus.INITIALIZED.value,
@@ -69,23 +72,6 @@ def _no_lap(stage: str) -> None:
 
 
 @dataclass(frozen=True)
-class EgoMotion:
-    """What the estimator knows of the car's motion at this step.
-
-    `speed_mps`, `yaw_rate_rps` and `lateral_speed_mps` predict the tracks over `dt_s`;
-    `pose` (x, y, yaw in an odometry frame) carries the models' past lane points to where the
-    rear reference looks now; `travelled_m` is the odometer.
-    """
-
-    dt_s: float
-    speed_mps: float
-    yaw_rate_rps: float
-    lateral_speed_mps: float
-    pose: tuple[float, float, float]
-    travelled_m: float
-
-
-@dataclass(frozen=True)
 class EstimatorSettings:
     """The scenario's estimation choices the estimator needs (see lanekeep.scenario)."""
 
@@ -93,6 +79,24 @@ class EstimatorSettings:
     residual_mode: str = "distance_aligned"
     output: str = "select"
     model_lane: str = "track"
+    # One-boundary detections are centred with the lane width the detectors measure when they
+    # see both boundaries (a running mean); until then with this prior: the common 3.5-3.75 m
+    # of motorway lanes, not the simulated road's width.
+    # Where the output offset is read: at `offset_lookahead_m` on the output lane ("lookahead"),
+    # or the selected model's own detection at its nearest row ("nearest_row", the paper's PID
+    # input; its track at that row while the detector has nothing).
+    output_at: str = "lookahead"
+    # What the MMAE compares with the reference: each model's Kalman track ("track"), or its
+    # raw detection ("detection", the paper: "the output offsets from both front camera
+    # models", with the model's filter giving eq. 8's C P C').
+    mmae_input: str = "track"
+    # With "detection" input: compare the models and the reference at the car (x = 0, each
+    # detection's lane extrapolated there), the paper's "offset of the vehicle", instead of
+    # at each detector's own look-ahead (+4 m front, -4 m rear: different road points).
+    mmae_at_car: bool = False
+    lane_width_prior_m: float = 3.7
+    lane_width_gain: float = 0.05  # weight of each two-boundary measurement in the mean
+    lane_width_range_m: tuple[float, float] = (2.5, 5.0)  # plausible widths; others ignored
 
 
 @dataclass(frozen=True)
@@ -105,6 +109,8 @@ class EstimatorOutput:
     selected: int  # the model whose lane is the output
     centre: np.ndarray | None
     offset_m: float | None
+    offset_x_m: float  # the look-ahead `offset_m` refers to
+    reference_x_m: float  # the look-ahead of `selection.reference_m`
     events: list[str] = field(default_factory=list)
 
 
@@ -112,11 +118,10 @@ class LaneEstimator:
     """Trackers, distance-aligned MMAE and output policy for a set of front models."""
 
     def __init__(self, model_names: list[str], settings: EstimatorSettings,
-                 lane_width_m: float, reference_x_m: float,
-                 tracker: TrackerConfig = CLOSED_LOOP_TRACKER) -> None:
+                 reference_x_m: float, tracker: TrackerConfig = CLOSED_LOOP_TRACKER) -> None:
         self.names = list(model_names)
         self.settings = settings
-        self.lane_width_m = lane_width_m
+        self.lane_width_m = settings.lane_width_prior_m
         self.reference_x_m = reference_x_m
         self.tracker_config = tracker
         self.trackers = {name: LaneTracker(tracker) for name in self.names}
@@ -129,6 +134,7 @@ class LaneEstimator:
         self.mmae = MMAE(len(self.names), MMAEConfig(residual_mode=mode))
 
     def reset(self) -> None:
+        self.lane_width_m = self.settings.lane_width_prior_m
         for tracker in self.trackers.values():
             tracker.reset()
         self.aligned.reset()
@@ -142,16 +148,31 @@ class LaneEstimator:
         ("mmae"), for a caller's stage timing (lanekeep.timing.StageClock.lap).
         """
         events: list[str] = []
+        self._measure_lane_width(detections.values())
         centres = {name: self.centre_of(detections[name]) for name in self.names}
         tracked, status = self._track(centres, ego)
         lap("track")
-        selection = self._select(reference, tracked, ego, events)
-        selected, centre, offset = self._output(centres, tracked, status, selection)
+        selection, reference_x = self._select(reference, tracked, detections, ego, events)
+        selected, centre = self._output(centres, tracked, status, selection)
+        offset, x_m = self._offset(selected, centre, detections, tracked, status)
         lap("mmae")
-        return EstimatorOutput(tracked, status, selection, selected, centre, offset, events)
+        return EstimatorOutput(tracked, status, selection, selected, centre, offset, x_m,
+                               reference_x, events)
+
+    def _measure_lane_width(self, detections) -> None:
+        """Update the running lane width from this step's two-boundary detections."""
+        x = self.settings.offset_lookahead_m
+        lo, hi = self.settings.lane_width_range_m
+        gain = self.settings.lane_width_gain
+        for estimate in detections:
+            if estimate.valid and estimate.left is not None and estimate.right is not None:
+                width = float(poly_eval(estimate.left, x) - poly_eval(estimate.right, x))
+                if lo <= width <= hi:
+                    self.lane_width_m += gain * (width - self.lane_width_m)
 
     def centre_of(self, estimate: LaneEstimate) -> np.ndarray | None:
-        """Centre line of a detection; one boundary is shifted by half a lane."""
+        """Centre line of a detection; one boundary is shifted by half the measured lane
+        width."""
         if not estimate.valid:
             return None
         if estimate.center is not None:
@@ -183,29 +204,43 @@ class LaneEstimator:
             tracked[name] = tracker.coefficients
         return tracked, status
 
-    def _select(self, reference: LaneEstimate, tracked, ego: EgoMotion,
-                events: list[str]) -> MMAEOutput:
+    def _select(self, reference: LaneEstimate, tracked, detections: dict[str, LaneEstimate],
+                ego: EgoMotion, events: list[str]) -> tuple[MMAEOutput, float]:
+        """The MMAE step, and the look-ahead of the reference offset it compared."""
         x_eval = self.settings.offset_lookahead_m
+        at_car = self.settings.mmae_input == "detection" and self.settings.mmae_at_car
         offsets, variances = [], []
-        for tracker in self.trackers.values():
-            offsets.append(tracker.offset_m(x_eval))
-            variances.append(tracker.offset_variance_m2(x_eval))
+        for name, tracker in self.trackers.items():
+            if self.settings.mmae_input == "detection":
+                detection = detections[name]
+                x_m = 0.0 if at_car else detection.x_m
+                offsets.append(self._offset_of(detection, x_m))
+                variances.append(tracker.offset_variance_m2(x_m))
+            else:
+                offsets.append(tracker.offset_m(x_eval))
+                variances.append(tracker.offset_variance_m2(x_eval))
         if self.settings.residual_mode == "distance_aligned":
             self.aligned.push(ego.pose, list(tracked.values()), variances, x_eval)
             offsets, variances = self.aligned.offsets_at(ego.pose, self.reference_x_m)
-        selection = self.mmae.step(
-            reference.offset_m if reference.valid else None,
-            offsets,
-            variances,
-            s_m=ego.travelled_m,
-        )
-        if selection.reference_repaired:
-            events.append(f"reference repaired: {reference.offset_m:+.2f} m -> "
+        reference_x = 0.0 if at_car else float(reference.x_m)
+        reference_m = self._offset_of(reference, reference_x)
+        selection = self.mmae.step(reference_m, offsets, variances, s_m=ego.travelled_m)
+        if selection.reference_repaired and reference_m is not None:
+            events.append(f"reference repaired: {reference_m:+.2f} m -> "
                           f"{selection.reference_m:+.2f} m")
-        return selection
+        return selection, reference_x
+
+    def _offset_of(self, detection: LaneEstimate, x_m: float) -> float | None:
+        """A detection's offset at x: its own where it reports it, else from its centre line."""
+        if not detection.valid:
+            return None
+        if abs(x_m - detection.x_m) < 1e-9:
+            return float(detection.offset_m)
+        centre = self.centre_of(detection)
+        return None if centre is None else -float(poly_eval(centre, x_m))
 
     def _output(self, centres, tracked, status, selection
-                ) -> tuple[int, np.ndarray | None, float | None]:
+                ) -> tuple[int, np.ndarray | None]:
         """The lane the controller follows: the MMAE output.
 
         By default (`model_lane = "track"`) the selected model's Kalman estimate, the state of
@@ -223,7 +258,7 @@ class LaneEstimator:
             polys = [(p, lanes[n]) for p, n in zip(selection.probabilities, names, strict=True)
                      if lanes[n] is not None]
             if not polys:
-                return chosen, None, None
+                return chosen, None
             weight = sum(p for p, _ in polys)
             centre = sum(p * c for p, c in polys) / weight
         else:
@@ -232,9 +267,23 @@ class LaneEstimator:
             if centre is None:  # the selected model has nothing at all: take any live one
                 live = [lanes[n] for n in names if lanes[n] is not None]
                 centre = live[0] if live else None
+        return chosen, centre
+
+    def _offset(self, selected: int, centre: np.ndarray | None,
+                detections: dict[str, LaneEstimate], tracked, status
+                ) -> tuple[float | None, float]:
+        """The output offset and the look-ahead it is at (see `EstimatorSettings.output_at`)."""
+        x_m = self.settings.offset_lookahead_m
+        if self.settings.output_at == "nearest_row":
+            name = self.names[selected]
+            detection = detections[name]
+            x_m = float(detection.x_m)
+            if detection.valid:  # the paper's PID reads the detection, gate or not
+                return float(detection.offset_m), x_m
+            centre = tracked[name] if tracked[name] is not None else centre
         if centre is None:
-            return chosen, None, None
-        return chosen, centre, -float(poly_eval(centre, self.settings.offset_lookahead_m))
+            return None, x_m
+        return -float(poly_eval(centre, x_m)), x_m
 
     def _choose(self, probabilities: np.ndarray, status: dict[str, str]) -> int:
         """The MMAE's likeliest model, unless its filter rejected (or had no) detection this

@@ -15,21 +15,31 @@ from pathlib import Path
 
 from lanekeep.config_io import ConfigError
 from lanekeep.metrics import EpisodeReport, SourceReport
+from lanekeep.scenario import ESTIMATION_MODES
 
 
 def run_episode(scenario_name: str, seed: int | None = None, seconds: float | None = None,
                 plots_dir: str | None = None, record_path: str | None = None,
                 record_every: int = 1, jpeg_quality: int = 75,
-                progress: bool = False) -> EpisodeReport:
-    """Run one scenario to the end and return its report (optionally plots and a recording)."""
+                progress: bool = False, mode: str | None = None,
+                front_detectors: tuple[str, ...] | None = None) -> EpisodeReport:
+    """Run one scenario to the end and return its report (optionally plots and a recording).
+
+    `mode` ("default" | "paper") and `front_detectors` (e.g. ("hough",) for a model-only
+    loop) override the scenario file's; None keeps them.
+    """
     import lanekeep  # noqa: F401 - EGL before mujoco
     from lanekeep.episode import Episode
+    from lanekeep.paper_mode import with_mode
     from lanekeep.plots import EpisodeTrace, write_plots
     from lanekeep.scenario import load_scenario
 
-    scenario = load_scenario(scenario_name)
+    scenario = with_mode(load_scenario(scenario_name), mode)
     if seed is not None:
         scenario = dataclasses.replace(scenario, seed=seed)
+    if front_detectors is not None:
+        scenario = dataclasses.replace(scenario, estimation=dataclasses.replace(
+            scenario.estimation, front_detectors=tuple(front_detectors)))
     recorder = None
     if record_path:
         from lanekeep.record import RerunRecorder
@@ -63,7 +73,8 @@ def _progress(done: int, total: int, label: str) -> None:
 
 def _cmd_run(args: argparse.Namespace) -> int:
     report = run_episode(args.scenario, args.seed, args.seconds, args.plots, args.record,
-                         args.record_every, args.jpeg_quality, progress=sys.stderr.isatty())
+                         args.record_every, args.jpeg_quality, progress=sys.stderr.isatty(),
+                         mode=args.mode)
     print(f"scenario {report.scenario} (seed {report.seed}): {report.duration_s:.1f} s simulated "
           f"in {report.wall_s:.1f} s")
     print(report.table())
@@ -72,11 +83,13 @@ def _cmd_run(args: argparse.Namespace) -> int:
     return 0 if report.completed else 130
 
 
-def _bench_one(name: str, seed: int | None, seconds: float | None, plots: str | None,
+def _bench_one(job: BenchJob, seconds: float | None, plots: str | None,
                record_dir: str | None) -> dict:
-    record = str(Path(record_dir) / f"{name}.rrd") if record_dir else None
-    plots_dir = str(Path(plots) / name) if plots else None
-    return run_episode(name, seed, seconds, plots_dir, record).to_dict()
+    label = job.label
+    record = str(Path(record_dir) / f"{label}.rrd") if record_dir else None
+    plots_dir = str(Path(plots) / label) if plots else None
+    return run_episode(job.scenario, job.seed, seconds, plots_dir, record, mode=job.mode,
+                       front_detectors=job.front_detectors).to_dict()
 
 
 def _report_from_dict(d: dict) -> EpisodeReport:
@@ -104,10 +117,21 @@ def _init_worker(threads: int) -> None:
 
 @dataclasses.dataclass(frozen=True)
 class BenchJob:
-    """One bench episode: a scenario (name or file) and a seed (None: the scenario's own)."""
+    """One bench episode: a scenario (name or file), a seed, the estimation mode and the front
+    models (None: the scenario's own)."""
 
     scenario: str
     seed: int | None = None
+    mode: str | None = None
+    front_detectors: tuple[str, ...] | None = None
+
+    @property
+    def label(self) -> str:
+        """Its key in reports: the scenario, "@model" for a model-only loop."""
+        name = Path(self.scenario).stem if self.scenario.endswith(".toml") else self.scenario
+        if self.front_detectors is None:
+            return name
+        return f"{name}@{'+'.join(self.front_detectors)}"
 
 
 def longest_first(jobs: list[BenchJob], seconds: float | None) -> list[int]:
@@ -135,8 +159,7 @@ def run_bench(jobs: list[BenchJob], workers: int, seconds: float | None = None,
     with ProcessPoolExecutor(max_workers=workers, mp_context=context,
                              initializer=_init_worker,
                              initargs=(worker_threads(workers),)) as pool:
-        futures = {pool.submit(_bench_one, jobs[i].scenario, jobs[i].seed, seconds, plots,
-                               record_dir): i
+        futures = {pool.submit(_bench_one, jobs[i], seconds, plots, record_dir): i
                    for i in longest_first(jobs, seconds)}
         for done, future in enumerate(as_completed(futures), start=1):
             reports[futures[future]] = _report_from_dict(future.result())
@@ -149,49 +172,80 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     from lanekeep.scenario import load_scenario, shipped_scenarios
 
     names = args.scenarios or shipped_scenarios()
-    for name in names:
-        load_scenario(name)  # fail fast on a bad name, before any worker starts
+    scenarios = {name: load_scenario(name) for name in names}  # fail fast on a bad name
     if args.record_dir:
         Path(args.record_dir).mkdir(parents=True, exist_ok=True)
     if args.workers < 1:
         raise ConfigError("", "--workers", f"must be >= 1, got {args.workers}")
-    jobs = [BenchJob(name, args.seed) for name in names]
+    jobs = [BenchJob(name, args.seed, args.mode) for name in names]
+    if args.single_model:
+        jobs += [BenchJob(name, args.seed, args.mode, (model,)) for name in names
+                 for model in scenarios[name].estimation.front_detectors]
     done_reports, wall = run_bench(jobs, args.workers, args.seconds, args.plots,
                                    args.record_dir,
                                    on_done=lambda done, total: _progress(done, total, "bench"))
-    reports = dict(zip(names, done_reports, strict=True))
+    reports = {job.label: report for job, report in zip(jobs, done_reports, strict=True)}
     print(file=sys.stderr)
     for name in names:
         r = reports[name]
         print(f"\n== {name} (seed {r.seed}, {r.duration_s:.0f} s, wall {r.wall_s:.0f} s) ==")
         print(r.table())
     print("\n" + summary_table([reports[n] for n in names]))
-    print(f"\nbench wall time: {wall:.1f} s for {len(names)} scenarios "
+    if args.single_model:
+        print("\n" + single_model_table(names, jobs, reports))
+    print(f"\nbench wall time: {wall:.1f} s for {len(jobs)} episodes "
           f"with {args.workers} workers")
     if args.json:
-        Path(args.json).write_text(json.dumps({n: reports[n].to_dict() for n in names},
+        Path(args.json).write_text(json.dumps({k: r.to_dict() for k, r in reports.items()},
                                               indent=2))
     return 0
 
 
+def _best(sources: dict, names: list[str]) -> tuple[str, float]:
+    """The source with the lowest offset RMSE among `names` (NaN counts as worst)."""
+    rmse = {n: sources[n].rmse_cm for n in names}
+    name = min(rmse, key=lambda n: math.inf if math.isnan(rmse[n]) else rmse[n])
+    return name, rmse[name]
+
+
 def summary_table(reports: list[EpisodeReport]) -> str:
-    """One line per scenario: fused vs the best single front model, reference, safety."""
-    header = (f"{'scenario':<28}{'fused':>8}{'best model':>18}{'reference':>11}"
-              f"{'car RMS':>9}{'depart':>8}{'switch':>8}")
+    """One line per scenario: fused vs the best front model's own track (like for like: both
+    Kalman estimates at the same look-ahead) and its best raw detection; reference; safety."""
+    header = (f"{'scenario':<28}{'fused':>8}{'best track':>20}{'best raw':>20}"
+              f"{'reference':>11}{'car RMS':>9}{'depart':>8}{'switch':>8}")
     lines = [header, "-" * len(header)]
     for r in reports:
-        models = {k: v for k, v in r.sources.items() if k not in ("fused", "reference")}
-        best_name, best = min(models.items(),
-                              key=lambda kv: math.inf if math.isnan(kv[1].rmse_cm)
-                              else kv[1].rmse_cm)
+        tracks = [k for k in r.sources if k.endswith(":track")]
+        raws = [k[: -len(":track")] for k in tracks]
+        track_name, track = _best(r.sources, tracks)
+        raw_name, raw = _best(r.sources, raws)
         lines.append(
             f"{r.scenario:<28}{r.sources['fused'].rmse_cm:>8.1f}"
-            f"{best.rmse_cm:>8.1f} ({best_name[:8]:>8})"
+            f"{track:>8.1f} ({track_name.split(':')[0][:9]:>9})"
+            f"{raw:>8.1f} ({raw_name[:9]:>9})"
             f"{r.sources['reference'].rmse_cm:>11.1f}{r.car_rms_cm:>9.1f}"
             f"{r.lane_departures:>8d}{r.mmae_switches:>8d}"
         )
-    lines.append("(offset RMSE in cm; models = their raw detections; fused = the MMAE output, "
-                 "by default the selected model's Kalman estimate)")
+    lines.append("(offset RMSE in cm; track = a model's own Kalman track at the fused output's "
+                 "look-ahead; raw = its detections, on the steps it had one; fused = the MMAE "
+                 "output)")
+    return "\n".join(lines)
+
+
+def single_model_table(names: list[str], jobs: list[BenchJob],
+                       reports: dict[str, EpisodeReport]) -> str:
+    """The closed loop driven by the MMAE beside the same loop driven by each front model
+    alone (the paper's "model-only system"): the car's own lateral error and departures."""
+    header = f"{'scenario':<28}{'loop':>22}{'car RMS':>9}{'car max':>9}{'depart':>8}"
+    lines = ["closed loop: MMAE vs each front model alone", header, "-" * len(header)]
+    for name in names:
+        labels = [name] + [j.label for j in jobs if j.scenario == name and j.front_detectors]
+        for label in labels:
+            r = reports[label]
+            loop = "MMAE" if label == name else label.split("@", 1)[1] + " only"
+            lines.append(f"{name if label == name else '':<28}{loop:>22}{r.car_rms_cm:>9.1f}"
+                         f"{r.car_max_cm:>9.1f}{r.lane_departures:>8d}")
+    lines.append("(car = its true lateral offset from the lane centre, cm)")
     return "\n".join(lines)
 
 
@@ -205,6 +259,9 @@ def register(sub) -> None:
     p.add_argument("--record", default=None, help="write a rerun recording (.rrd)")
     p.add_argument("--record-every", type=int, default=1, help="record every N-th step")
     p.add_argument("--jpeg-quality", type=int, default=75, help="JPEG quality of recorded images")
+    p.add_argument("--mode", choices=ESTIMATION_MODES, default=None,
+                   help="estimation mode: 'default' (ours) or 'paper' (paper 001's own loop, "
+                        "lanekeep/paper_mode.py); default: the scenario file's")
     p.set_defaults(func=_cmd_run)
 
     p = sub.add_parser("bench", help="run many scenarios in parallel; paper-style tables")
@@ -215,4 +272,11 @@ def register(sub) -> None:
     p.add_argument("--json", default=None)
     p.add_argument("--plots", default=None, help="folder; one subfolder of PNGs per scenario")
     p.add_argument("--record-dir", default=None, help="write one .rrd per scenario here")
+    p.add_argument("--mode", choices=ESTIMATION_MODES, default=None,
+                   help="estimation mode for every episode ('default' or 'paper'); "
+                        "default: each scenario file's")
+    p.add_argument("--single-model", action="store_true",
+                   help="also drive each scenario closed loop with each front model alone "
+                        "and print the car's lateral RMS / max and departures beside the "
+                        "MMAE loop's; in --json these episodes are keyed 'SCENARIO@MODEL'")
     p.set_defaults(func=_cmd_bench)

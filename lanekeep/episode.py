@@ -4,6 +4,13 @@ Each line of `Episode.step` is one call into one module (DESIGN.md's loop). The 
 detectors each feed a Kalman lane tracker; the rear detector is the MMAE's reference (the
 paper's "observer"); the MMAE selects (or fuses) the front models; the PID steers on the chosen
 lane's offset at the control look-ahead; the speed PI holds the target speed.
+
+What the car knows is what a car has: the camera frames and its sensor signals
+(lanekeep/sensors.py: wheel odometry, IMU yaw rate, accelerations, steering angle), dead-reckoned
+into the estimator's ego-motion (estimators/odometry.py). The simulator's state (the car's
+true pose and speed, the road) is read only to score the step (`_true_pose`, `_score`,
+`_wheels_outside_lane`), to image the scene (`_sense`: motion blur follows the true motion) and
+by the recorder; tests/test_honest_loop.py makes any other read fail.
 """
 
 from __future__ import annotations
@@ -14,26 +21,36 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from detectors.base import Detector, LaneEstimate
+from detectors.base import Detector, LaneEstimate, poly_eval
 from detectors.registry import make_detector
-from estimators.lane_estimator import (
-    CLOSED_LOOP_TRACKER,
-    EgoMotion,
-    EstimatorOutput,
-    EstimatorSettings,
-    LaneEstimator,
-)
+from estimators.lane_estimator import CLOSED_LOOP_TRACKER, EstimatorOutput, LaneEstimator
+from estimators.odometry import DeadReckoning
 from lanekeep.cameras import CameraRig, RenderSettings
 from lanekeep.conditions import ImageEffects
-from lanekeep.control import SpeedController, SteeringPID
-from lanekeep.ground_truth import lane_centre_fit, lane_offsets
+from lanekeep.control import PaperGains, SpeedController, SteeringPID
+from lanekeep.ground_truth import lane_centre_at, lane_centre_fit, lane_offsets
 from lanekeep.metrics import EpisodeReport, Metrics
+from lanekeep.paper_mode import estimator_settings, front_detector_config
 from lanekeep.record import EpisodeInfo, NullRecorder, Recorder
 from lanekeep.scenario import Scenario
+from lanekeep.sensors import VehicleSensors, VehicleSignals
 from lanekeep.timing import StageClock
 from lanekeep.world import World, build
 
 FUSED, REFERENCE = "fused", "reference"
+TRACK_SUFFIX = ":track"  # a front model's own Kalman track, scored like the fused output
+
+
+def track_source(model: str) -> str:
+    """The report column of a model's own track ("hough" -> "hough:track")."""
+    return model + TRACK_SUFFIX
+
+
+def source_names(models: list[str]) -> list[str]:
+    """Report columns in order: per model its raw detection and its own track, then the
+    fused output and the reference."""
+    return [n for m in models for n in (m, track_source(m))] + [FUSED, REFERENCE]
+
 TYRES = ("front_left_tyre", "front_right_tyre", "rear_left_tyre", "rear_right_tyre")
 
 @dataclass(frozen=True)
@@ -45,11 +62,14 @@ class StepResult:
     frames: dict[str, np.ndarray]
     estimates: dict[str, LaneEstimate]
     tracked: dict[str, np.ndarray | None]  # centre-line coefficients per front model
+    track_offsets_m: dict[str, float | None]  # each track's offset at the output's look-ahead
     probabilities: np.ndarray
     selected: int
     output_offset_m: float | None
+    output_x_m: float  # the look-ahead of output_offset_m
     output_centre: np.ndarray | None
     reference_m: float | None
+    reference_x_m: float  # the look-ahead of reference_m
     reference_repaired: bool
     steer: float
     throttle: float
@@ -57,7 +77,8 @@ class StepResult:
     truth_centre: np.ndarray  # true lane centre in the frame of `sensed_pose`
     pose: tuple[float, float, float]  # after the control period
     sensed_pose: tuple[float, float, float]  # where the frames were taken
-    speed_mps: float
+    speed_mps: float  # true speed (scoring, recording)
+    signals: VehicleSignals  # what the car's sensors said at the frames' time
     events: list[str] = field(default_factory=list)
     tracker_status: dict[str, str] = field(default_factory=dict)  # UpdateStatus value per model
     # Marking masks (uint8, 1 = paint) per camera rendered from the state after this step, the
@@ -82,24 +103,30 @@ class Episode:
                         for name in self.rig.CAMERA_NAMES}
         self.dt_s = scenario.control_period_s
         self.front: dict[str, Detector] = {
-            name: make_detector(name, self.rig.cameras["front"]) for name in est.front_detectors
+            name: make_detector(name, self.rig.cameras["front"],
+                                front_detector_config(name, est.mode))
+            for name in est.front_detectors
         }
         self.reference: Detector = make_detector(est.reference_detector,
                                                    self.rig.cameras[est.reference_camera])
         self.estimator = LaneEstimator(
             list(self.front),
-            EstimatorSettings(est.offset_lookahead_m, est.residual_mode, est.output,
-                              est.model_lane),
-            lane_width_m=self.world.road.lane_width_m,
+            estimator_settings(est),
             reference_x_m=float(self.reference.x_ref),
             tracker=CLOSED_LOOP_TRACKER,
         )
-        self.travelled_m = 0.0
         geometry = self.world.car.geometry
+        # The sensors draw from their own stream of the episode's generator, so that they do
+        # not shift the image effects' draws (and a perfect-sensor run sees the same frames).
+        self.sensors = VehicleSensors(scenario.sensors, self.dt_s, self.rng.spawn(1)[0])
+        # The reference point is the middle of the wheelbase (lanekeep/vehicle.py).
+        self.odometry = DeadReckoning(self.dt_s, geometry.wheelbase_m / 2.0)
+        self.paper_mode = est.mode == "paper"
         self.steering = SteeringPID(self.dt_s, est.control_lookahead_m, geometry.wheelbase_m,
-                                    geometry.max_steer_rad)
+                                    geometry.max_steer_rad,
+                                    paper_gains=PaperGains() if self.paper_mode else None)
         self.speed = SpeedController(scenario.target_speed_mps, self.dt_s)
-        self.metrics = Metrics(list(self.front) + [FUSED, REFERENCE])
+        self.metrics = Metrics(source_names(list(self.front)))
         self.recorder: Recorder = recorder or NullRecorder()
         geometry = self.world.car.geometry
         self.recorder.start(EpisodeInfo(self.world.road, dict(self.rig.cameras), list(self.front),
@@ -119,17 +146,18 @@ class Episode:
         clock = self.clock
         clock.start()
         events: list[str] = []
-        sensed_pose = self.world.car.pose()  # the pose the frames are taken from
+        sensed_pose = self._true_pose()  # scoring: where the frames are taken from
         frames = self._sense()
+        signals = self.sensors.sample(self.world.car)
         estimates = self._detect(frames, events)
-        estimate = self._estimate(estimates)  # laps "track" and "mmae"
+        estimate = self._estimate(estimates, signals)  # laps "track" and "mmae"
         events.extend(estimate.events)
-        centre, offset = estimate.centre, estimate.offset_m
-        steer, throttle = self._control(centre, offset) if action is None else action
+        steer, throttle = self._control(estimate, signals) if action is None else action
         clock.lap("control")
         self.world.step(steer, throttle, self.dt_s)
         clock.lap("physics")
-        result = self._score(sensed_pose, frames, estimates, estimate, steer, throttle, events)
+        result = self._score(sensed_pose, frames, estimates, estimate, signals, steer, throttle,
+                             events)
         clock.lap("score")
         if self.recorder.wants_masks(self.index):
             result = replace(result, marking_masks_after=self._marking_masks())
@@ -174,22 +202,29 @@ class Episode:
         self.clock.lap("detect_reference")
         return out
 
-    def _ego_motion(self) -> EgoMotion:
-        """What the estimator is told of the car's motion (today: the simulator's values)."""
-        car = self.world.car
-        self.travelled_m += abs(car.speed_mps()) * self.dt_s  # odometry
-        return EgoMotion(self.dt_s, car.speed_mps(), car.yaw_rate_rps(),
-                         car.lateral_speed_mps(), car.pose(), self.travelled_m)
-
-    def _estimate(self, estimates: dict[str, LaneEstimate]) -> EstimatorOutput:
+    def _estimate(self, estimates: dict[str, LaneEstimate], signals: VehicleSignals
+                  ) -> EstimatorOutput:
         front = {name: estimates[name] for name in self.front}
-        return self.estimator.update(front, estimates[REFERENCE], self._ego_motion(),
-                                     lap=self.clock.lap)
+        ego = self.odometry.update(signals.speed_mps, signals.yaw_rate_rps)
+        return self.estimator.update(front, estimates[REFERENCE], ego, lap=self.clock.lap)
 
-    def _control(self, centre, offset) -> tuple[float, float]:
-        car = self.world.car
+    def _control(self, estimate: EstimatorOutput, signals: VehicleSignals
+                 ) -> tuple[float, float]:
+        centre, speed = estimate.centre, signals.speed_mps
         if centre is None:
-            steer = self.steering(None, car.speed_mps())
+            steer = self.steering(None, speed)
+        elif self.paper_mode:
+            # Eq. 9 on the output offset itself (the selected detection at its nearest row).
+            # The paper does not say how it tells a curvy road from a straight one; here the
+            # larger of the lane's curvature there and the car's own path curvature (gyro yaw
+            # rate / wheel speed) picks the gains: a short-range model fits straight lines,
+            # and once the car turns, the gyro knows.
+            x = estimate.offset_x_m
+            slope = centre[1] + 2.0 * centre[2] * x
+            lane_curvature = 2.0 * centre[2] / (1.0 + slope * slope) ** 1.5
+            path_curvature = signals.yaw_rate_rps / max(abs(speed), 1.0)
+            curvature = max(lane_curvature, path_curvature, key=abs)
+            steer = self.steering(estimate.offset_m, speed, curvature_1pm=curvature)
         else:
             # Feedback on the lane's offset and heading projected x_ctrl ahead (the linear
             # terms); its curvature goes to the controller's feed-forward, not counted twice.
@@ -200,40 +235,56 @@ class Episode:
             # term), and 2 c2 alone would over-steer a 40 m radius turn by ~25%.
             slope = centre[1] + 2.0 * centre[2] * x_ctrl
             curvature = 2.0 * centre[2] / (1.0 + slope * slope) ** 1.5
-            steer = self.steering(control_offset, car.speed_mps(), curvature_1pm=curvature)
-        return steer, self.speed(car.speed_mps())
+            steer = self.steering(control_offset, speed, curvature_1pm=curvature)
+        return steer, self.speed(speed)
 
-    def _score(self, sensed_pose, frames, estimates, estimate: EstimatorOutput, steer,
-               throttle, events) -> StepResult:
+    def _true_pose(self) -> tuple[float, float, float]:
+        """The car's true pose, for scoring only."""
+        return self.world.car.pose()
+
+    def _score(self, sensed_pose, frames, estimates, estimate: EstimatorOutput,
+               signals: VehicleSignals, steer, throttle, events) -> StepResult:
         """Estimates against the truth of the pose their frames were taken from; the car's own
-        lateral error and lane departures at its pose after the control period."""
-        world, est = self.world, self.scenario.estimation
+        lateral error and lane departures at its pose after the control period.
+
+        Per front model two columns: its raw detection (at the detector's own look-ahead) and
+        its own Kalman track (at the output's look-ahead, like the fused output).
+        """
+        world = self.world
         lane = self.scenario.road.ego_lane
         tracked, selection = estimate.tracked, estimate.selection
-        centre, offset = estimate.centre, estimate.offset_m
+        centre, offset, x_out = estimate.centre, estimate.offset_m, estimate.offset_x_m
         # One truth of the lane where the frames were taken, and its offsets at every
         # look-ahead that an estimate reports at (one Newton solve for all of them).
-        true_centre, s_car = lane_centre_fit(world.road, *sensed_pose, lane)
+        true_centre, s_car = lane_centre_fit(world.road, *sensed_pose, lane)  # for drawing
+        true_y = lane_centre_at(world.road, *sensed_pose, lane, self.metrics.ade_points_m,
+                                s_car=s_car)  # exact, for ADE / FDE
+        x_ref = estimate.reference_x_m
         lookaheads = sorted({round(e.x_m, 3) for e in estimates.values()}
-                            | {round(est.offset_lookahead_m, 3)})
+                            | {round(x_out, 3), round(x_ref, 3)})
         offsets = dict(zip(lookaheads, lane_offsets(world.road, *sensed_pose, lane, lookaheads,
                                                     s_car=s_car), strict=True))
 
         def true_offset(x_m: float) -> float:
             return float(offsets[round(x_m, 3)])
 
-        x, y, yaw = world.car.pose()
+        x, y, yaw = self._true_pose()
         car_offset_m = float(lane_offsets(world.road, x, y, yaw, lane, [0.0])[0])
 
+        track_offsets: dict[str, float | None] = {}
         for name in self.front:
             e = estimates[name]
             self.metrics.add_offset(name, e.offset_m if e.valid else None, true_offset(e.x_m))
-            self.metrics.add_lane(name, tracked[name], true_centre)
+            self.metrics.add_lane(name, self.estimator.centre_of(e), true_y)
+            track = tracked[name]
+            track_offsets[name] = None if track is None else -float(poly_eval(track, x_out))
+            self.metrics.add_offset(track_source(name), track_offsets[name], true_offset(x_out))
+            self.metrics.add_lane(track_source(name), track, true_y)
         ref = estimates[REFERENCE]
         self.metrics.add_offset(REFERENCE, selection.reference_m if ref.valid else None,
-                                true_offset(ref.x_m))
-        self.metrics.add_offset(FUSED, offset, true_offset(est.offset_lookahead_m))
-        self.metrics.add_lane(FUSED, centre, true_centre)
+                                true_offset(x_ref))
+        self.metrics.add_offset(FUSED, offset, true_offset(x_out))
+        self.metrics.add_lane(FUSED, centre, true_y)
         if centre is None:
             self.metrics.add_no_estimate()
         outside = self._wheels_outside_lane()
@@ -243,12 +294,15 @@ class Episode:
         self.metrics.add_selection(estimate.selected, selection.reference_repaired)
         return StepResult(
             index=self.index, time_s=float(world.data.time), frames=frames, estimates=estimates,
-            tracked=tracked, probabilities=np.asarray(selection.probabilities),
-            selected=int(estimate.selected), output_offset_m=offset, output_centre=centre,
-            reference_m=selection.reference_m, reference_repaired=selection.reference_repaired,
+            tracked=tracked, track_offsets_m=track_offsets,
+            probabilities=np.asarray(selection.probabilities),
+            selected=int(estimate.selected), output_offset_m=offset, output_x_m=x_out,
+            output_centre=centre,
+            reference_m=selection.reference_m, reference_x_m=x_ref,
+            reference_repaired=selection.reference_repaired,
             steer=steer, throttle=throttle, truth_offset_m=car_offset_m,
             truth_centre=true_centre, pose=(x, y, yaw), sensed_pose=sensed_pose,
-            speed_mps=world.car.speed_mps(), events=events,
+            speed_mps=world.car.speed_mps(), signals=signals, events=events,
             tracker_status=dict(estimate.tracker_status),
         )
 

@@ -5,6 +5,10 @@ The vehicle ground frame has its origin on the ground under the vehicle referenc
 plane x_vehicle = x at one point for each x (while the car points along the road); that point is
 found exactly by Newton's method on the road geometry, so offsets are exact and the fitted
 polynomials are least-squares fits of exact points.
+
+Scoring uses the exact points (`lane_offsets`, `lane_centre_at`), never a fit: a quadratic
+cannot follow a tight arc (on case2_sharp_turn's 40 m radius a 0-30 m fit is off by ~10 cm at
+4-20 m and ~30 cm at 30 m), so a fitted truth would charge its own error to every estimate.
 """
 
 from __future__ import annotations
@@ -124,12 +128,25 @@ def lane_truth(
 def lane_centre_fit(road: Road, x: float, y: float, yaw: float, lane: int,
                     fit_range_m: tuple[float, float] = (0.0, 30.0)) -> tuple[np.ndarray, float]:
     """`lane_truth(...).center` and `.s_m` alone: the centre line's fit and the car's Frenet s,
-    without the two boundary fits (the same numbers, a third of the work)."""
+    without the two boundary fits (the same numbers, a third of the work).
+
+    For drawing and for the step record only; ADE/FDE score against `lane_centre_at`."""
     lo, hi = fit_range_m
     s_car, _ = road.local_coordinates(np.array([x, y], dtype=float))
     xs = np.linspace(lo, hi, max(3, math.ceil((hi - lo) / FIT_STEP_M) + 1))
     points = line_points(road, x, y, yaw, road.lane_center_r(lane), xs, s_car=s_car)
     return _fit(points), float(s_car)
+
+
+def lane_centre_at(road: Road, x: float, y: float, yaw: float, lane: int, xs,
+                   s_car: float | None = None) -> np.ndarray:
+    """True y (m, + = left) of lane `lane`'s centre line at vehicle-frame forward distances xs.
+
+    Exact road geometry at each x (one Newton solve for all of them): the truth ADE/FDE
+    compare a lane estimate with (`Metrics.add_lane`), so that the metric measures the
+    estimate's error and not a fitted truth's. `s_car` (the car's Frenet s) seeds the search.
+    """
+    return line_points(road, x, y, yaw, road.lane_center_r(lane), xs, s_car=s_car)[:, 1]
 
 
 def lane_offsets(road: Road, x: float, y: float, yaw: float, lane: int, lookaheads_m,

@@ -16,6 +16,7 @@ class EpisodeTrace:
     time_s: list[float] = field(default_factory=list)
     truth_m: list[float] = field(default_factory=list)
     model_offsets_m: list[list[float]] = field(default_factory=list)
+    track_offsets_m: list[list[float]] = field(default_factory=list)  # each model's own track
     fused_m: list[float] = field(default_factory=list)
     reference_m: list[float] = field(default_factory=list)
     probabilities: list[np.ndarray] = field(default_factory=list)
@@ -27,6 +28,10 @@ class EpisodeTrace:
         self.truth_m.append(step.truth_offset_m)
         self.model_offsets_m.append(
             [step.estimates[n].offset_m if step.estimates[n].valid else nan
+             for n in self.model_names]
+        )
+        self.track_offsets_m.append(
+            [nan if step.track_offsets_m.get(n) is None else step.track_offsets_m[n]
              for n in self.model_names]
         )
         self.fused_m.append(nan if step.output_offset_m is None else step.output_offset_m)
@@ -49,8 +54,11 @@ def write_plots(trace: EpisodeTrace, road, out_dir: Path, title: str) -> list[Pa
     fig, ax = plt.subplots(figsize=(10, 4.5))
     ax.plot(t, np.asarray(trace.truth_m) * 100, "k-", lw=2, label="ground truth (x=0)")
     offsets = np.asarray(trace.model_offsets_m) * 100
+    tracks = np.asarray(trace.track_offsets_m) * 100
     for i, name in enumerate(trace.model_names):
-        ax.plot(t, offsets[:, i], lw=1, label=f"model {name}")
+        line, = ax.plot(t, offsets[:, i], lw=0.8, alpha=0.6, label=f"model {name} (detection)")
+        ax.plot(t, tracks[:, i], "--", lw=1.2, color=line.get_color(),
+                label=f"model {name} (own track)")
     ax.plot(t, np.asarray(trace.fused_m) * 100, lw=1.8, label="MMAE output")
     ax.plot(t, np.asarray(trace.reference_m) * 100, ":", lw=1.2, label="reference (rear)")
     ax.set(xlabel="time (s)", ylabel="offset (cm, + = car left of centre)", title=title)

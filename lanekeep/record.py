@@ -383,7 +383,8 @@ class RerunRecorder:
 
     def _truth_points(self, step) -> list[float]:
         """The look-aheads whose true offsets this step's plots need."""
-        xs = {0.0, self.scenario.estimation.offset_lookahead_m}
+        xs = {0.0, self.scenario.estimation.offset_lookahead_m, float(step.output_x_m),
+              float(step.reference_x_m)}
         xs |= {float(e.x_m) for e in step.estimates.values()}
         return sorted(xs)
 
@@ -417,6 +418,8 @@ class RerunRecorder:
         for name in view.models:
             for group in ("offset", "error", "probability"):
                 series[f"plots/{group}/{name}"] = name
+            for group in ("offset", "error"):  # the model's own Kalman track
+                series[f"plots/{group}/{name}:track"] = name
         for path, name in series.items():
             rec.log(path, rr.SeriesLines(colors=[self._colour(name)], names=[name]), static=True)
 
@@ -428,17 +431,27 @@ class RerunRecorder:
             value = step.reference_m if name == REFERENCE else estimate.offset_m
             if not estimate.valid or value is None:
                 continue
+            x_m = step.reference_x_m if name == REFERENCE else estimate.x_m
             rec.log(f"plots/offset/{name}", rr.Scalars(value))
-            rec.log(f"plots/error/{name}", rr.Scalars(value - truth.offset_m(estimate.x_m)))
+            rec.log(f"plots/error/{name}", rr.Scalars(value - truth.offset_m(x_m)))
+        x_out = step.output_x_m
+        for name, value in step.track_offsets_m.items():
+            if value is not None:
+                rec.log(f"plots/offset/{name}:track", rr.Scalars(value))
+                rec.log(f"plots/error/{name}:track", rr.Scalars(value - truth.offset_m(x_out)))
         if step.output_offset_m is not None:
             rec.log("plots/offset/fused", rr.Scalars(step.output_offset_m))
             rec.log("plots/error/fused", rr.Scalars(
-                step.output_offset_m - truth.offset_m(est.offset_lookahead_m)))
+                step.output_offset_m - truth.offset_m(x_out)))
         for name, p in zip(self._view.models, np.asarray(step.probabilities), strict=False):
             rec.log(f"plots/probability/{name}", rr.Scalars(float(p)))
         rec.log("plots/car/offset_m", rr.Scalars(truth.offset_m(0.0)))
         rec.log("plots/car/speed_mps", rr.Scalars(float(step.speed_mps)))
         rec.log("plots/car/steer", rr.Scalars(float(step.steer)))
+        signals = step.signals  # what the car's sensors told the estimator
+        rec.log("plots/sensors/speed_mps", rr.Scalars(float(signals.speed_mps)))
+        rec.log("plots/sensors/yaw_rate_rps", rr.Scalars(float(signals.yaw_rate_rps)))
+        rec.log("plots/sensors/accel_lat_mps2", rr.Scalars(float(signals.accel_lat_mps2)))
         rec.log("plots/car/throttle", rr.Scalars(float(step.throttle)))
 
     def _log_events(self, step) -> None:

@@ -23,6 +23,7 @@ from pathlib import Path
 from lanekeep.config_io import ConfigError, InvalidValue, from_dict
 from lanekeep.markings import MarkingStyle
 from lanekeep.road import Road, SegmentSpec
+from lanekeep.sensors import SensorsConfig
 
 TIMES_OF_DAY = ("day", "dawn", "dusk", "night")
 SHADOW_KINDS = ("buildings", "trees")
@@ -210,6 +211,7 @@ class Conditions:
 
 RESIDUAL_MODES = ("distance_aligned", "one_step_delay")
 OUTPUT_MODES = ("select", "fused")
+ESTIMATION_MODES = ("default", "paper")
 MODEL_LANES = ("track", "detection")
 CAMERAS = ("front", "rear")
 
@@ -224,6 +226,11 @@ class EstimationConfig:
     the probability-weighted lane ("fused").
     """
 
+    # "paper": the paper's own loop (lanekeep/paper_mode.py): one-step-delay residuals, the
+    # selected model's detection at its nearest row into eq. 9 with Table 2's gain shape and no
+    # feed-forward, model #1 long range and model #2 short range. It overrides residual_mode,
+    # model_lane and the front windows; "default" is our loop with its improvements.
+    mode: str = "default"
     front_detectors: tuple[str, ...] = ("hough", "sliding_window")
     reference_detector: str = "sliding_window"
     reference_camera: str = "rear"
@@ -236,6 +243,8 @@ class EstimationConfig:
     control_lookahead_m: float = 8.0  # where the PID reads the chosen lane
 
     def __post_init__(self):
+        if self.mode not in ESTIMATION_MODES:
+            raise InvalidValue("mode", f"must be one of {ESTIMATION_MODES}, got {self.mode!r}")
         if not self.front_detectors:
             raise InvalidValue("front_detectors", "at least one front detector is needed")
         if self.reference_camera not in CAMERAS:
@@ -264,6 +273,7 @@ class Scenario:
     camera: CameraConfig = field(default_factory=CameraConfig)
     conditions: Conditions = field(default_factory=Conditions)
     estimation: EstimationConfig = field(default_factory=EstimationConfig)
+    sensors: SensorsConfig = field(default_factory=SensorsConfig)
     source: str = field(default="", metadata={"toml": False})  # file it was read from
 
     def __post_init__(self):

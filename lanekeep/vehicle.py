@@ -94,6 +94,17 @@ class Car:
         world_vel = self.data.qvel[self._qvel_adr : self._qvel_adr + 3]
         return self.rotation().T @ world_vel
 
+    def acceleration_body(self) -> np.ndarray:
+        """Linear acceleration of the reference point in the body frame (m/s^2), no gravity.
+
+        The free joint's linear qacc, as MuJoCo computed it in the last physics step, is the
+        derivative of its world-frame linear qvel. On flat ground the tyres' normal forces
+        cancel gravity, so this is the kinematic acceleration, not an accelerometer's specific
+        force (which would read +9.81 m/s^2 up).
+        """
+        world_acc = self.data.qacc[self._qvel_adr : self._qvel_adr + 3]
+        return self.rotation().T @ world_acc
+
     def speed_mps(self) -> float:
         """Forward speed (m/s), negative when reversing."""
         return float(self.velocity_body()[0])

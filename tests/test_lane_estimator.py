@@ -23,7 +23,7 @@ def _ego(k: int, speed: float = 15.0) -> EgoMotion:
 
 
 def _estimator() -> LaneEstimator:
-    return LaneEstimator(NAMES, EstimatorSettings(), WIDTH, reference_x_m=-4.0)
+    return LaneEstimator(NAMES, EstimatorSettings(lane_width_prior_m=WIDTH), reference_x_m=-4.0)
 
 
 def test_one_boundary_is_centred_with_the_lane_width():
@@ -71,6 +71,7 @@ def test_reset_forgets_the_tracks():
 
 
 def test_the_tracker_tuning_file_is_read_strictly():
+    import tomllib
     from importlib import resources
 
     import pytest
@@ -81,7 +82,9 @@ def test_the_tracker_tuning_file_is_read_strictly():
     text = resources.files("estimators").joinpath(TRACKER_TOML).read_text()
     config = closed_loop_tracker(text)
     assert config.coast_with_rates is False
-    np.testing.assert_allclose(config.coefficient_r[0, 0], 4.0 * 3.18e-3)
+    data = tomllib.loads(text)
+    measured = np.asarray(data["measured_coefficient_covariance"])
+    np.testing.assert_allclose(config.coefficient_r, data["r_scale"] * measured)
     with pytest.raises(ConfigError, match="tracker.c1_accel_psd"):
         closed_loop_tracker(text.replace("c1_accel_psd_ps3 =", "c1_accel_psd =", 1))
     with pytest.raises(ConfigError, match="r_scale"):

@@ -19,6 +19,7 @@ from detectors.base import LaneEstimate
 from lanekeep.cameras import CameraRig, RenderSettings
 from lanekeep.record import EpisodeInfo, RerunRecorder
 from lanekeep.scenario import load_scenario
+from lanekeep.sensors import VehicleSignals
 from lanekeep.world import build
 
 BIN = Path(sys.executable).parent
@@ -99,10 +100,13 @@ def make_step(fake, index: int, **changes) -> SimpleNamespace:
         index=index, time_s=0.1 * (index + 1), frames=fake.frames,
         estimates={"hough": estimate, "sliding_window": estimate, "reference": estimate},
         tracked={m: np.zeros(3) for m in MODELS}, probabilities=np.array([0.7, 0.3]),
-        selected=0, output_offset_m=0.05, output_centre=np.zeros(3), reference_m=0.04,
+        track_offsets_m={m: 0.05 for m in MODELS},
+        selected=0, output_offset_m=0.05, output_x_m=4.0, output_centre=np.zeros(3),
+        reference_m=0.04, reference_x_m=6.0,
         reference_repaired=False, steer=0.01, throttle=0.2, truth_offset_m=0.0,
         truth_centre=np.zeros(3), pose=fake.scenario.start_pose(fake.world.road),
         sensed_pose=fake.scenario.start_pose(fake.world.road), speed_mps=15.0,
+        signals=VehicleSignals(15.0, 0.0, 0.0, 0.0, 0.0),
         events=[], tracker_status=dict.fromkeys(MODELS, "updated"),
     )
     step.update(changes)

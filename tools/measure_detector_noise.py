@@ -1,36 +1,61 @@
 """Measure the front detectors' centre-line coefficient noise in the closed loop.
 
-    MUJOCO_GL=egl .venv/bin/python tools/measure_detector_noise.py \
-        clear_straight clear_curve case2_sharp_turn case3_mild_turn_shade_bumps
+    MUJOCO_GL=egl .venv/bin/python tools/measure_detector_noise.py
+
+Measures on the tuning scenarios, every file in tools/tuning/, which `lanekeep bench` does not
+score (it scores every shipped scenario, lanekeep/scenarios/*.toml): tuning the tracker on the
+bench's scenarios would tune it on its test set. Scenario names or files may be given instead;
+a shipped scenario is refused unless --allow-scored is given.
 
 Runs each scenario's episode, collects every valid detection's centre line [c0, c1, c2] minus
 the true centre line at the pose its frame was taken from, and prints the covariance of the
 errors' core (an iterated 97.5% chi-square trim, which keeps ~80%: the tails are heavy) and the
-share of detections a tracker gate would reject with it. The
-measured_coefficient_covariance of estimators/closed_loop_tracker.toml came from this command
-with the four scenarios above.
+share of detections a tracker gate would reject with it, then the result as the TOML to paste
+into estimators/closed_loop_tracker.toml (`measured_coefficient_covariance`). The truth is the
+least-squares quadratic of the exact road centre over the front detectors' own fit window
+(detectors/detectors.toml [profiles.front]), so that the errors are the detectors' and not the
+difference between two windows' quadratic fits of a curving road.
 """
 
 from __future__ import annotations
 
 import argparse
+import sys
+from pathlib import Path
 
 import numpy as np
 from scipy.stats import chi2
 
-from lanekeep.episode import Episode
-from lanekeep.ground_truth import lane_truth
-from lanekeep.scenario import load_scenario
+from lanekeep.scenario import ScenarioError, load_scenario, shipped_scenarios
+
+TUNING_DIR = Path(__file__).resolve().parent / "tuning"
 
 
-def coefficient_errors(name: str) -> list[np.ndarray]:
+def tuning_scenarios() -> list[Path]:
+    """The tuning scenario files, tools/tuning/*.toml, sorted."""
+    return sorted(TUNING_DIR.glob("*.toml"))
+
+
+def front_window() -> tuple[float, float]:
+    """(near, far) of the front detectors' ground window, where they fit their lines."""
+    from detectors.config import load_config
+
+    front = load_config().profiles.front
+    return tuple(sorted((float(front.x_near_m), float(front.x_far_m))))
+
+
+def coefficient_errors(name: str | Path, fit_range_m: tuple[float, float]) -> list[np.ndarray]:
     """Detection minus truth, one row per valid front detection of one episode."""
+    from lanekeep.episode import Episode
+    from lanekeep.ground_truth import lane_truth
+
     scenario = load_scenario(name)
     errors = []
     with Episode(scenario) as episode:
         for _ in range(episode.total_steps):
             step = episode.step()
-            truth = lane_truth(episode.world.road, *step.sensed_pose, scenario.road.ego_lane).center
+            truth = lane_truth(episode.world.road, *step.sensed_pose, scenario.road.ego_lane,
+                               fit_range_m=fit_range_m).center
             for detector in episode.front:
                 centre = episode.estimator.centre_of(step.estimates[detector])
                 if centre is not None:
@@ -39,31 +64,100 @@ def coefficient_errors(name: str) -> list[np.ndarray]:
 
 
 def core_covariance(errors: np.ndarray, quantile: float = 0.975, rounds: int = 5
-                    ) -> tuple[np.ndarray, float]:
-    """Covariance of the errors' core and the share of rows kept in it."""
+                    ) -> tuple[np.ndarray, np.ndarray, float]:
+    """Mean and covariance of the errors' core, and the share of rows kept in it."""
     keep = np.ones(len(errors), bool)
     limit = chi2.ppf(quantile, errors.shape[1])
     for _ in range(rounds):
         mean, cov = errors[keep].mean(0), np.cov(errors[keep].T)
         d = errors - mean
         keep = np.einsum("ij,jk,ik->i", d, np.linalg.inv(cov), d) < limit
-    return np.cov(errors[keep].T), float(keep.mean())
+    return errors[keep].mean(0), np.cov(errors[keep].T), float(keep.mean())
 
 
-def main() -> None:
+def _num(value: float) -> str:
+    """3 significant digits, TOML's float syntax with a short exponent: 3.18e-3."""
+    mantissa, exponent = f"{value:.2e}".split("e")
+    return f"{mantissa}e{int(exponent)}"
+
+
+def toml_block(cov: np.ndarray, count: int, kept: float, names: list[str]) -> str:
+    """The covariance as the lines to paste into estimators/closed_loop_tracker.toml."""
+    rows = "\n".join("  [" + ", ".join(_num(v) for v in row) + "]," for row in cov)
+    return (
+        f"# scenarios: {' '.join(names)}\n"
+        f"# {count:,} detections, the {kept:.0%} core of a robust fit; stds {stds_text(cov)}\n"
+        f"measured_coefficient_covariance = [\n{rows}\n]"
+    )
+
+
+def stds_text(cov: np.ndarray) -> str:
+    """The standard deviations of c0, c1, c2 with their units."""
+    s0, s1, s2 = np.sqrt(np.diag(cov))
+    return f"{100 * s0:.1f} cm, {s1:.3g}, {_num(s2)} /m"
+
+
+def _shown(arg: str) -> str:
+    """A scenario argument as given, or a tuning file relative to the working directory."""
+    try:
+        return str(Path(arg).resolve().relative_to(Path.cwd()))
+    except ValueError:
+        return arg
+
+
+def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
+    """The command line; exits 2 on a shipped (bench-scored) scenario without --allow-scored."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("scenarios", nargs="+")
-    args = parser.parse_args()
-    errors = np.array([e for name in args.scenarios for e in coefficient_errors(name)])
-    cov, kept = core_covariance(errors)
+    parser.add_argument("scenarios", nargs="*",
+                        help="scenario names or files (default: every file in tools/tuning/)")
+    parser.add_argument("--allow-scored", action="store_true",
+                        help="allow shipped scenarios, which `lanekeep bench` scores")
+    args = parser.parse_args(argv)
+    if not args.scenarios:
+        args.scenarios = [str(path) for path in tuning_scenarios()]
+        if not args.scenarios:
+            parser.exit(2, f"error: no tuning scenarios in {TUNING_DIR}\n")
+    shipped = set(shipped_scenarios())
+    for arg in args.scenarios:
+        try:
+            name = load_scenario(arg).name
+        except ScenarioError as err:
+            parser.exit(2, f"error: {err}\n")
+        if (name in shipped or Path(arg).stem in shipped) and not args.allow_scored:
+            parser.exit(2, f"error: {arg} is a shipped scenario, scored by `lanekeep bench`: "
+                           f"tune on tools/tuning/ (or pass --allow-scored)\n")
+    return args
+
+
+def main(argv: list[str] | None = None) -> None:
+    args = parse_args(argv)
+    window = front_window()
+    shipped = set(shipped_scenarios())
+    names = [load_scenario(arg).name for arg in args.scenarios]
+    scored = [name for name in names if name in shipped]
+    print(f"measuring on {len(names)} scenarios: {' '.join(_shown(a) for a in args.scenarios)}")
+    print("  scored by the bench: " + (", ".join(scored) if scored else "none"))
+    print(f"  truth: least-squares quadratic of the road centre over x = {window[0]:g} .. "
+          f"{window[1]:g} m (detectors.toml [profiles.front])")
+    errors_per = []
+    for arg, name in zip(args.scenarios, names, strict=True):
+        errors = coefficient_errors(arg, window)
+        print(f"  {name}: {len(errors)} detections", flush=True)
+        errors_per.extend(errors)
+    errors = np.array(errors_per)
+    mean, cov, kept = core_covariance(errors)
     np.set_printoptions(precision=3, suppress=False)
     print(f"{len(errors)} detections, core {kept:.0%}")
+    print("core mean (bias):", mean)
     print("covariance:\n", cov)
-    print("stds:", np.sqrt(np.diag(cov)))
+    print("stds:", stds_text(cov))
     gate = chi2.ppf(0.99, 3)
     for scale in (1.0, 2.0, 4.0):
         d2 = np.einsum("ij,jk,ik->i", errors, np.linalg.inv(scale * cov), errors)
         print(f"R = {scale:g} x core: {np.mean(d2 > gate):.1%} of detections beyond the 99% gate")
+    print("\nTOML (estimators/closed_loop_tracker.toml):")
+    print(toml_block(cov, len(errors), kept, names))
+    sys.stdout.flush()
 
 
 if __name__ == "__main__":

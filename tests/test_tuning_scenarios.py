@@ -1,0 +1,70 @@
+"""The tuning scenarios (tools/tuning/), on which the closed loop's tracker noise is measured.
+
+They must load and build, and stay apart from the shipped scenarios that `lanekeep bench`
+scores; tools/measure_detector_noise.py refuses a shipped one unless told --allow-scored.
+"""
+
+import importlib.util
+from pathlib import Path
+
+import pytest
+
+from lanekeep.scenario import load_scenario, shipped_scenarios
+from lanekeep.world import build
+
+TOOLS = Path(__file__).resolve().parents[1] / "tools"
+TUNING = sorted((TOOLS / "tuning").glob("*.toml"))
+
+
+def _noise_tool():
+    spec = importlib.util.spec_from_file_location(
+        "measure_detector_noise", TOOLS / "measure_detector_noise.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_there_are_tuning_scenarios():
+    assert len(TUNING) >= 4
+
+
+@pytest.mark.parametrize("path", TUNING, ids=lambda p: p.stem)
+def test_tuning_scenario_loads_and_builds(path):
+    scenario = load_scenario(path)
+    assert scenario.name == path.stem
+    assert "not scored by the bench" in scenario.description
+    build(scenario)  # shadow casters against the sun, segments, markings: checked at build
+
+
+def test_tuning_scenarios_are_not_shipped():
+    shipped = set(shipped_scenarios())
+    names = {load_scenario(path).name for path in TUNING}
+    assert not names & shipped
+    shipped_seeds = {load_scenario(name).seed for name in shipped}
+    assert not {load_scenario(path).seed for path in TUNING} & shipped_seeds
+
+
+def test_noise_tool_defaults_to_the_tuning_scenarios():
+    tool = _noise_tool()
+    args = tool.parse_args([])
+    assert sorted(Path(a) for a in args.scenarios) == TUNING
+    assert not args.allow_scored
+
+
+@pytest.mark.parametrize("arg", ["clear_straight", "case2_sharp_turn"])
+def test_noise_tool_refuses_a_shipped_scenario(arg, capsys):
+    tool = _noise_tool()
+    with pytest.raises(SystemExit) as exit_info:
+        tool.parse_args([str(TUNING[0]), arg])
+    assert exit_info.value.code == 2
+    assert "--allow-scored" in capsys.readouterr().err
+    args = tool.parse_args([arg, "--allow-scored"])
+    assert args.scenarios == [arg] and args.allow_scored
+
+
+def test_noise_tool_refuses_a_shipped_scenario_file():
+    tool = _noise_tool()
+    path = Path(load_scenario("fog").source)
+    with pytest.raises(SystemExit) as exit_info:
+        tool.parse_args([str(path)])
+    assert exit_info.value.code == 2
