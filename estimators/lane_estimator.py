@@ -94,6 +94,9 @@ class EstimatorSettings:
     # detection's lane extrapolated there), the paper's "offset of the vehicle", instead of
     # at each detector's own look-ahead (+4 m front, -4 m rear: different road points).
     mmae_at_car: bool = False
+    # Prefer a model whose track accepted this step's detection over a likelier one whose
+    # track coasts (see `LaneEstimator._choose`); the paper takes the argmax.
+    prefer_accepted: bool = True
     lane_width_prior_m: float = 3.7
     lane_width_gain: float = 0.05  # weight of each two-boundary measurement in the mean
     lane_width_range_m: tuple[float, float] = (2.5, 5.0)  # plausible widths; others ignored
@@ -295,6 +298,8 @@ class LaneEstimator:
         extrapolates; an updated one has just been checked against its own detection.
         """
         order = np.argsort(-np.asarray(probabilities), kind="stable")
+        if not self.settings.prefer_accepted:
+            return int(order[0])
         accepted = [i for i in order if status[self.names[i]] in ACCEPTED]
         if not accepted or order[0] in accepted:
             return int(order[0])

@@ -185,19 +185,20 @@ def _cmd_bench(args: argparse.Namespace) -> int:
                                    args.record_dir,
                                    on_done=lambda done, total: _progress(done, total, "bench"))
     reports = {job.label: report for job, report in zip(jobs, done_reports, strict=True)}
-    print(file=sys.stderr)
-    for name in names:
-        r = reports[name]
-        print(f"\n== {name} (seed {r.seed}, {r.duration_s:.0f} s, wall {r.wall_s:.0f} s) ==")
-        print(r.table())
-    print("\n" + summary_table([reports[n] for n in names]))
-    if args.single_model:
-        print("\n" + single_model_table(names, jobs, reports))
-    print(f"\nbench wall time: {wall:.1f} s for {len(jobs)} episodes "
-          f"with {args.workers} workers")
-    if args.json:
+    if args.json:  # first: a failing table must not lose the episodes
         Path(args.json).write_text(json.dumps({k: r.to_dict() for k, r in reports.items()},
                                               indent=2))
+    main_labels = [job.label for job in jobs[: len(names)]]
+    print(file=sys.stderr)
+    for label in main_labels:
+        r = reports[label]
+        print(f"\n== {label} (seed {r.seed}, {r.duration_s:.0f} s, wall {r.wall_s:.0f} s) ==")
+        print(r.table())
+    print("\n" + summary_table([reports[label] for label in main_labels]))
+    if args.single_model:
+        print("\n" + single_model_table(jobs, reports))
+    print(f"\nbench wall time: {wall:.1f} s for {len(jobs)} episodes "
+          f"with {args.workers} workers")
     return 0
 
 
@@ -232,19 +233,18 @@ def summary_table(reports: list[EpisodeReport]) -> str:
     return "\n".join(lines)
 
 
-def single_model_table(names: list[str], jobs: list[BenchJob],
-                       reports: dict[str, EpisodeReport]) -> str:
+def single_model_table(jobs: list[BenchJob], reports: dict[str, EpisodeReport]) -> str:
     """The closed loop driven by the MMAE beside the same loop driven by each front model
     alone (the paper's "model-only system"): the car's own lateral error and departures."""
     header = f"{'scenario':<28}{'loop':>22}{'car RMS':>9}{'car max':>9}{'depart':>8}"
     lines = ["closed loop: MMAE vs each front model alone", header, "-" * len(header)]
-    for name in names:
-        labels = [name] + [j.label for j in jobs if j.scenario == name and j.front_detectors]
-        for label in labels:
-            r = reports[label]
-            loop = "MMAE" if label == name else label.split("@", 1)[1] + " only"
-            lines.append(f"{name if label == name else '':<28}{loop:>22}{r.car_rms_cm:>9.1f}"
-                         f"{r.car_max_cm:>9.1f}{r.lane_departures:>8d}")
+    for main in (j for j in jobs if j.front_detectors is None):
+        alone = [j for j in jobs if j.scenario == main.scenario and j.front_detectors]
+        for job in [main, *alone]:
+            r = reports[job.label]
+            loop = "MMAE" if job is main else "+".join(job.front_detectors) + " only"
+            lines.append(f"{main.label if job is main else '':<28}{loop:>22}"
+                         f"{r.car_rms_cm:>9.1f}{r.car_max_cm:>9.1f}{r.lane_departures:>8d}")
     lines.append("(car = its true lateral offset from the lane centre, cm)")
     return "\n".join(lines)
 

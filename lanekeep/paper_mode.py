@@ -7,6 +7,8 @@ What changes from our default loop, and why the default differs:
     ours compares each model's Kalman track, carried by odometry to the road point the rear
     camera sees now ("distance_aligned"), since one step is not the ~1 s the car needs to
     drive from the front view to the rear one;
+  - selection: the likeliest model (the paper's decision unit); ours passes over a likelier
+    model whose track coasts this step for one whose track accepted its detection;
   - PID input: the selected model's own detection at its nearest row (the paper feeds the
     model's offset to eq. 9); ours reads the selected model's Kalman track at 8 m and adds its
     heading;
@@ -54,7 +56,7 @@ def estimator_settings(est: EstimationConfig) -> EstimatorSettings:
         return settings
     return replace(settings, residual_mode="one_step_delay", output="select",
                    model_lane="detection", output_at="nearest_row", mmae_input="detection",
-                   mmae_at_car=True)
+                   mmae_at_car=True, prefer_accepted=False)
 
 
 def front_detector_config(name: str, mode: str,

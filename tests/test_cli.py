@@ -35,3 +35,27 @@ def test_malformed_scenario_file_names_the_key(tmp_path, capsys):
     assert main(["render", str(bad), "--out", str(tmp_path)]) == 2
     err = capsys.readouterr().err
     assert "speeed" in err and "bad.toml" in err
+
+
+def test_bench_single_model_adds_a_model_only_loop_per_front_model(tmp_path, capsys):
+    """`--single-model` drives each scenario with each front model alone; the JSON keys those
+    episodes SCENARIO@MODEL; a scenario given by path is reported by its file's stem."""
+    import json
+    from pathlib import Path
+
+    from lanekeep.scenario import load_scenario
+
+    path = tmp_path / "short_straight.toml"
+    path.write_text(Path(load_scenario("clear_straight").source).read_text())
+    out = tmp_path / "bench.json"
+    code = main(["bench", str(path), "--seconds", "0.3", "--workers", "2", "--single-model",
+                 "--mode", "paper", "--json", str(out)])
+    assert code == 0
+    data = json.loads(out.read_text())
+    assert sorted(data) == ["short_straight", "short_straight@hough",
+                            "short_straight@sliding_window"]
+    assert list(data["short_straight@hough"]["sources"]) == [
+        "hough", "hough:track", "fused", "reference"]
+    printed = capsys.readouterr().out
+    assert "closed loop: MMAE vs each front model alone" in printed
+    assert "sliding_window only" in printed and "best track" in printed

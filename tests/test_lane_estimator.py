@@ -33,6 +33,24 @@ def test_one_boundary_is_centred_with_the_lane_width():
     assert estimator.centre_of(LaneEstimate.invalid("none")) is None
 
 
+def test_one_boundary_uses_the_lane_width_the_detections_measured():
+    """The estimator never reads the road's width: two-boundary detections of a 3.3 m lane
+    move its running width from the 3.7 m prior towards 3.3 m, and a one-boundary detection
+    is then centred with it; implausible widths are ignored."""
+    estimator = _estimator()
+    narrow = LaneEstimate(valid=True, offset_m=0.0, x_m=4.0, left=np.array([1.65, 0.0, 0.0]),
+                          right=np.array([-1.65, 0.0, 0.0]))
+    wide = LaneEstimate(valid=True, offset_m=0.0, x_m=4.0, left=np.array([4.0, 0.0, 0.0]),
+                        right=np.array([-4.0, 0.0, 0.0]))
+    for k in range(100):
+        estimator.update({"hough": narrow, "sliding_window": wide}, narrow, _ego(k))
+    assert abs(estimator.lane_width_m - 3.3) < 0.01
+    left_only = LaneEstimate(valid=True, x_m=4.0, left=np.array([1.65, 0.0, 0.0]))
+    assert abs(estimator.centre_of(left_only)[0]) < 0.01
+    estimator.reset()
+    assert estimator.lane_width_m == WIDTH
+
+
 def test_a_steady_lane_is_tracked_and_handed_on_with_its_offset():
     estimator = _estimator()
     laps: list[str] = []
@@ -91,3 +109,25 @@ def test_the_tracker_tuning_file_is_read_strictly():
         closed_loop_tracker(text.replace("r_scale = 4.0", ""))
     with pytest.raises(ConfigError, match="gate_probability"):
         closed_loop_tracker(text + "gate_probability = 1.5\n")
+
+
+def test_paper_settings_hand_on_the_selected_detection_at_its_own_row():
+    """Paper mode's PID input is the selected model's detection as the detector reported it
+    (offset and look-ahead), even when its track's gate rejects it; the MMAE compares every
+    offset at the car (x = 0), the reference's too."""
+    from lanekeep.paper_mode import estimator_settings
+    from lanekeep.scenario import EstimationConfig
+
+    settings = estimator_settings(EstimationConfig(mode="paper"))
+    assert (settings.residual_mode, settings.model_lane, settings.output_at) == (
+        "one_step_delay", "detection", "nearest_row")
+    estimator = LaneEstimator(NAMES, settings, reference_x_m=-4.0)
+    for k in range(10):
+        estimator.update({n: _lane(0.0) for n in NAMES}, _lane(0.0), _ego(k))
+    jump = LaneEstimate(valid=True, offset_m=-1.5, x_m=5.0, left=np.array([3.35, 0.0, 0.0]),
+                        right=np.array([-0.35, 0.0, 0.0]))
+    out = estimator.update({"hough": jump, "sliding_window": _lane(0.0)}, _lane(0.0), _ego(10))
+    assert out.tracker_status == {"hough": "gated", "sliding_window": "updated"}
+    assert out.selected == 0  # the argmax (equal so far: the first), not the accepted one
+    assert (out.offset_m, out.offset_x_m) == (-1.5, 5.0)
+    assert out.reference_x_m == 0.0
