@@ -74,6 +74,7 @@ class StepResult:
     steer: float
     throttle: float
     truth_offset_m: float  # the car's true lateral offset after the period (at `pose`)
+    truth_output_m: float  # the true offset at the output's look-ahead, where frames were taken
     truth_centre: np.ndarray  # true lane centre in the frame of `sensed_pose`
     pose: tuple[float, float, float]  # after the control period
     sensed_pose: tuple[float, float, float]  # where the frames were taken
@@ -301,6 +302,7 @@ class Episode:
             reference_m=selection.reference_m, reference_x_m=x_ref,
             reference_repaired=selection.reference_repaired,
             steer=steer, throttle=throttle, truth_offset_m=car_offset_m,
+            truth_output_m=true_offset(x_out),
             truth_centre=true_centre, pose=(x, y, yaw), sensed_pose=sensed_pose,
             speed_mps=world.car.speed_mps(), signals=signals, events=events,
             tracker_status=dict(estimate.tracker_status),

@@ -14,7 +14,10 @@ class EpisodeTrace:
 
     model_names: list[str]
     time_s: list[float] = field(default_factory=list)
-    truth_m: list[float] = field(default_factory=list)
+    truth_m: list[float] = field(default_factory=list)  # the car's offset (x = 0)
+    truth_ahead_m: list[float] = field(default_factory=list)  # at the output's look-ahead
+    ahead_x_m: float = 0.0
+    reference_x_m: float = 0.0
     model_offsets_m: list[list[float]] = field(default_factory=list)
     track_offsets_m: list[list[float]] = field(default_factory=list)  # each model's own track
     fused_m: list[float] = field(default_factory=list)
@@ -26,6 +29,9 @@ class EpisodeTrace:
         nan = float("nan")
         self.time_s.append(step.time_s)
         self.truth_m.append(step.truth_offset_m)
+        self.truth_ahead_m.append(step.truth_output_m)
+        self.ahead_x_m = step.output_x_m
+        self.reference_x_m = step.reference_x_m
         self.model_offsets_m.append(
             [step.estimates[n].offset_m if step.estimates[n].valid else nan
              for n in self.model_names]
@@ -52,7 +58,9 @@ def write_plots(trace: EpisodeTrace, road, out_dir: Path, title: str) -> list[Pa
     written = []
 
     fig, ax = plt.subplots(figsize=(10, 4.5))
-    ax.plot(t, np.asarray(trace.truth_m) * 100, "k-", lw=2, label="ground truth (x=0)")
+    ax.plot(t, np.asarray(trace.truth_ahead_m) * 100, "k-", lw=2,
+            label=f"ground truth at x = {trace.ahead_x_m:g} m (what the estimates measure)")
+    ax.plot(t, np.asarray(trace.truth_m) * 100, "-", color="0.6", lw=1.2, label="car (x = 0)")
     offsets = np.asarray(trace.model_offsets_m) * 100
     tracks = np.asarray(trace.track_offsets_m) * 100
     for i, name in enumerate(trace.model_names):
@@ -60,7 +68,8 @@ def write_plots(trace: EpisodeTrace, road, out_dir: Path, title: str) -> list[Pa
         ax.plot(t, tracks[:, i], "--", lw=1.2, color=line.get_color(),
                 label=f"model {name} (own track)")
     ax.plot(t, np.asarray(trace.fused_m) * 100, lw=1.8, label="MMAE output")
-    ax.plot(t, np.asarray(trace.reference_m) * 100, ":", lw=1.2, label="reference (rear)")
+    ax.plot(t, np.asarray(trace.reference_m) * 100, ":", lw=1.2,
+            label=f"reference (rear, at x = {trace.reference_x_m:g} m)")
     ax.set(xlabel="time (s)", ylabel="offset (cm, + = car left of centre)", title=title)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8, ncol=3)

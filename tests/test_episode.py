@@ -78,13 +78,23 @@ def test_fused_rmse_within_10cm_on_clear_roads(name):
 
 
 @pytest.mark.slow
-def test_fused_beats_the_best_single_model_on_four_of_five_paper_cases(paper_reports):
-    wins = []
+def test_fused_against_the_models_on_the_paper_cases(paper_reports):
+    """As the paper's Tables 3-4 compare (the MMAE output against each model's own output),
+    the fused output beats the best raw detections in 4 of 5 cases. Like for like, against
+    each model's own Kalman track at the same look-ahead, it does so in 3 of 5 today (case 3
+    and case 5 lose by 0.35 and 0.09 cm): a regression guard, not a target."""
+    raw_wins, track_wins = [], []
     for report in paper_reports.values():
-        models = [v.rmse_cm for k, v in report.sources.items() if k not in ("fused", "reference")]
-        wins.append(report.sources["fused"].rmse_cm <= min(models))
+        sources = report.sources
+        fused = sources["fused"].rmse_cm
+        tracks = [v.rmse_cm for k, v in sources.items() if k.endswith(":track")]
+        raws = [sources[k[: -len(":track")]].rmse_cm
+                for k in sources if k.endswith(":track")]
+        raw_wins.append(fused <= min(raws))
+        track_wins.append(fused <= min(tracks))
     tables = "\n\n".join(f"{n}\n{r.table()}" for n, r in paper_reports.items())
-    assert sum(wins) >= 4, tables
+    assert sum(raw_wins) >= 4, tables
+    assert sum(track_wins) >= 3, tables
     assert all(r.lane_departures == 0 for r in paper_reports.values()), tables
 
 

@@ -104,6 +104,7 @@ def make_step(fake, index: int, **changes) -> SimpleNamespace:
         selected=0, output_offset_m=0.05, output_x_m=4.0, output_centre=np.zeros(3),
         reference_m=0.04, reference_x_m=6.0,
         reference_repaired=False, steer=0.01, throttle=0.2, truth_offset_m=0.0,
+        truth_output_m=0.0,
         truth_centre=np.zeros(3), pose=fake.scenario.start_pose(fake.world.road),
         sensed_pose=fake.scenario.start_pose(fake.world.road), speed_mps=15.0,
         signals=VehicleSignals(15.0, 0.0, 0.0, 0.0, 0.0),
