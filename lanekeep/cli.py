@@ -32,7 +32,7 @@ def _cmd_render(args: argparse.Namespace) -> int:
 
     scenario = load_scenario(args.scenario)
     written = render_snapshot(scenario, Path(args.out), at_s=args.at, offset_m=args.offset,
-                              heading_deg=args.heading)
+                              heading_deg=args.heading, effects=not args.no_effects)
     for path in written:
         print(path)
     return EXIT_OK
@@ -53,6 +53,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--offset", type=float, default=0.0, help="lateral offset from lane centre (m)")
     p.add_argument("--heading", type=float, default=0.0, help="heading error (deg, + = left)")
     p.add_argument("--out", default="out/render", help="output folder")
+    p.add_argument("--no-effects", action="store_true",
+                   help="the bare render, without the scenario's image effects (rain, snow, "
+                        "noise, motion blur, low light)")
     p.set_defaults(func=_cmd_render)
 
     for module in _optional_command_modules():

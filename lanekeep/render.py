@@ -1,4 +1,10 @@
-"""Snapshots of a scenario: front/rear RGB and colourised segmentation PNGs at a road pose."""
+"""Snapshots of a scenario: front/rear RGB and colourised segmentation PNGs at a road pose.
+
+The RGB frames are what the car's cameras deliver: the render with the scenario's image
+effects (rain, snow, noise, motion blur, low light), drawn from the scenario seed as an episode
+draws them, so the snapshot at the start pose is the episode's first frame; `effects=False`
+gives the bare render.
+"""
 
 from __future__ import annotations
 
@@ -9,6 +15,7 @@ import cv2
 import numpy as np
 
 from lanekeep.cameras import CameraRig, RenderSettings
+from lanekeep.conditions import ImageEffects
 from lanekeep.scenario import Scenario
 from lanekeep.world import World, build
 
@@ -38,7 +45,8 @@ def colourise_segmentation(world: World, geom_ids: np.ndarray) -> np.ndarray:
 
 
 def render_snapshot(scenario: Scenario, out_dir: Path, at_s: float | None = None,
-                    offset_m: float = 0.0, heading_deg: float = 0.0) -> list[Path]:
+                    offset_m: float = 0.0, heading_deg: float = 0.0,
+                    effects: bool = True) -> list[Path]:
     """Writes front.png, rear.png, front_seg.png, rear_seg.png; returns their paths."""
     world = build(scenario)
     s = scenario.start.s_m if at_s is None else at_s
@@ -48,9 +56,16 @@ def render_snapshot(scenario: Scenario, out_dir: Path, at_s: float | None = None
     out_dir.mkdir(parents=True, exist_ok=True)
     written = []
     settings = RenderSettings.of(scenario)
+    speed = scenario.start.speed_mps
     with CameraRig(world.model, settings) as rig:
+        rng = np.random.default_rng(scenario.seed)  # as Episode: one stream, cameras in order
+        camera_effects = {cam: ImageEffects(scenario.conditions, settings.height,
+                                            settings.width, rng)
+                          for cam in rig.CAMERA_NAMES}
         for cam in rig.CAMERA_NAMES:
             rgb = rig.render_rgb(world.data, cam)
+            if effects:
+                rgb = camera_effects[cam](rgb, rng, speed_mps=speed)
             seg = colourise_segmentation(world, rig.render_segmentation(world.data, cam))
             for name, image in ((f"{cam}.png", rgb), (f"{cam}_seg.png", seg)):
                 path = out_dir / name

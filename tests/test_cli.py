@@ -22,6 +22,26 @@ def test_render_writes_four_pngs(tmp_path, capsys):
     assert front[600:, :, :].std() > 5  # textured road, not a flat fill
 
 
+def test_render_applies_the_scenarios_image_effects_unless_told_not_to(tmp_path, capsys):
+    """heavy_rain's snapshot is the episode's first frame (streaks, drops, mist), not the sunny
+    render underneath it; --no-effects gives that bare render."""
+    import cv2
+    import numpy as np
+
+    from lanekeep.episode import Episode
+    from lanekeep.scenario import load_scenario
+
+    wet, dry = tmp_path / "effects", tmp_path / "bare"
+    assert main(["render", "heavy_rain", "--out", str(wet)]) == 0
+    assert main(["render", "heavy_rain", "--out", str(dry), "--no-effects"]) == 0
+    with_effects = cv2.imread(str(wet / "front.png"))[..., ::-1]
+    bare = cv2.imread(str(dry / "front.png"))[..., ::-1]
+    assert np.abs(with_effects.astype(int) - bare).mean() > 5.0
+    with Episode(load_scenario("heavy_rain")) as episode:
+        first = episode.step().frames["front"]
+    np.testing.assert_array_equal(with_effects, first)
+
+
 def test_unknown_scenario_is_one_clear_error(capsys):
     assert main(["render", "no_such_scenario"]) == 2
     err = capsys.readouterr().err.strip().splitlines()
