@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -27,6 +27,7 @@ __all__ = ["MarkingPiece", "MarkingStyle", "Road", "SegmentSpec"]
 SEGMENT_KINDS = ("straight", "arc", "clothoid")
 TABLE_STEP_M = 0.1  # spacing of the exact position table
 COARSE_STEP_M = 0.5  # spacing of the nearest-point search table
+LEAD_SEED_OFFSET = 7919  # worn paint before the start and after the end draws its own runs
 _GL_X, _GL_W = np.polynomial.legendre.leggauss(4)  # Gauss-Legendre nodes/weights on [-1, 1]
 _CHUNK = 1_000_000  # query points x coarse samples per argmin block (memory bound)
 
@@ -212,10 +213,32 @@ class Road:
             raise IndexError(f"lane {lane} not in 0..{self.n_lanes - 1}")
         return (lane + 0.5 - 0.5 * self.n_lanes) * self.lane_width_m
 
-    def marking_pieces(self) -> list[MarkingPiece]:
-        """Every strip of paint, ordered by boundary, then s (then r for double lines)."""
+    def marking_pieces(self, lead_m: float = 0.0) -> list[MarkingPiece]:
+        """Every strip of paint, ordered by boundary, then s (then r for double lines).
+
+        `lead_m` > 0 also paints the straight continuations `lead_m` before s = 0 and after
+        the end (`position` extrapolates straight there), each laid out as a road of its own
+        (dashes keep their period across s = 0 and the end; worn paint draws its own runs).
+        The pieces on [0, length_m] do not depend on it.
+        """
         joins = [a for a, _ in self.segment_bounds()[1:]]
         pieces = []
         for i, style in enumerate(self.markings):
-            pieces += layout(style, i, self.boundary_r(i), self.length_m, joins, self.rng_seed)
+            r = self.boundary_r(i)
+            main = layout(style, i, r, self.length_m, joins, self.rng_seed)
+            if lead_m <= 0.0:
+                pieces += main
+                continue
+            period = style.dash_m + style.gap_m if style.kind == "dashed" else 0.0
+            before = math.ceil(lead_m / period) * period if period else lead_m
+            extra = self.rng_seed + LEAD_SEED_OFFSET
+            head = [replace(p, s_start_m=p.s_start_m - before, s_end_m=p.s_end_m - before)
+                    for p in layout(style, i, r, before, (), extra)]
+            tail_at = (math.ceil(self.length_m / period) * period if period
+                       else self.length_m)
+            tail_length = self.length_m + lead_m - tail_at
+            tail = [replace(p, s_start_m=p.s_start_m + tail_at, s_end_m=p.s_end_m + tail_at)
+                    for p in (layout(style, i, r, tail_length, (), extra + 1)
+                              if tail_length > 0.0 else [])]
+            pieces += head + main + tail
         return pieces

@@ -136,12 +136,20 @@ def _asphalt_mesh(road: Road, s0: float, s1: float, right: float, left: float,
     ])
 
 
+def _surface_pieces(road: Road, layout: WorldLayout) -> list[tuple[float, float]]:
+    """The road's segments, with the straight lead before s = 0 and after the end."""
+    bounds = road.segment_bounds()
+    if layout.lead_m <= 0.0:
+        return bounds
+    return [(-layout.lead_m, 0.0), *bounds, (road.length_m, road.length_m + layout.lead_m)]
+
+
 def _add_road_surface(spec: mujoco.MjSpec, road: Road, layout: WorldLayout,
                       grid_step_m: float | None) -> None:
     """Asphalt and gravel ribbons, one mesh per road segment for each."""
     edge_right, edge_left = road.boundary_r(0), road.boundary_r(road.n_lanes)
     asphalt_right, asphalt_left = edge_right - layout.shoulder_m, edge_left + layout.shoulder_m
-    for i, (s0, s1) in enumerate(road.segment_bounds()):
+    for i, (s0, s1) in enumerate(_surface_pieces(road, layout)):
         asphalt = _asphalt_mesh(road, s0, s1, asphalt_right, asphalt_left, layout, grid_step_m)
         add_mesh_geom(spec, f"road_{i}", asphalt, "asphalt", GROUP_WORLD)
         gravel = Ribbon.concatenate(
@@ -164,7 +172,7 @@ def _add_markings(
     bounds = road.segment_bounds()
     starts = np.array([b[0] for b in bounds])
     levels = layout.paint_brightness_levels
-    for piece in road.marking_pieces():
+    for piece in road.marking_pieces(layout.lead_m):
         segment = int(np.searchsorted(starts, piece.s_start_m, side="right") - 1)
         level = int(np.clip(round(piece.brightness * (levels - 1)), 0, levels - 1))
         half = piece.width_m / 2.0

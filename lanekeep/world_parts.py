@@ -28,6 +28,9 @@ class WorldLayout:
     tile_m: float = 4.0  # asphalt texture period
     texture_px: int = 512
     paint_brightness_levels: int = 4  # worn paint is quantised into this many materials
+    # The road continues straight this far before s = 0 and after its end (Road.position
+    # extrapolates there), so the rear camera at the start does not see the asphalt end.
+    lead_m: float = 60.0
 
 
 def add_texture(spec: mujoco.MjSpec, name: str, rgb: np.ndarray) -> None:
