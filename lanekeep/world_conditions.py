@@ -41,7 +41,7 @@ from lanekeep.world_lighting import (
     sun_direction,
 )
 from lanekeep.world_parts import ConditionsInfo, WorldLayout
-from lanekeep.world_roadside import add_bumps, add_shadow_zone, add_snow, add_wet
+from lanekeep.world_roadside import add_bumps, add_shadow_zone, add_snow, add_wet, overlay_alpha
 from lanekeep.world_traffic import add_vehicle
 
 
@@ -59,7 +59,8 @@ def add_conditions(spec: mujoco.MjSpec, scenario: Scenario, road: Road,
         add_car_lights(spec)
     to_sun = sun_direction(cond, road)
     for i, zone in enumerate(cond.shadows):
-        spec.add_material(name=f"cond_shadow_{i}", rgba=[0.0, 0.0, 0.0, zone.darkness],
+        spec.add_material(name=f"cond_shadow_{i}",
+                          rgba=[0.0, 0.0, 0.0, overlay_alpha(zone.darkness)],
                           specular=0.0, shininess=0.0)
         add_shadow_zone(spec, road, zone, i, to_sun, rng, info, layout)
     if cond.speed_bumps_m:
@@ -68,7 +69,8 @@ def add_conditions(spec: mujoco.MjSpec, scenario: Scenario, road: Road,
     if cond.wet > 0.0:
         # At a camera's grazing angle water mirrors the sky: sky-coloured, self-lit, glossy.
         horizon = LIGHTING[cond.time_of_day][3][1]
-        spec.add_material(name="cond_puddle", rgba=[*(0.4 * np.array(horizon)), 0.55],
+        spec.add_material(name="cond_puddle",
+                          rgba=[*(0.4 * np.array(horizon)), overlay_alpha(0.55)],
                           emission=0.3, specular=0.9, shininess=1.0)
         add_wet(spec, road, cond, rng, info, layout)
     if cond.snow > 0.0:

@@ -26,7 +26,22 @@ from lanekeep.world_parts import (
 )
 
 BUMP_LENGTH_M = 0.6  # chord of a speed bump along the road
+BUMP_STRIPE_RAISE_M = 0.004  # the stripes (cylinders) stand this much proud of the bump
+DRAPE_MARGIN_M = 0.004  # a shadow draped over a bump floats this far above its stripes
+DRAPE_STRIPS = 12  # flat strips a draped shadow follows a bump's arc with (sagitta < 1 mm)
+_MIN_PIECE_M2 = 1e-6
 
+
+def overlay_alpha(opacity: float) -> float:
+    """Material alpha of a translucent overlay that should look `opacity` opaque.
+
+    MuJoCo's renderer (mjr_render, unless the scene flag mjRND_ADDITIVE is set) draws every
+    transparent geom twice, front to back and then back to front, with depth writes off: a flat
+    overlay of alpha a blends over the asphalt twice and lets (1 - a)^2 through, not 1 - a (a
+    shadow of darkness 0.6 left 0.16 of the light, not 0.4). Two blends of one colour are one
+    blend of alpha 1 - (1 - a)^2, so this alpha gives `opacity` for any overlay colour.
+    """
+    return 1.0 - math.sqrt(1.0 - float(opacity))
 
 
 def _convex_hull(points_xy: np.ndarray) -> np.ndarray:
@@ -37,17 +52,73 @@ def _convex_hull(points_xy: np.ndarray) -> np.ndarray:
     return hull if area > 0 else hull[::-1]
 
 
-def _polygon_mesh(polygons: list[np.ndarray], z_m: float) -> Ribbon:
-    """Triangle fans of convex CCW polygons at height z, one mesh."""
+def _polygon_mesh(polygons: list[np.ndarray], z_m: float | None = None) -> Ribbon:
+    """Triangle fans of convex CCW polygons, one mesh: 2D polygons at height z, or 3D ones."""
     verts, faces, offset = [], [], 0
     for poly in polygons:
         n = len(poly)
-        verts.append(np.c_[poly, np.full(n, z_m)])
+        verts.append(poly if z_m is None else np.c_[poly, np.full(n, z_m)])
         i = np.arange(1, n - 1)
         faces.append(np.stack([np.zeros_like(i), i, i + 1], 1) + offset)
         offset += n
     v = np.concatenate(verts)
     return Ribbon(v, np.concatenate(faces).astype(np.int32), v[:, :2] / 4.0)
+
+
+def _area(poly: np.ndarray) -> float:
+    if len(poly) < 3:
+        return 0.0
+    x, y = poly[:, 0], poly[:, 1]
+    return 0.5 * float(np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y))
+
+
+def _clip(poly: np.ndarray, normal: np.ndarray, offset: float) -> np.ndarray:
+    """The part of a convex polygon (n, 2) where normal . p <= offset (Sutherland-Hodgman)."""
+    if len(poly) == 0:
+        return poly
+    d = poly @ normal - offset
+    out = []
+    for k in range(len(poly)):
+        j = (k + 1) % len(poly)
+        if d[k] <= 0.0:
+            out.append(poly[k])
+        if (d[k] < 0.0 < d[j]) or (d[j] < 0.0 < d[k]):
+            out.append(poly[k] + d[k] / (d[k] - d[j]) * (poly[j] - poly[k]))
+    return np.array(out, dtype=float).reshape(-1, 2)
+
+
+def _minus(poly: np.ndarray, hole: np.ndarray) -> list[np.ndarray]:
+    """Convex pieces of a convex polygon outside a convex CCW polygon `hole`."""
+    pieces, rest = [], poly
+    for a, b in zip(hole, np.roll(hole, -1, axis=0), strict=True):
+        normal = np.array([b[1] - a[1], a[0] - b[0]])  # outward: right of a CCW edge
+        if normal @ normal < 1e-12:
+            continue
+        outside = _clip(rest, -normal, -float(normal @ a))
+        if _area(outside) > _MIN_PIECE_M2:
+            pieces.append(outside)
+        rest = _clip(rest, normal, float(normal @ a))
+        if _area(rest) <= _MIN_PIECE_M2:
+            break
+    return pieces
+
+
+def disjoint_pieces(polygons: list[np.ndarray]) -> list[np.ndarray]:
+    """Convex CCW pieces that cover the union of convex CCW polygons exactly once.
+
+    Overlapping triangles of one translucent mesh blend once each: where two casters' shadows
+    overlapped, the road was shaded twice. Each polygon loses what earlier ones cover.
+    """
+    out = []
+    for i, poly in enumerate(polygons):
+        pieces = [np.asarray(poly, dtype=float)]
+        lo, hi = pieces[0].min(0), pieces[0].max(0)
+        for hole in polygons[:i]:
+            if (hole.min(0) > hi).any() or (hole.max(0) < lo).any():
+                continue
+            pieces = [p for piece in pieces for p in _minus(piece, hole)]
+        out.extend(pieces)
+    return out
 
 
 def cast_shadow(points: np.ndarray, to_sun: np.ndarray) -> np.ndarray:
@@ -143,8 +214,9 @@ def add_shadow_zone(spec: mujoco.MjSpec, road: Road, zone: ShadowZone, index: in
         s += length + gap
         k += 1
     if polygons:
-        add_mesh_geom(spec, f"cond_shadow_{index}", _polygon_mesh(polygons, OVERLAY_Z_M),
-                  f"cond_shadow_{index}", GROUP_SHADOW)
+        add_mesh_geom(spec, f"cond_shadow_{index}",
+                      _polygon_mesh(disjoint_pieces(polygons), OVERLAY_Z_M),
+                      f"cond_shadow_{index}", GROUP_SHADOW)
         info.shadow_polygons.extend(polygons)
 
 
@@ -177,9 +249,69 @@ def add_bumps(spec: mujoco.MjSpec, road: Road, cond: Conditions, info: Condition
             spec.worldbody.add_geom(
                 name=f"{name}_stripe_{j + n_stripes}", type=mujoco.mjtGeom.mjGEOM_CYLINDER,
                 group=GROUP_WORLD, pos=[*sxy, h - radius], quat=quat.tolist(),
-                size=[radius + 0.004, 0.15, 0], rgba=[0.05, 0.05, 0.05, 1.0],
+                size=[radius + BUMP_STRIPE_RAISE_M, 0.15, 0], rgba=[0.05, 0.05, 0.05, 1.0],
                 contype=0, conaffinity=0,
             )
+        _drape_shadows(spec, xy, th, half, h, radius)
+
+
+def _drape_shadows(spec: mujoco.MjSpec, centre: np.ndarray, heading: float, half_width: float,
+                   height: float, radius: float) -> None:
+    """Lay the shadow overlays already in the spec over a bump instead of under it.
+
+    The overlays lie flat at OVERLAY_Z_M, under a bump's top (~0.08 m): a bump in the shade
+    stayed sunlit. Over the bump's footprint (where its stripes rise above the overlay, across
+    its length) each overlay triangle is cut out and replaced by strips lifted onto the arc.
+    """
+    t_hat = np.array([math.cos(heading), math.sin(heading)])
+    n_hat = np.array([-math.sin(heading), math.cos(heading)])
+    top = radius + BUMP_STRIPE_RAISE_M  # radius of the stripes, the bump's outermost surface
+    below = radius - height  # depth of the cylinder's axis under the ground
+    rise = OVERLAY_Z_M - DRAPE_MARGIN_M + below  # axis to the height where the drape lands
+    if rise >= top:
+        return  # the bump stays under the overlay
+    reach = math.sqrt(top**2 - rise**2)  # half chord (along the road) that needs the drape
+    corners = np.array([[-1, -1], [1, -1], [1, 1], [-1, 1]], dtype=float)  # CCW
+    rect = centre + corners[:, :1] * reach * t_hat + corners[:, 1:] * half_width * n_hat
+    cuts = np.linspace(-reach, reach, DRAPE_STRIPS + 1)
+
+    def lift(poly: np.ndarray) -> np.ndarray:
+        d = (poly - centre) @ t_hat
+        z = np.sqrt(np.maximum(top**2 - d**2, 0.0)) - below + DRAPE_MARGIN_M
+        return np.c_[poly, np.maximum(z, OVERLAY_Z_M)]
+
+    for mesh in spec.meshes:
+        if not mesh.name.startswith("cond_shadow_"):
+            continue
+        verts = np.asarray(mesh.uservert, dtype=float).reshape(-1, 3)
+        faces = np.asarray(mesh.userface, dtype=int).reshape(-1, 3)
+        lo, hi = rect.min(0), rect.max(0)
+        keep, draped = [], []
+        for face in faces:
+            tri = verts[face]
+            xy = tri[:, :2]
+            flat = (np.abs(tri[:, 2] - OVERLAY_Z_M) < 1e-6).all()  # not draped over a bump yet
+            if not flat or (xy.min(0) > hi).any() or (xy.max(0) < lo).any():
+                keep.append(tri)
+                continue
+            keep.extend(np.c_[p, np.full(len(p), OVERLAY_Z_M)] for p in _minus(xy, rect))
+            inside = xy
+            for a, b in zip(rect, np.roll(rect, -1, axis=0), strict=True):
+                normal = np.array([b[1] - a[1], a[0] - b[0]])
+                inside = _clip(inside, normal, float(normal @ a))
+            if _area(inside) <= _MIN_PIECE_M2:
+                continue
+            for d0, d1 in zip(cuts[:-1], cuts[1:], strict=True):
+                strip = _clip(inside, t_hat, d1 + float(t_hat @ centre))
+                strip = _clip(strip, -t_hat, -(d0 + float(t_hat @ centre)))
+                if _area(strip) > _MIN_PIECE_M2:
+                    draped.append(lift(strip))
+        if not draped:
+            continue
+        mesh_arrays = _polygon_mesh(keep + draped)
+        mesh.uservert = mesh_arrays.vertices.astype(np.float32).ravel().tolist()
+        mesh.userface = mesh_arrays.faces.ravel().tolist()
+        mesh.usertexcoord = mesh_arrays.texcoords.astype(np.float32).ravel().tolist()
 
 
 def add_wet(spec: mujoco.MjSpec, road: Road, cond: Conditions, rng: np.random.Generator,
@@ -213,7 +345,8 @@ def add_snow(spec: mujoco.MjSpec, road: Road, cond: Conditions,
     tex = textures.gravel(rng)
     snow = np.clip(235 + (tex.astype(np.int16) - tex.mean()) * 0.25, 0, 255).astype(np.uint8)
     add_texture(spec, SNOW_TEXTURE, snow)
-    spec.add_material(name="cond_snowdrift", rgba=[0.95, 0.96, 0.98, 0.35 + 0.55 * cond.snow],
+    spec.add_material(name="cond_snowdrift",
+                      rgba=[0.95, 0.96, 0.98, overlay_alpha(0.35 + 0.55 * cond.snow)],
                       specular=0.1, shininess=0.1)
     inner = 0.25 + 0.9 * (1.0 - cond.snow)  # distance kept clear of the edge lines (m)
     for i, (s0, s1) in enumerate(road.segment_bounds()):
