@@ -23,10 +23,8 @@ work is split by concern: lanekeep/world_lighting.py (car lights), world_roadsid
     Scenes without fog put it beyond the far clip plane, so the render flag can stay on.
   - Snow: white verges (the grass and gravel materials use the snow texture made here) and snow
     drifts over the asphalt shoulders.
-  - Other vehicles: cars, vans and trucks built from primitives (lanekeep/vehicle_assets.py:
-    wheels on the ground, windows, lights, contact and cast shadows) on mocap bodies moved
-    along their lanes by `update_dynamic(world, t_s)`; `occluded_marking_share` measures how
-    much paint they hide.
+  - Other vehicles: mocap bodies (body box + cabin + axles) moved along their lanes by
+    `update_dynamic(world, t_s)`; `occluded_marking_share` measures how much paint they hide.
 """
 
 from __future__ import annotations
