@@ -1,18 +1,26 @@
 """`lanekeep detect` (classical detectors on real photos) and `lanekeep calibrate`.
 
 Thin: argument parsing and output; the work is in detectors/ and lanekeep/calibration.py.
-Exit codes: 0 success, 2 bad input (missing or unreadable image, too few chessboards).
+Images are read by lanekeep/image_io.py, which rejects missing, empty, truncated and corrupt
+files. `detect` checks every input (and the overlay folder) before it runs anything: one bad input
+and nothing is detected or written.
+Exit codes: 0 success, 1 a failure while running (an overlay that could not be written),
+2 bad input (a missing, empty, truncated, corrupt or wrongly sized image, an output folder that
+cannot be written, too few chessboards); each bad input is one "lanekeep CMD: error:" line.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import os
+import secrets
 import sys
+import tempfile
 import time
 from pathlib import Path
 
-EXIT_OK, EXIT_BAD_INPUT = 0, 2
+EXIT_OK, EXIT_FAILURE, EXIT_BAD_INPUT = 0, 1, 2
 MIN_IMAGE_PX = 64
 
 
@@ -37,32 +45,135 @@ def _overlay(image, camera, estimate, lanes, h_samples, horizon: float):
     return out
 
 
+def _output_dir_problem(folder: str) -> str | None:
+    """Why `folder` cannot become a writable folder, checked without creating anything."""
+    p = Path(folder)
+    if p.exists():
+        if not p.is_dir():
+            return f"{folder}: exists and is not a folder"
+        existing = p
+    else:
+        existing = p.parent
+        while not existing.exists() and existing != existing.parent:
+            existing = existing.parent
+        if not existing.is_dir():
+            return f"{folder}: cannot be created: {existing} is not a folder"
+    if not os.access(existing, os.W_OK | os.X_OK):
+        return f"{folder}: cannot write there: {existing} is not writable"
+    return None
+
+
+def _make_output_dir(folder: str) -> str | None:
+    """Create `folder` and prove it takes a file; the problem, or None."""
+    try:
+        Path(folder).mkdir(parents=True, exist_ok=True)
+        with tempfile.NamedTemporaryFile(dir=folder, prefix=".lanekeep-probe-"):
+            pass
+    except OSError as err:
+        return f"{folder}: cannot write there: {err.strerror or err}"
+    return None
+
+
+def _temp_beside(path: Path) -> tuple[int, Path]:
+    """A new file next to `path` (same folder, so os.replace is atomic), mode 0666 & ~umask."""
+    while True:
+        tmp = path.parent / f".{path.name}.{secrets.token_hex(4)}.tmp"
+        try:
+            return os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666), tmp
+        except FileExistsError:
+            continue
+
+
+def _write_atomically(path: Path, data: bytes) -> None:
+    """Write `data` to `path` via a temporary file in the same folder and os.replace."""
+    fd, tmp = _temp_beside(path)
+    try:
+        with os.fdopen(fd, "wb") as f:
+            f.write(data)
+        os.replace(tmp, path)
+    finally:
+        tmp.unlink(missing_ok=True)
+
+
+def _overlay_path(folder: str, image: str) -> Path:
+    return Path(folder) / (Path(image).stem + ".png")
+
+
+def _input_problems(args: argparse.Namespace, camera_file) -> list[str]:
+    """Every problem with the inputs and outputs of `detect`, found before anything runs."""
+    from lanekeep.image_io import read_image
+
+    problems = []
+    if args.overlay:
+        problem = _output_dir_problem(args.overlay)
+        if problem:
+            problems.append(problem)
+    for path in args.images:
+        try:
+            h, w = read_image(path).shape[:2]
+        except ValueError as err:
+            if getattr(args, "debug", False):  # `lanekeep --debug`: the exception, traceback
+                raise
+            problems.append(str(err))
+            continue
+        if h < MIN_IMAGE_PX or w < MIN_IMAGE_PX:
+            problems.append(f"{path}: image is {w}x{h}, too small for lane detection "
+                            f"(at least {MIN_IMAGE_PX}x{MIN_IMAGE_PX})")
+        elif camera_file is not None and (w, h) != (camera_file.width, camera_file.height):
+            problems.append(
+                f"{path}: image is {w}x{h} but camera file {args.camera} is calibrated for "
+                f"{camera_file.width}x{camera_file.height} (calibrate at this size, or give "
+                f"images of that size)")
+    if args.overlay and not problems:
+        # Two inputs with one stem would overwrite each other's overlay; an input inside the
+        # overlay folder could be overwritten by its own.
+        seen: dict[Path, str] = {}
+        for path in args.images:
+            target = _overlay_path(args.overlay, path).resolve()
+            source = Path(path).resolve()
+            if target == source:
+                problems.append(f"{path}: its overlay {_overlay_path(args.overlay, path)} "
+                                f"would overwrite the image itself")
+            elif seen.setdefault(target, str(source)) != str(source):
+                problems.append(f"{path}: its overlay {_overlay_path(args.overlay, path)} "
+                                f"would overwrite that of {seen[target]}")
+    return problems
+
+
 def cmd_detect(args: argparse.Namespace) -> int:
     import cv2
 
     from detectors.config import load_config
     from detectors.registry import make_detector
     from detectors.tusimple import estimate_lanes, h_samples_for, record
-    from lanekeep.calibration import read_image
     from lanekeep.camera_file import camera_for_image, read_camera_file
+    from lanekeep.image_io import read_image
 
     try:
         config = load_config(args.config)
         camera_file = read_camera_file(args.camera) if args.camera else None
     except (OSError, ValueError) as err:
+        if getattr(args, "debug", False):
+            raise
+        if isinstance(err, OSError) and err.filename:
+            return _error("detect", f"{err.filename}: cannot read it: {err.strerror or err}")
         return _error("detect", str(err))
     dash = config.dashcam
-    if args.overlay:
-        Path(args.overlay).mkdir(parents=True, exist_ok=True)
+    # All inputs first: a bad one stops the command before any detection or output.
+    problems = _input_problems(args, camera_file)
+    if not problems and args.overlay:
+        problem = _make_output_dir(args.overlay)
+        problems += [problem] if problem else []
+    if problems:
+        for problem in problems:
+            _error("detect", problem)
+        return EXIT_BAD_INPUT
     for path in args.images:
         try:
-            image = read_image(path)
+            image = read_image(path)  # checked above; changed since, it is still an error
         except ValueError as err:
             return _error("detect", str(err))
         h, w = image.shape[:2]
-        if h < MIN_IMAGE_PX or w < MIN_IMAGE_PX:
-            return _error("detect", f"{path}: image is {w}x{h}, too small for lane detection "
-                                    f"(at least {MIN_IMAGE_PX}x{MIN_IMAGE_PX})")
         camera, cam_file, horizon = camera_for_image(
             image, camera_file, dash.hfov_deg, dash.height_m, dash.horizon_fraction,
             dash.min_horizon_fraction, dash.max_horizon_fraction)
@@ -86,21 +197,37 @@ def cmd_detect(args: argparse.Namespace) -> int:
                 "confidence": estimate.confidence, "reason": estimate.reason,
                 "horizon_row": horizon, "run_time_ms": round(ms, 2),
             }
-        print(json.dumps(line))
+        print(json.dumps(line), flush=True)
         if args.overlay:
-            png = Path(args.overlay) / (Path(path).stem + ".png")
-            cv2.imwrite(str(png), _overlay(image, camera, estimate, lanes, h_samples, horizon))
+            png = _overlay_path(args.overlay, path)
+            ok, encoded = cv2.imencode(
+                ".png", _overlay(image, camera, estimate, lanes, h_samples, horizon))
+            try:
+                if not ok:
+                    raise OSError("OpenCV cannot encode the overlay")
+                _write_atomically(png, encoded.tobytes())
+            except OSError as err:
+                print(f"lanekeep detect: error: {png}: cannot write the overlay: "
+                      f"{getattr(err, 'strerror', None) or err}", file=sys.stderr)
+                return EXIT_FAILURE
     return EXIT_OK
 
 
 def cmd_calibrate(args: argparse.Namespace) -> int:
-    from lanekeep.calibration import CalibrationError, calibrate, parse_pattern, read_image
+    from lanekeep.calibration import CalibrationError, calibrate, parse_pattern
     from lanekeep.camera_file import write_camera_file
+    from lanekeep.image_io import read_image
 
     try:
         pattern = parse_pattern(args.pattern)
     except ValueError as err:
         return _error("calibrate", str(err))
+    out = Path(args.out)
+    if out.is_dir():
+        return _error("calibrate", f"{args.out}: is a folder; --out names the camera file")
+    problem = _output_dir_problem(str(out.parent))
+    if problem:
+        return _error("calibrate", f"--out {args.out}: {problem}")
     images, unreadable = [], []
     for path in args.images:
         try:
@@ -114,9 +241,20 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
             print(f"not used: {name}: {why}", file=sys.stderr)
         return _error("calibrate", str(err))
     cam = result.camera
-    write_camera_file(args.out, cam, comment=(
-        f"lanekeep calibrate: {len(result.used)} images, pattern {args.pattern}, "
-        f"reprojection RMS {result.rms_px:.3f} px"))
+    try:  # a temporary file renamed into place: never a half-written camera file
+        out.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = _temp_beside(out)
+        os.close(fd)
+        try:
+            write_camera_file(tmp, cam, comment=(
+                f"lanekeep calibrate: {len(result.used)} images, pattern {args.pattern}, "
+                f"reprojection RMS {result.rms_px:.3f} px"))
+            os.replace(tmp, out)
+        finally:
+            tmp.unlink(missing_ok=True)
+    except OSError as err:
+        return _error("calibrate", f"{args.out}: cannot write the camera file: "
+                                   f"{err.strerror or err}")
     print(f"reprojection RMS {result.rms_px:.3f} px over {len(result.used)} images")
     print(f"fx {cam.fx:.2f} fy {cam.fy:.2f} cx {cam.cx:.2f} cy {cam.cy:.2f} "
           f"distortion {', '.join(f'{d:.4g}' for d in cam.distortion)}")
@@ -134,10 +272,16 @@ def register(subparsers) -> None:
         "detect", help="run a classical lane detector on real road photos",
         description="Without --camera the camera is an unknown 1.5 m high dashcam with a "
                     "60 deg horizontal field of view whose pitch is taken from each image's "
-                    "vanishing point (detectors.toml [dashcam]).")
-    p.add_argument("images", nargs="+", help="image files (PNG, JPEG)")
+                    "vanishing point (detectors.toml [dashcam]). All images are checked before "
+                    "any is processed: if one is missing, empty, truncated, corrupt, not an "
+                    "image, too small or (with --camera) not the camera file's size, or the "
+                    "--overlay folder cannot be written, each problem is one error line, "
+                    "nothing is detected or written, and the exit code is 2.")
+    p.add_argument("images", nargs="+",
+                   help="image files (PNG, JPEG; truncated or corrupt ones are rejected)")
     p.add_argument("--detector", choices=known_detectors(), default="sliding_window")
-    p.add_argument("--camera", help="camera TOML (intrinsics, distortion, height_m, pitch_deg)")
+    p.add_argument("--camera", help="camera TOML (intrinsics, distortion, height_m, pitch_deg); "
+                                     "every image must have its width x height")
     p.add_argument("--config", help="detectors TOML (default: the shipped, tuned one)")
     p.add_argument("--format", choices=("json", "tusimple"), default="json")
     p.add_argument("--overlay", help="folder for PNGs with the detected lanes drawn")
