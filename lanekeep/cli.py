@@ -1,6 +1,8 @@
 """The `lanekeep` command line: thin argument parsing over library calls; main() returns a code.
 
 Exit codes: 0 success, 1 a failure while running, 2 bad input (arguments, files, scenarios).
+An error is one line on stderr, "lanekeep: error: ...", naming the file and key or the option;
+`lanekeep --debug ...` lets the exception through instead (with its traceback).
 """
 
 from __future__ import annotations
@@ -42,6 +44,9 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="lanekeep", description="Headless closed-loop lane-keeping testbed on MuJoCo."
     )
+    parser.add_argument("--debug", action="store_true",
+                        help="on an error, raise the exception (with its traceback) instead of "
+                             "printing one line")
     sub = parser.add_subparsers(dest="command", required=True)
 
     p = sub.add_parser("scenarios", help="list the shipped scenarios")
@@ -82,15 +87,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parser.parse_args(argv)
     try:
         return int(args.func(args))
-    except ConfigError as err:
-        print(f"lanekeep: error: {err}", file=sys.stderr)
-        return EXIT_BAD_INPUT
-    except FileNotFoundError as err:
-        print(f"lanekeep: error: {err}", file=sys.stderr)
-        return EXIT_BAD_INPUT
-    except RuntimeError as err:
-        print(f"lanekeep: error: {err}", file=sys.stderr)
-        return EXIT_FAILURE
+    except (ConfigError, FileNotFoundError, RuntimeError) as err:
+        if args.debug:
+            raise
+        message = " ".join(str(err).split())  # one line, whatever the message holds
+        print(f"lanekeep: error: {message}", file=sys.stderr)
+        return EXIT_FAILURE if isinstance(err, RuntimeError) else EXIT_BAD_INPUT
 
 
 if __name__ == "__main__":

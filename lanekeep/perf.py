@@ -5,8 +5,10 @@ image effects, its detectors and estimators), stage by stage from the episode's 
 `StageClock`, with recording off and then on; physics alone; and bench throughput with one
 and two worker processes through the same code as `lanekeep bench`.
 
-JSON keys (stable; times are wall-clock on this machine):
-  lanekeep_version, scenario, seed, cpus   what was measured where
+JSON keys (stable; times are wall-clock on this machine; strict JSON, null for no value):
+  schema_version, lanekeep_version, scenario_sha256, seed   the file format, the package, the
+                               scenario file's SHA-256 and seed (lanekeep/report_json.py)
+  scenario, cpus               what was measured where
   cameras                      {"front": "1280x720", "rear": "1280x720"}
   front_detectors, reference_detector
   seconds                      simulated seconds of each timed loop (after one warm-up step)
@@ -33,7 +35,6 @@ JSON keys (stable; times are wall-clock on this machine):
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import tempfile
 import time
@@ -157,11 +158,18 @@ def _cmd_perf(args) -> int:
                               ("--bench-episodes", args.bench_episodes, args.bench_episodes >= 0)):
         if not ok:
             raise ConfigError("", option, f"out of range: {value}")
+    from lanekeep.cli_episode import check_scenario
+    from lanekeep.scenario import load_scenario
+
+    scenario = load_scenario(args.scenario)
+    check_scenario(scenario)  # a bad scenario: one line, before any loop
     results = measure(args.scenario, args.seconds, args.repeats, args.bench_episodes,
                       args.bench_seconds)
     print(format_results(results))
     if args.json:
-        Path(args.json).write_text(json.dumps(results, indent=2))
+        from lanekeep.report_json import with_metadata, write_json
+
+        write_json(args.json, with_metadata(results, scenario))
         print(f"wrote {args.json}")
     return 0
 

@@ -16,7 +16,8 @@ import numpy as np
 
 from lanekeep.cameras import CameraRig, RenderSettings
 from lanekeep.conditions import ImageEffects
-from lanekeep.scenario import Scenario
+from lanekeep.config_io import ConfigError
+from lanekeep.scenario import Scenario, ScenarioError
 from lanekeep.world import World, build
 
 
@@ -47,11 +48,19 @@ def colourise_segmentation(world: World, geom_ids: np.ndarray) -> np.ndarray:
 def render_snapshot(scenario: Scenario, out_dir: Path, at_s: float | None = None,
                     offset_m: float = 0.0, heading_deg: float = 0.0,
                     effects: bool = True) -> list[Path]:
-    """Writes front.png, rear.png, front_seg.png, rear_seg.png; returns their paths."""
-    world = build(scenario)
+    """Writes front.png, rear.png, front_seg.png, rear_seg.png; returns their paths.
+
+    Raises:
+      ConfigError: `at_s` is off the road (key "--at"); ScenarioError: the start is.
+    """
     s = scenario.start.s_m if at_s is None else at_s
-    if not 0.0 <= s <= world.road.length_m:
-        raise ValueError(f"--at {s} is outside the road (0..{world.road.length_m:.0f} m)")
+    length = scenario.road.length_m
+    if not 0.0 <= s <= length:  # before the build (~1 s) and before any file is written
+        where = f"is outside the road (0..{length:g} m)"
+        if at_s is None:
+            raise ScenarioError(scenario.source or scenario.name, "start.s_m", f"{s:g} m {where}")
+        raise ConfigError("", "--at", f"{s:g} m {where}")
+    world = build(scenario)
     place_on_road(world, s, offset_m, heading_deg)
     out_dir.mkdir(parents=True, exist_ok=True)
     written = []

@@ -13,6 +13,7 @@ MuJoCo collides meshes by their convex hull, which for a curved ribbon is meanin
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass
 
 import mujoco
@@ -22,7 +23,7 @@ from lanekeep import textures
 from lanekeep.cameras import GROUP_MARKING, GROUP_WORLD
 from lanekeep.road import Road
 from lanekeep.road_mesh import Ribbon, ribbon
-from lanekeep.scenario import Scenario
+from lanekeep.scenario import Scenario, ScenarioError
 from lanekeep.vehicle import Car
 from lanekeep.world_appearance import MODEL_EXTENT_M, Lighting, appearance_of
 from lanekeep.world_conditions import add_conditions
@@ -224,18 +225,44 @@ def build_spec(
     return spec, marking_names, add_conditions(spec, scenario, road, layout)
 
 
+# "conditions.vehicles[1].lane = 5 not in 0..1", "conditions.shadows[0]: with this sun ...":
+# a build-time message that starts with the key it is about.
+_KEYED_MESSAGE = re.compile(r"(?P<key>[A-Za-z_]\w*(?:\[\d+\])*(?:\.[A-Za-z_]\w*(?:\[\d+\])*)*)"
+                            r"\s*[:=]\s*(?P<message>.+)", re.DOTALL)
+
+
+def scenario_error(scenario: Scenario, err: ValueError) -> ScenarioError:
+    """A ValueError raised while building `scenario`'s world as the ScenarioError that names
+    the scenario's file and, where the message starts with one, the key."""
+    text = str(err)
+    match = _KEYED_MESSAGE.fullmatch(text)
+    key, message = (match["key"], match["message"]) if match else ("", text)
+    return ScenarioError(scenario.source or scenario.name, key, message)
+
+
 def build(scenario: Scenario, layout: WorldLayout | None = None) -> World:
-    """Compile a scenario into a ready-to-step World with the car at its start pose."""
-    road = scenario.build_road()
-    spec, marking_names, conditions = build_spec(scenario, road, layout)
-    model = spec.compile()
+    """Compile a scenario into a ready-to-step World with the car at its start pose.
+
+    Raises:
+      ScenarioError: a check across the scenario's fields failed (a speed bump beyond the
+        road's end, a vehicle in a lane that does not exist, shadows the sun cannot cast, a
+        control period that is no whole number of physics steps).
+    """
     try:
-        physics_steps(scenario.control_period_s, model.opt.timestep)
-    except ValueError:
-        raise ValueError(
-            f"control_period_s = {scenario.control_period_s} is not an integer multiple of the "
-            f"physics timestep {model.opt.timestep} s"
-        ) from None
+        road = scenario.build_road()
+        spec, marking_names, conditions = build_spec(scenario, road, layout)
+        model = spec.compile()
+        try:
+            physics_steps(scenario.control_period_s, model.opt.timestep)
+        except ValueError:
+            raise ValueError(
+                f"control_period_s = {scenario.control_period_s} is not an integer multiple of "
+                f"the physics timestep {model.opt.timestep} s"
+            ) from None
+    except ScenarioError:
+        raise
+    except ValueError as err:
+        raise scenario_error(scenario, err) from err
     marking_boundary = np.full(model.ngeom, -1, dtype=np.int32)
     for name, boundary in marking_names.items():
         marking_boundary[model.geom(name).id] = boundary
