@@ -124,7 +124,8 @@ def run_episode(scenario_name: str, seed: int | None = None, seconds: float | No
         if progress:
             print(file=sys.stderr)
         if not report.completed:
-            print("interrupted: writing the partial report", file=sys.stderr)
+            print(f"stopped ({report.stop_reason}): writing the partial report",
+                  file=sys.stderr)
         if plots_dir:
             write_plots(trace, episode.world.road, Path(plots_dir), scenario.name)
     return report
@@ -150,7 +151,9 @@ def _cmd_run(args: argparse.Namespace) -> int:
     print(report.table())
     if args.json:
         write_json(args.json, report_document(report, scenario))
-    return 0 if report.completed else 130
+    if report.completed:
+        return 0
+    return 130 if report.stop_reason == "interrupted" else 1
 
 
 def _bench_one(job: BenchJob, seconds: float | None, plots: str | None,

@@ -35,7 +35,7 @@ from lanekeep.record import EpisodeInfo, NullRecorder, Recorder
 from lanekeep.scenario import Scenario
 from lanekeep.sensors import VehicleSensors, VehicleSignals
 from lanekeep.timing import StageClock
-from lanekeep.world import World, build
+from lanekeep.world import SimulationError, World, build
 
 FUSED, REFERENCE = "fused", "reference"
 TRACK_SUFFIX = ":track"  # a front model's own Kalman track, scored like the fused output
@@ -182,7 +182,7 @@ class Episode:
         """A detector that raises or returns garbage counts as a miss, with an event."""
         try:
             estimate = detector.detect(frame)
-        except (ValueError, FloatingPointError, ArithmeticError) as err:
+        except Exception as err:  # noqa: BLE001 - any detector fault is a miss, not a crash
             self.detector_errors += 1
             events.append(f"detector {name} failed: {err}")
             return LaneEstimate.invalid(f"error: {err}")
@@ -332,23 +332,27 @@ class Episode:
         """Step to the end (or `seconds`); an interrupt still returns a partial report.
 
         `on_step(result, total_steps)` sees every step as it is made (a trace for plots, a
-        progress bar); the report says `completed = False` after Ctrl-C.
+        progress bar); the report says `completed = False` and why (`stop_reason`) after
+        Ctrl-C or when the physics went unstable (lanekeep.world.SimulationError).
         """
         steps = self.total_steps if seconds is None else int(round(seconds / self.dt_s))
-        completed = True
+        reason = ""
         try:
             for _ in range(steps):
                 result = self.step()
                 if on_step is not None:
                     on_step(result, steps)
         except KeyboardInterrupt:
-            completed = False
-        return self.report(completed)
+            reason = "interrupted"
+        except SimulationError as err:  # the steps so far stand; the recording is kept
+            reason = str(err)
+        return self.report(not reason, reason)
 
-    def report(self, completed: bool = True) -> EpisodeReport:
+    def report(self, completed: bool = True, stop_reason: str = "") -> EpisodeReport:
         return self.metrics.report(self.scenario.name, self.scenario.seed, self.dt_s,
                                    completed=completed,
-                                   wall_s=time.perf_counter() - self._wall_start)
+                                   wall_s=time.perf_counter() - self._wall_start,
+                                   stop_reason=stop_reason)
 
     def close(self) -> None:
         self.rig.close()

@@ -64,6 +64,7 @@ class EpisodeReport:
     reference_repairs: int
     completed: bool = True
     wall_s: float = 0.0
+    stop_reason: str = ""  # why an incomplete episode stopped ("" when completed)
     # (nearest, farthest) look-ahead (m) of ADE / FDE, for the table's footer.
     ade_range_m: tuple[float, float] = (ADE_POINTS_M[0], ADE_POINTS_M[-1])
 
@@ -92,7 +93,8 @@ class EpisodeReport:
             f"car: lateral RMS {self.car_rms_cm:.1f} cm, max {self.car_max_cm:.1f} cm; "
             f"lane departures {self.lane_departures}; MMAE switches {self.mmae_switches}; "
             f"reference repairs {self.reference_repairs}; no estimate {self.no_estimate_s:.1f} s"
-            + ("" if self.completed else "  [INTERRUPTED: partial episode]")
+            + ("" if self.completed else
+               f"  [STOPPED: partial episode: {self.stop_reason or 'interrupted'}]")
         )
         near, far = self.ade_range_m
         lines.append(f"ADE/FDE: lane centre vs exact road geometry at x = {near:g}-{far:g} m "
@@ -160,7 +162,7 @@ class Metrics:
         self._no_estimate_steps += 1
 
     def report(self, scenario: str, seed: int, dt_s: float, completed: bool = True,
-               wall_s: float = 0.0) -> EpisodeReport:
+               wall_s: float = 0.0, stop_reason: str = "") -> EpisodeReport:
         sources = {}
         for name, acc in self._sources.items():
             errors = np.asarray(acc.offset_errors)
@@ -187,5 +189,6 @@ class Metrics:
             reference_repairs=self.reference_repairs,
             completed=completed,
             wall_s=wall_s,
+            stop_reason=stop_reason,
             ade_range_m=(float(self.ade_points_m[0]), float(self.ade_points_m[-1])),
         )

@@ -119,7 +119,9 @@ class CarState(Protocol):
 
 
 def _quantise(value: float, step: float) -> float:
-    return step * math.floor(value / step + 0.5) if step > 0.0 else value
+    if step <= 0.0 or not math.isfinite(value):  # a broken state reads as broken, not a crash
+        return value
+    return step * math.floor(value / step + 0.5)
 
 
 class VehicleSensors:

@@ -61,10 +61,19 @@ class World:
 
     def step(self, steer: float, throttle: float, seconds: float) -> None:
         """Apply the command and advance the world by `seconds`: the car's physics, then the
-        other vehicles to their poses at the new time (so the next render sees them)."""
+        other vehicles to their poses at the new time (so the next render sees them).
+
+        Raises SimulationError when MuJoCo found the state unstable (NaN, inf or huge
+        positions, velocities or accelerations): it then resets the data to the model's
+        initial state, and going on would score a teleported car."""
         self.car.apply(steer, throttle)
+        before = _instability_count(self.data)
         for _ in range(physics_steps(seconds, self.model.opt.timestep)):
             mujoco.mj_step(self.model, self.data)
+            if _instability_count(self.data) != before:
+                raise SimulationError(
+                    f"MuJoCo found the simulation unstable at t = {self.data.time:.2f} s "
+                    f"(bad position, velocity or acceleration) and reset it")
         update_dynamic(self, self.data.time)
 
     def marking_mask(self, segmentation: np.ndarray, boundary: int | None = None) -> np.ndarray:
@@ -270,6 +279,18 @@ def build(scenario: Scenario, layout: WorldLayout | None = None) -> World:
     world = World(scenario, road, model, data, Car(model, data), marking_boundary, conditions)
     world.reset()
     return world
+
+
+class SimulationError(RuntimeError):
+    """The physics went unstable; the episode cannot go on."""
+
+
+UNSTABLE_WARNINGS = (mujoco.mjtWarning.mjWARN_BADQPOS, mujoco.mjtWarning.mjWARN_BADQVEL,
+                     mujoco.mjtWarning.mjWARN_BADQACC)
+
+
+def _instability_count(data: mujoco.MjData) -> int:
+    return sum(int(data.warning[w].number) for w in UNSTABLE_WARNINGS)
 
 
 def physics_steps(seconds: float, timestep: float) -> int:
