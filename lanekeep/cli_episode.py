@@ -19,25 +19,18 @@ from lanekeep.scenario import ESTIMATION_MODES, Scenario, ScenarioError
 
 
 def check_scenario(scenario: Scenario, seconds: float | None = None) -> None:
-    """The checks across a scenario's fields that building its world and its episode make, in
-    ~10 ms instead of the build's ~1 s, so that a bad scenario fails before anything runs or
-    any file is written (`lanekeep bench` checks every scenario before a worker starts).
-
-    They are the build's own code on a bare car: the road, the conditions added to the car's
-    MjSpec (speed bumps beyond the road, vehicles in a lane that does not exist, shadows the
-    sun cannot cast), the control period against the physics timestep; then the detector
-    names, and that `seconds` makes at least one control step.
+    """Everything about a scenario that building its episode would reject, checked in ~10 ms
+    so that a bad scenario fails before anything runs or any file is written (`lanekeep
+    bench` checks every scenario before a worker starts): the world's cross-field checks
+    (lanekeep.world.check_scenario), the detector names, and that `seconds` makes at least
+    one control step.
 
     Raises:
       ScenarioError: naming the scenario's file and key.
       ConfigError: `seconds` makes no control step (key "--seconds").
     """
-    import mujoco
-
     from detectors.registry import known_detectors
-    from lanekeep.world import physics_steps, scenario_error
-    from lanekeep.world_conditions import add_conditions
-    from mjcf import CAR_XML
+    from lanekeep.world import check_scenario as check_world
 
     source = scenario.source or scenario.name
     est = scenario.estimation
@@ -47,20 +40,7 @@ def check_scenario(scenario: Scenario, seconds: float | None = None) -> None:
         if name not in known_detectors():
             raise ScenarioError(source, key, f"unknown detector {name!r} (known: "
                                              f"{', '.join(known_detectors())})")
-    try:
-        road = scenario.build_road()
-        spec = mujoco.MjSpec.from_file(str(CAR_XML))
-        add_conditions(spec, scenario, road)
-    except ScenarioError:
-        raise
-    except ValueError as err:
-        raise scenario_error(scenario, err) from err
-    try:
-        physics_steps(scenario.control_period_s, spec.option.timestep)
-    except ValueError:
-        raise ScenarioError(source, "control_period_s",
-                            f"{scenario.control_period_s} is not an integer multiple of the "
-                            f"physics timestep {spec.option.timestep} s") from None
+    check_world(scenario)
     if seconds is not None and round(seconds / scenario.control_period_s) < 1:
         raise ConfigError("", "--seconds", f"{seconds:g} s is less than one control step "
                                            f"({scenario.control_period_s:g} s)")

@@ -87,6 +87,14 @@ class StepResult:
     marking_masks_after: dict[str, np.ndarray] | None = None
 
 
+def _curvature(centre: np.ndarray, x_m: float) -> float:
+    """Curvature of the lane polynomial at x: 2 c2 / (1 + y'^2)^1.5. A quadratic fitted to a
+    tight arc over 4-20 m inflates c2 (it absorbs the arc's x^4 term), and 2 c2 alone would
+    over-steer a 40 m radius turn by ~25%."""
+    slope = centre[1] + 2.0 * centre[2] * x_m
+    return float(2.0 * centre[2] / (1.0 + slope * slope) ** 1.5)
+
+
 class Episode:
     """A closed-loop run of one scenario; `run()` steps it to the end and returns the report."""
 
@@ -220,9 +228,7 @@ class Episode:
             # larger of the lane's curvature there and the car's own path curvature (gyro yaw
             # rate / wheel speed) picks the gains: a short-range model fits straight lines,
             # and once the car turns, the gyro knows.
-            x = estimate.offset_x_m
-            slope = centre[1] + 2.0 * centre[2] * x
-            lane_curvature = 2.0 * centre[2] / (1.0 + slope * slope) ** 1.5
+            lane_curvature = _curvature(centre, estimate.offset_x_m)
             path_curvature = signals.yaw_rate_rps / max(abs(speed), 1.0)
             curvature = max(lane_curvature, path_curvature, key=abs)
             steer = self.steering(estimate.offset_m, speed, curvature_1pm=curvature)
@@ -231,11 +237,7 @@ class Episode:
             # terms); its curvature goes to the controller's feed-forward, not counted twice.
             x_ctrl = self.scenario.estimation.control_lookahead_m
             control_offset = -float(centre[0] + centre[1] * x_ctrl)
-            # Curvature of the lane where the controller looks: 2 c2 / (1 + y'^2)^1.5. A
-            # quadratic fitted to a tight arc over 4-20 m inflates c2 (it absorbs the arc's x^4
-            # term), and 2 c2 alone would over-steer a 40 m radius turn by ~25%.
-            slope = centre[1] + 2.0 * centre[2] * x_ctrl
-            curvature = 2.0 * centre[2] / (1.0 + slope * slope) ** 1.5
+            curvature = _curvature(centre, x_ctrl)
             steer = self.steering(control_offset, speed, curvature_1pm=curvature)
         return steer, self.speed(speed)
 

@@ -70,10 +70,10 @@ class World:
         before = _instability_count(self.data)
         for _ in range(physics_steps(seconds, self.model.opt.timestep)):
             mujoco.mj_step(self.model, self.data)
-            if _instability_count(self.data) != before:
-                raise SimulationError(
-                    f"MuJoCo found the simulation unstable at t = {self.data.time:.2f} s "
-                    f"(bad position, velocity or acceleration) and reset it")
+        if _instability_count(self.data) != before:
+            raise SimulationError(
+                f"MuJoCo found the simulation unstable by t = {self.data.time:.2f} s "
+                f"(bad position, velocity or acceleration) and reset it")
         update_dynamic(self, self.data.time)
 
     def marking_mask(self, segmentation: np.ndarray, boundary: int | None = None) -> np.ndarray:
@@ -249,6 +249,37 @@ def scenario_error(scenario: Scenario, err: ValueError) -> ScenarioError:
     return ScenarioError(scenario.source or scenario.name, key, message)
 
 
+def _check_control_period(scenario: Scenario, timestep: float) -> None:
+    """ValueError unless the control period is a whole number of physics steps."""
+    try:
+        physics_steps(scenario.control_period_s, timestep)
+    except ValueError:
+        raise ValueError(
+            f"control_period_s = {scenario.control_period_s} is not an integer multiple of "
+            f"the physics timestep {timestep} s"
+        ) from None
+
+
+def check_scenario(scenario: Scenario) -> None:
+    """The checks across a scenario's fields that `build` makes, in ~10 ms instead of its ~1 s:
+    the build's own code on the bare car (the road, the conditions added to the car's MjSpec:
+    speed bumps beyond the road, vehicles in a lane that does not exist, shadows the sun cannot
+    cast) and the control period against the physics timestep.
+
+    Raises:
+      ScenarioError: naming the scenario's file and key.
+    """
+    try:
+        road = scenario.build_road()
+        spec = mujoco.MjSpec.from_file(str(CAR_XML))
+        add_conditions(spec, scenario, road)
+        _check_control_period(scenario, spec.option.timestep)
+    except ScenarioError:
+        raise
+    except ValueError as err:
+        raise scenario_error(scenario, err) from err
+
+
 def build(scenario: Scenario, layout: WorldLayout | None = None) -> World:
     """Compile a scenario into a ready-to-step World with the car at its start pose.
 
@@ -261,13 +292,7 @@ def build(scenario: Scenario, layout: WorldLayout | None = None) -> World:
         road = scenario.build_road()
         spec, marking_names, conditions = build_spec(scenario, road, layout)
         model = spec.compile()
-        try:
-            physics_steps(scenario.control_period_s, model.opt.timestep)
-        except ValueError:
-            raise ValueError(
-                f"control_period_s = {scenario.control_period_s} is not an integer multiple of "
-                f"the physics timestep {model.opt.timestep} s"
-            ) from None
+        _check_control_period(scenario, model.opt.timestep)
     except ScenarioError:
         raise
     except ValueError as err:

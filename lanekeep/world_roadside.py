@@ -47,9 +47,7 @@ def overlay_alpha(opacity: float) -> float:
 def _convex_hull(points_xy: np.ndarray) -> np.ndarray:
     """Counter-clockwise (seen from above, z up) convex hull of 2D points."""
     hull = cv2.convexHull(points_xy.astype(np.float32)).reshape(-1, 2).astype(float)
-    x, y = hull[:, 0], hull[:, 1]
-    area = 0.5 * np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y)
-    return hull if area > 0 else hull[::-1]
+    return hull if _area(hull) > 0 else hull[::-1]
 
 
 def _polygon_mesh(polygons: list[np.ndarray], z_m: float | None = None) -> Ribbon:
@@ -66,6 +64,7 @@ def _polygon_mesh(polygons: list[np.ndarray], z_m: float | None = None) -> Ribbo
 
 
 def _area(poly: np.ndarray) -> float:
+    """Signed (shoelace) area of a polygon (n, 2): > 0 when counter-clockwise."""
     if len(poly) < 3:
         return 0.0
     x, y = poly[:, 0], poly[:, 1]
