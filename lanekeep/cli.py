@@ -1,6 +1,8 @@
 """The `lanekeep` command line: thin argument parsing over library calls; main() returns a code.
 
-Exit codes: 0 success, 1 a failure while running, 2 bad input (arguments, files, scenarios).
+Exit codes: 0 success, 1 a failure while running, 2 bad input (arguments, files, scenarios),
+130 stopped by Ctrl-C or SIGTERM (both are handled alike: the results so far are kept, see
+lanekeep/interrupts.py).
 An error is one line on stderr, "lanekeep: error: ...", naming the file and key or the option;
 `lanekeep --debug ...` lets the exception through instead (with its traceback).
 """
@@ -14,8 +16,9 @@ from pathlib import Path
 
 import lanekeep  # noqa: F401 - sets MUJOCO_GL before mujoco is imported
 from lanekeep.config_io import ConfigError
+from lanekeep.interrupts import stop_signals_interrupt
 
-EXIT_OK, EXIT_FAILURE, EXIT_BAD_INPUT = 0, 1, 2
+EXIT_OK, EXIT_FAILURE, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 130
 
 
 def _cmd_scenarios(args: argparse.Namespace) -> int:
@@ -86,7 +89,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     try:
-        return int(args.func(args))
+        with stop_signals_interrupt():
+            return int(args.func(args))
+    except KeyboardInterrupt:
+        if args.debug:
+            raise
+        print("lanekeep: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
     except (ConfigError, FileNotFoundError, RuntimeError) as err:
         if args.debug:
             raise

@@ -9,10 +9,17 @@ import multiprocessing
 import os
 import sys
 import time
-from concurrent.futures import ProcessPoolExecutor, as_completed
+from concurrent.futures import ProcessPoolExecutor, as_completed, wait
 from pathlib import Path
 
 from lanekeep.config_io import ConfigError
+from lanekeep.interrupts import (
+    end_children,
+    ignore_stop_signals,
+    stop_children,
+    stop_signals_held,
+    stop_signals_interrupt,
+)
 from lanekeep.metrics import EpisodeReport
 from lanekeep.report_json import report_document, report_from_dict, write_json
 from lanekeep.scenario import ESTIMATION_MODES, Scenario, ScenarioError
@@ -137,12 +144,15 @@ def _cmd_run(args: argparse.Namespace) -> int:
 
 
 def _bench_one(job: BenchJob, seconds: float | None, plots: str | None,
-               record_dir: str | None) -> dict:
+               record_dir: str | None) -> dict | None:
     label = job.label
     record = str(Path(record_dir) / f"{label}.rrd") if record_dir else None
     plots_dir = str(Path(plots) / label) if plots else None
-    return run_episode(job.scenario, job.seed, seconds, plots_dir, record, mode=job.mode,
-                       front_detectors=job.front_detectors).to_dict()
+    with stop_signals_interrupt():  # only while an episode runs (lanekeep/interrupts.py)
+        if _STOP is not None and _STOP.is_set():  # queued before the bench was stopped
+            return None
+        return run_episode(job.scenario, job.seed, seconds, plots_dir, record, mode=job.mode,
+                           front_detectors=job.front_detectors).to_dict()
 
 
 def _report_from_dict(d: dict) -> EpisodeReport:
@@ -159,8 +169,16 @@ def worker_threads(workers: int) -> int:
     return max(1, (os.cpu_count() or 1) // max(workers, 1))
 
 
-def _init_worker(threads: int) -> None:
-    """Runs first in every bench worker: thread counts before EGL or OpenCV start."""
+_STOP = None  # in a bench worker: the parent's "stop" event (multiprocessing.Event)
+
+
+def _init_worker(threads: int, stop) -> None:
+    """Runs first in every bench worker: thread counts before EGL or OpenCV start; an idle
+    worker ignores Ctrl-C and SIGTERM (one dying would break the pool for all) and starts no
+    episode once the parent has set `stop`."""
+    global _STOP
+    _STOP = stop
+    ignore_stop_signals()
     os.environ["LP_NUM_THREADS"] = str(threads)  # Mesa llvmpipe, read when EGL starts
     import cv2
 
@@ -198,26 +216,68 @@ def longest_first(jobs: list[BenchJob], seconds: float | None) -> list[int]:
     return sorted(range(len(jobs)), key=simulated_s, reverse=True)
 
 
+STOP_GRACE_S = 60.0  # how long stopped workers get to return their partial reports
+
+
+class BenchInterrupted(KeyboardInterrupt):
+    """A bench stopped by Ctrl-C or SIGTERM, with what it had: `reports` in the jobs' order
+    (finished, partial with `completed = False`, or None for an episode that never ran)."""
+
+    def __init__(self, reports: list[EpisodeReport | None], wall_s: float) -> None:
+        super().__init__("interrupted")
+        self.reports, self.wall_s = reports, wall_s
+
+
 def run_bench(jobs: list[BenchJob], workers: int, seconds: float | None = None,
               plots: str | None = None, record_dir: str | None = None,
               on_done=None) -> tuple[list[EpisodeReport], float]:
     """Episodes in `workers` processes, longest first: (reports in the jobs' order, wall s).
 
-    `on_done(done, total)` is called as each episode finishes.
+    `on_done(done, total)` is called as each episode finishes. On KeyboardInterrupt (Ctrl-C,
+    or SIGTERM under `lanekeep.cli.main`) the waiting episodes are cancelled, the running ones
+    are told to stop and return their partial reports (recordings finalised), any worker still
+    alive after STOP_GRACE_S is killed, and BenchInterrupted carries the reports.
     """
     start = time.perf_counter()
     reports: list[EpisodeReport | None] = [None] * len(jobs)
     context = multiprocessing.get_context("spawn")
-    with ProcessPoolExecutor(max_workers=workers, mp_context=context,
-                             initializer=_init_worker,
-                             initargs=(worker_threads(workers),)) as pool:
+    stop = context.Event()
+    pool = ProcessPoolExecutor(max_workers=workers, mp_context=context, initializer=_init_worker,
+                               initargs=(worker_threads(workers), stop))
+    futures = {}
+    try:
         futures = {pool.submit(_bench_one, jobs[i], seconds, plots, record_dir): i
                    for i in longest_first(jobs, seconds)}
         for done, future in enumerate(as_completed(futures), start=1):
             reports[futures[future]] = _report_from_dict(future.result())
             if on_done is not None:
                 on_done(done, len(jobs))
+    except KeyboardInterrupt:
+        with stop_signals_held():
+            stop.set()
+            _collect_partial(pool, futures, reports)
+        raise BenchInterrupted(reports, time.perf_counter() - start) from None
+    except BaseException:
+        pool.shutdown(wait=False, cancel_futures=True)
+        end_children(STOP_GRACE_S)
+        raise
+    pool.shutdown(wait=True)
     return reports, time.perf_counter() - start
+
+
+def _collect_partial(pool: ProcessPoolExecutor, futures: dict, reports: list) -> None:
+    """After an interrupt: cancel the waiting episodes, stop the running ones, keep every
+    report that comes back within STOP_GRACE_S, and leave no worker behind."""
+    for future in futures:
+        future.cancel()
+    stop_children()  # a terminal's Ctrl-C reached them already; SIGTERM did not
+    running = [f for f in futures if not f.cancelled()]
+    wait(running, timeout=STOP_GRACE_S)
+    for future in running:
+        if future.done() and future.exception() is None and future.result() is not None:
+            reports[futures[future]] = _report_from_dict(future.result())
+    pool.shutdown(wait=False, cancel_futures=True)
+    end_children(STOP_GRACE_S)
 
 
 def _cmd_bench(args: argparse.Namespace) -> int:
@@ -237,9 +297,12 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     if args.single_model:
         jobs += [BenchJob(name, args.seed, args.mode, (model,)) for name in names
                  for model in scenarios[name].estimation.front_detectors]
-    done_reports, wall = run_bench(jobs, args.workers, args.seconds, args.plots,
-                                   args.record_dir,
-                                   on_done=lambda done, total: _progress(done, total, "bench"))
+    try:
+        done_reports, wall = run_bench(
+            jobs, args.workers, args.seconds, args.plots, args.record_dir,
+            on_done=lambda done, total: _progress(done, total, "bench"))
+    except BenchInterrupted as stop:
+        return _bench_interrupted(args, jobs, scenarios, stop)
     reports = {job.label: report for job, report in zip(jobs, done_reports, strict=True)}
     if args.json:  # first: a failing table must not lose the episodes
         write_json(args.json, {job.label: report_document(reports[job.label],
@@ -257,6 +320,30 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     print(f"\nbench wall time: {wall:.1f} s for {len(jobs)} episodes "
           f"with {args.workers} workers")
     return 0
+
+
+def _bench_interrupted(args: argparse.Namespace, jobs: list[BenchJob],
+                       scenarios: dict[str, Scenario], stop: BenchInterrupted) -> int:
+    """Keep what an interrupted bench has: the JSON of every episode that returned a report
+    (partial ones say `completed: false`), a table each, and which episodes never ran."""
+    with stop_signals_held():
+        kept = {job.label: (job, r) for job, r in zip(jobs, stop.reports, strict=True)
+                if r is not None}
+        if args.json:
+            write_json(args.json, {label: report_document(r, scenarios[job.scenario])
+                                   for label, (job, r) in kept.items()})
+        print(file=sys.stderr)
+        for label, (_, r) in kept.items():
+            state = "complete" if r.completed else f"stopped: {r.stop_reason}"
+            print(f"\n== {label} (seed {r.seed}, {r.duration_s:.0f} s, {state}) ==")
+            print(r.table())
+        partial = [label for label, (_, r) in kept.items() if not r.completed]
+        not_run = [job.label for job in jobs if job.label not in kept]
+        print(f"bench interrupted after {stop.wall_s:.1f} s: {len(kept) - len(partial)} "
+              f"episodes complete, {len(partial)} stopped part-way"
+              f"{' (' + ', '.join(partial) + ')' if partial else ''}, {len(not_run)} not run"
+              f"{' (' + ', '.join(not_run) + ')' if not_run else ''}", file=sys.stderr)
+    return 130
 
 
 def _best(sources: dict, names: list[str]) -> tuple[str, float]:

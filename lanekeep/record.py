@@ -38,11 +38,9 @@ from __future__ import annotations
 import functools
 import math
 import queue
-import signal
 import threading
 import uuid
 from collections.abc import Iterator
-from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Protocol
@@ -53,6 +51,7 @@ import numpy as np
 from detectors.base import poly_eval
 from lanekeep.cameras import RENDERER_IDLE
 from lanekeep.ground_truth import LanePolylines, lane_offsets
+from lanekeep.interrupts import stop_signals_held
 
 APPLICATION_ID = "lanekeep"
 REFERENCE, TRUTH, OUTPUT = "reference", "truth", "output"
@@ -173,19 +172,6 @@ def _to_pixels(camera, ground_xy: np.ndarray) -> np.ndarray:
     keep = in_front & (uv[:, 0] > -margin_w) & (uv[:, 0] < camera.width + margin_w)
     keep &= (uv[:, 1] > -margin_h) & (uv[:, 1] < camera.height + margin_h)
     return uv[keep]
-
-
-@contextmanager
-def _no_interrupt() -> Iterator[None]:
-    """Hold off Ctrl-C while the file is finalised (a second one would cut its footer)."""
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGINT, previous)
 
 
 # -- the blueprint ------------------------------------------------------------------------------
@@ -330,7 +316,7 @@ class RerunRecorder:
         if self._closed:
             return
         self._closed = True
-        with _no_interrupt():
+        with stop_signals_held():  # a second Ctrl-C or a SIGTERM would cut its footer
             self._queue.put(None)
             self._writer.join()
             self._rec.flush()
