@@ -20,6 +20,7 @@ import mujoco
 import numpy as np
 
 from lanekeep.camera_model import CameraModel
+from lanekeep.gl_backend import RendererUnavailable
 
 # Geom groups (see mjcf/car.xml and lanekeep/world.py).
 GROUP_WORLD = 0
@@ -118,10 +119,7 @@ class CameraRig:
                 n: mujoco.Renderer(model, height=h, width=w) for n in self.CAMERA_NAMES
             }
         except Exception as exc:  # noqa: BLE001 - any GL failure means the same thing to a user
-            raise RuntimeError(
-                f"cannot create an offscreen MuJoCo renderer ({exc}); on a headless machine set "
-                "MUJOCO_GL=egl and install an EGL driver (e.g. Mesa's libegl1)"
-            ) from exc
+            raise RendererUnavailable(str(exc)) from exc
         self._rgb_option = mujoco.MjvOption()
         self._seg_option = mujoco.MjvOption()
         for option in (self._rgb_option, self._seg_option):

@@ -16,6 +16,7 @@ from pathlib import Path
 
 import lanekeep  # noqa: F401 - sets MUJOCO_GL before mujoco is imported
 from lanekeep.config_io import ConfigError
+from lanekeep.gl_backend import require_mujoco
 from lanekeep.interrupts import stop_signals_interrupt
 
 EXIT_OK, EXIT_FAILURE, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 130
@@ -90,6 +91,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parser.parse_args(argv)
     try:
         with stop_signals_interrupt():
+            require_mujoco()  # a GL backend this machine lacks: one line, not a traceback
             return int(args.func(args))
     except KeyboardInterrupt:
         if args.debug:

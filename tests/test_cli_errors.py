@@ -153,3 +153,24 @@ def test_the_real_process_prints_a_traceback_only_with_debug(tmp_path):
                            timeout=300)
     assert debug.returncode == 1 and "Traceback" in debug.stderr
     assert "ConfigError" in debug.stderr
+
+
+@pytest.mark.parametrize("env", [{"MUJOCO_GL": "osmesa"}, {"MUJOCO_GL": "bogus"},
+                                 {"MUJOCO_GL": "egl",
+                                  "__EGL_VENDOR_LIBRARY_FILENAMES": "/nonexistent.json"}],
+                         ids=["osmesa_missing", "unknown_backend", "no_egl_driver"])
+def test_a_renderer_that_cannot_start_is_one_line_naming_mujoco_gl(tmp_path, env):
+    """A GL backend this machine lacks fails inside PyOpenGL or mujoco.Renderer; the user gets
+    one line naming MUJOCO_GL and what to do, exit 2, and no file."""
+    import os
+
+    out = tmp_path / "frames"
+    result = subprocess.run([str(Path(sys.executable).parent / "lanekeep"), "render",
+                             "clear_straight", "--out", str(out)],
+                            capture_output=True, text=True, timeout=120,
+                            env={**os.environ, **env})
+    assert result.returncode == 2, result.stderr
+    assert "Traceback" not in result.stderr
+    (line,) = [ln for ln in result.stderr.splitlines() if ln.startswith("lanekeep: error: ")]
+    assert f"MUJOCO_GL={env['MUJOCO_GL']}" in line and "MUJOCO_GL=egl" in line
+    assert not out.exists() or not any(out.iterdir())
