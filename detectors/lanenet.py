@@ -1,0 +1,191 @@
+"""The LaneNet detector: weights file in, `LaneEstimate` out, GRU state kept between frames.
+
+    detector = LaneNetDetector(camera, weights="detectors/weights/lanenet.pt")
+    estimate = detector.detect(frame)      # ego lane, vehicle frame
+    detector.last.boundaries               # every boundary it saw in that frame
+
+A weights file is a dict saved by `save_weights`: a format tag, the architecture
+(`LaneNetConfig`) and the state dict, read back with `torch.load(..., weights_only=True)` so a
+file can hold tensors and plain values only, never code. Anything wrong with it (missing, empty,
+corrupt, another architecture, other shapes) is one `WeightsError` naming the file.
+
+The state is dropped on `reset()` and on a scene change, seen as a jump of the mean grey
+difference between consecutive thumbnails: what the GRU remembers of another road would mislead.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from importlib import resources
+from pathlib import Path
+
+import cv2
+import numpy as np
+import torch
+
+from detectors.base import LaneEstimate
+from detectors.birds_eye import detector_view
+from detectors.config import DetectorsConfig, GroundWindow, load_config
+from detectors.lanenet_decode import (
+    Boundary,
+    DecodeSettings,
+    Proposals,
+    ego_estimate,
+    fit_boundaries,
+    proposals,
+)
+from detectors.lanenet_model import LaneNet, LaneNetConfig, LaneNetState, prepare_frame
+from detectors.lanenet_targets import CellGrid
+from lanekeep.camera_model import CameraModel
+
+FORMAT = "lanekeep-lanenet/1"
+DEFAULT_WEIGHTS = "weights/lanenet.pt"  # inside the detectors package
+
+
+class WeightsError(ValueError):
+    """A weights file that cannot become a LaneNet; the message starts with the file's path."""
+
+    def __init__(self, path: str | Path, why: str) -> None:
+        super().__init__(f"{path}: {why}")
+        self.path = str(path)
+
+
+def save_weights(model: LaneNet, path: str | Path, meta: dict | None = None) -> None:
+    """Write the model's architecture and weights (and plain metadata) to `path`."""
+    torch.save({"format": FORMAT, "config": model.config.to_dict(),
+                "state_dict": model.state_dict(), "meta": dict(meta or {})}, str(path))
+
+
+def load_weights(path: str | Path) -> LaneNet:
+    """The network stored in `path`, in eval mode, or `WeightsError`."""
+    p = Path(path)
+    if not p.is_file():
+        raise WeightsError(p, "no such weights file")
+    if p.stat().st_size == 0:
+        raise WeightsError(p, "weights file is empty")
+    try:
+        blob = torch.load(str(p), map_location="cpu", weights_only=True)
+    except Exception as exc:  # noqa: BLE001 - any unpickling failure means the same thing
+        raise WeightsError(p, f"not a readable weights file ({type(exc).__name__}: "
+                              f"{str(exc).splitlines()[0] if str(exc) else ''})") from None
+    if not isinstance(blob, dict) or blob.get("format") != FORMAT:
+        raise WeightsError(p, f"not a LaneNet weights file (expected format {FORMAT!r})")
+    try:
+        model = LaneNet(LaneNetConfig.from_dict(blob["config"]))
+    except (KeyError, TypeError, ValueError) as exc:
+        raise WeightsError(p, f"unknown LaneNet architecture: {exc}") from None
+    try:
+        model.load_state_dict(blob.get("state_dict", {}), strict=True)
+    except (RuntimeError, TypeError, AttributeError) as exc:
+        first = str(exc).splitlines()
+        raise WeightsError(p, "weights do not fit the LaneNet architecture: "
+                              f"{first[1].strip() if len(first) > 1 else exc}") from None
+    return model.eval()
+
+
+@dataclass(frozen=True)
+class LaneNetSettings:
+    """The detector's settings (a `[lanenet]` table of the detectors TOML, once registered)."""
+
+    weights: str = ""  # "" = the shipped detectors/weights/lanenet.pt
+    score_threshold: float = 0.5
+    inlier_px: float = 6.0
+    ransac_iterations: int = 100
+    min_points: int = 4
+    seed: int = 0
+    scene_change_grey: float = 30.0  # mean |grey difference| of thumbnails (0..255) = new scene
+
+    def decode(self) -> DecodeSettings:
+        return DecodeSettings(score_threshold=self.score_threshold, inlier_px=self.inlier_px,
+                              iterations=self.ransac_iterations, min_points=self.min_points,
+                              seed=self.seed)
+
+
+@dataclass(frozen=True)
+class Decoded:
+    """Everything one frame gave: its proposals (for AP) and every fitted boundary."""
+
+    proposals: Proposals
+    boundaries: list[Boundary]
+    scene_change: bool
+
+
+class LaneNetDetector:
+    """`Detector` protocol over the spatiotemporal network (paper 000)."""
+
+    name = "lanenet"
+
+    def __init__(
+        self,
+        camera: CameraModel,
+        config: DetectorsConfig | None = None,
+        distortion: np.ndarray | None = None,
+        settings: LaneNetSettings | None = None,
+        weights: str | Path | None = None,
+    ) -> None:
+        self.camera = camera
+        self.config = config or load_config()
+        self.settings = settings or LaneNetSettings()
+        path = weights or self.settings.weights or resources.files("detectors").joinpath(
+            DEFAULT_WEIGHTS)
+        self.model = load_weights(path)
+        self.weights_path = str(path)
+        self.view, self.x_ref = detector_view(camera, self.config, distortion)
+        self.distortion = None
+        if distortion is not None and np.any(np.asarray(distortion) != 0):
+            self.distortion = np.asarray(distortion, dtype=float)
+        self._decode = self.settings.decode()
+        self._state: LaneNetState | None = None
+        self._thumb: np.ndarray | None = None
+        self.last: Decoded | None = None
+
+    @property
+    def window(self) -> GroundWindow:
+        return self.view.window
+
+    def reset(self) -> None:
+        self._state = None
+        self._thumb = None
+        self.last = None
+
+    def _scene_changed(self, image: np.ndarray) -> bool:
+        """Compare a 40x22 grey thumbnail with the previous frame's."""
+        grey = image.astype(np.float32).mean(axis=0)
+        thumb = cv2.resize(grey, (40, 22), interpolation=cv2.INTER_AREA)
+        changed = self._thumb is not None and float(
+            np.abs(thumb - self._thumb).mean()) > self.settings.scene_change_grey
+        self._thumb = thumb
+        return changed
+
+    def _camera_for(self, width: int, height: int) -> CameraModel:
+        if (self.camera.width, self.camera.height) == (width, height):
+            return self.camera
+        return self.camera.scaled(width, height)
+
+    def infer(self, frame: np.ndarray) -> Decoded:
+        """Run the network on one frame (keeping state) and decode every boundary."""
+        image = prepare_frame(frame, self.model.config)
+        changed = self._scene_changed(image)
+        if changed:
+            self._state = None
+        with torch.inference_mode():
+            out, self._state = self.model(torch.from_numpy(image)[None, None], self._state)
+        rows, cols = self.model.config.grid
+        grid = CellGrid(frame.shape[1], frame.shape[0], rows, cols)
+        props = proposals(out.objectness[0, 0].numpy(), out.x_offset[0, 0].numpy(),
+                          out.slot[0, 0].numpy(), grid, self._decode.score_threshold)
+        camera = self._camera_for(frame.shape[1], frame.shape[0])
+        fit_props = props
+        if self.distortion is not None and len(props.points_px):
+            pts = cv2.undistortPoints(props.points_px.reshape(-1, 1, 2).astype(np.float64),
+                                      camera.K, self.distortion, P=camera.K).reshape(-1, 2)
+            fit_props = replace(props, points_px=pts)
+        boundaries = fit_boundaries(fit_props, grid, self._decode, camera)
+        self.last = Decoded(props, boundaries, changed)
+        return self.last
+
+    def detect(self, frame: np.ndarray) -> LaneEstimate:
+        decoded = self.infer(frame)
+        rules = self.config.lane
+        return ego_estimate(decoded.boundaries, self._camera_for(frame.shape[1], frame.shape[0]),
+                            self.x_ref, rules.lane_width_m, rules.width_tolerance_m)

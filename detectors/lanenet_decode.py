@@ -1,0 +1,272 @@
+"""From LaneNet outputs to lanes: proposals, grouping by slot, a RANSAC parabola per boundary.
+
+Proposals are the cells whose objectness exceeds a threshold: a point on a boundary (the cell's
+band centre row, x from the offset head), a box around that piece of marking (one cell wide,
+centred on the point, one band tall) and a confidence, which is what AP ranks.
+
+Each slot's points are one boundary ("other" may hold several: fitted one after another on what
+the previous fits left). The fit is RANSAC over a model linear in its parameters:
+  - camera known: y(x) = c0 + c1 x + c2 x^2 on the ground (vehicle frame, metres), the points
+    brought down with `CameraModel.pixels_to_ground`;
+  - camera unknown: the same ground parabola seen by a level pinhole camera over a flat road. With
+    d = v - v_h (rows below the horizon) the ground distance is x = k / d, so
+    u = cx - fx y / x = A + B d + C / d: a curve with three linear parameters, and v_h is
+    found where the boundaries' near parts meet (their vanishing point).
+Residuals are in image pixels in both cases (ground residuals are divided by the metres one pixel
+spans at that distance), so one threshold serves near and far points. RANSAC draws from a
+generator seeded per call: the same outputs always give the same lanes.
+"""
+
+from __future__ import annotations
+
+import itertools
+from dataclasses import dataclass
+
+import numpy as np
+
+from detectors.base import LaneEstimate
+from detectors.lanenet_targets import OTHER, SLOTS, CellGrid
+from lanekeep.camera_model import CameraModel
+
+
+@dataclass(frozen=True)
+class DecodeSettings:
+    """Thresholds of the decoding (tuned numbers belong in the detectors TOML)."""
+
+    score_threshold: float = 0.5  # objectness probability of a proposal
+    inlier_px: float = 6.0  # RANSAC residual threshold (frame pixels)
+    iterations: int = 100
+    min_points: int = 4  # a boundary needs at least this many inliers
+    max_other: int = 3  # boundaries fitted from the "other" slot
+    seed: int = 0  # of RANSAC's generator
+
+    def __post_init__(self) -> None:
+        if not 0.0 < self.score_threshold < 1.0:
+            raise ValueError("score_threshold must be in (0, 1)")
+        if self.inlier_px <= 0 or self.iterations < 1 or self.min_points < 3:
+            raise ValueError("inlier_px > 0, iterations >= 1, min_points >= 3")
+
+
+@dataclass(frozen=True)
+class Proposals:
+    """N proposals of one frame, frame pixels: points (N, 2), boxes (N, 4) x0 y0 x1 y1."""
+
+    points_px: np.ndarray
+    boxes_px: np.ndarray
+    scores: np.ndarray
+    slots: np.ndarray
+    slot_probs: np.ndarray  # (N,) probability of the chosen slot
+
+
+@dataclass(frozen=True)
+class Boundary:
+    """One fitted boundary: coefficients in `frame` ("ground": y(x) = c0 + c1 x + c2 x^2 in
+    metres; "image": u(v) = c0 + c1 d + c2 / d with d = v - horizon_row), its inlier image
+    points and, on the ground, their vehicle-frame points."""
+
+    slot: int
+    coeffs: np.ndarray
+    frame: str
+    points_px: np.ndarray
+    score: float  # mean objectness of the inliers
+    points_xy: np.ndarray | None = None
+    horizon_row: float | None = None
+
+    @property
+    def name(self) -> str:
+        return SLOTS[self.slot]
+
+    def x_at_rows(self, rows_px: np.ndarray, camera: CameraModel | None = None,
+                  extend_rows: tuple[float, float] | None = None) -> np.ndarray:
+        """Image x of the curve at each row (NaN off the curve's span; `extend_rows` = a row
+        range to extend it over instead, e.g. the whole visible road)."""
+        rows = np.asarray(rows_px, dtype=float)
+        lo, hi = extend_rows or (self.points_px[:, 1].min(), self.points_px[:, 1].max())
+        if self.frame == "image":
+            d = rows - float(self.horizon_row)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                x = self.coeffs[0] + self.coeffs[1] * d + self.coeffs[2] / d
+        else:
+            if camera is None:
+                raise ValueError("a ground-plane boundary needs the camera to be drawn")
+            xs = self.points_xy[:, 0]
+            x_lo, x_hi = float(xs.min()), float(xs.max())
+            if extend_rows is not None:  # from the camera to 1.5x the farthest point
+                cam_x = float(camera.position_m[0])
+                if np.mean(xs) > cam_x:
+                    x_lo, x_hi = min(x_lo, cam_x), cam_x + 1.5 * (x_hi - cam_x)
+                else:
+                    x_lo, x_hi = cam_x + 1.5 * (x_lo - cam_x), max(x_hi, cam_x)
+            g = np.linspace(x_lo, x_hi, 400)
+            uv, ok = camera.project_ground(np.stack([g, _poly(self.coeffs, g)], -1))
+            uv = uv[ok]
+            uv = uv[np.argsort(uv[:, 1])]
+            if len(uv) < 2:
+                return np.full(rows.shape, np.nan)
+            x = np.interp(rows, uv[:, 1], uv[:, 0], left=np.nan, right=np.nan)
+        return np.where((rows >= lo) & (rows <= hi), x, np.nan)
+
+
+def _poly(c: np.ndarray, x: np.ndarray) -> np.ndarray:
+    return c[0] + c[1] * x + c[2] * x * x
+
+
+def proposals(objectness: np.ndarray, x_offset: np.ndarray, slot_logits: np.ndarray,
+              grid: CellGrid, score_threshold: float) -> Proposals:
+    """Proposals of one frame from its head outputs: objectness logits (rows, cols), offsets
+    (rows, cols) in 0..1, slot logits (n_slots, rows, cols)."""
+    prob = 1.0 / (1.0 + np.exp(-np.asarray(objectness, dtype=np.float64)))
+    r, c = np.nonzero(prob > score_threshold)
+    x = grid.cell_to_x(c, x_offset[r, c])
+    y = grid.row_centres()[r]
+    logits = slot_logits[:, r, c].astype(np.float64)
+    e = np.exp(logits - logits.max(axis=0, keepdims=True))
+    p = e / e.sum(axis=0, keepdims=True)
+    half_w, half_h = grid.cell_w / 2.0, grid.cell_h / 2.0
+    boxes = np.stack([x - half_w, y - half_h, x + half_w, y + half_h], -1)
+    return Proposals(np.stack([x, y], -1).reshape(-1, 2), boxes.reshape(-1, 4), prob[r, c],
+                     p.argmax(axis=0).astype(np.int64), p.max(axis=0, initial=0.0))
+
+
+def ransac_fit(basis: np.ndarray, target: np.ndarray, scale: np.ndarray, threshold: float,
+               iterations: int, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray] | None:
+    """RANSAC of target ~ basis @ c with 3-point samples; residual / scale compared with the
+    threshold. Returns (coefficients refitted on the inliers, inlier mask) or None."""
+    n = len(target)
+    if n < 3:
+        return None
+    # All hypotheses at once: (iterations, 3) distinct indices, one batched 3x3 solve.
+    idx = np.argsort(rng.random((iterations, n)), axis=1)[:, :3]
+    a, b = basis[idx], target[idx]
+    ok = np.abs(np.linalg.det(a)) > 1e-12
+    if not ok.any():
+        return None
+    c = np.linalg.solve(a[ok], b[ok][..., None])[..., 0]  # (K, 3)
+    inl = np.abs(c @ basis.T - target) / scale < threshold  # (K, n)
+    best = inl[int(np.argmax(inl.sum(axis=1)))]
+    if best.sum() < 3:
+        return None
+    for _ in range(2):  # least squares on the consensus, then once more on its own inliers
+        w = 1.0 / scale[best]
+        c, *_ = np.linalg.lstsq(basis[best] * w[:, None], target[best] * w, rcond=None)
+        refined = np.abs(basis @ c - target) / scale < threshold
+        if refined.sum() < 3:
+            break
+        best = refined
+    return c, best
+
+
+def estimate_horizon_row(groups: list[np.ndarray], grid: CellGrid) -> float:
+    """Row where the boundaries' near parts (straight lines u = a + b v through their lower
+    half) meet; with fewer than two, one band above the highest proposal."""
+    lines = []
+    for pts in groups:
+        if len(pts) < 3:
+            continue
+        lower = pts[pts[:, 1] >= np.median(pts[:, 1])]
+        if len(lower) >= 2 and np.ptp(lower[:, 1]) > 0:
+            lines.append(np.polyfit(lower[:, 1], lower[:, 0], 1))
+    rows = []
+    for (b1, a1), (b2, a2) in itertools.combinations(lines, 2):
+        if abs(b1 - b2) > 1e-3:
+            rows.append((a2 - a1) / (b1 - b2))
+    top = min((float(p[:, 1].min()) for p in groups if len(p)), default=grid.frame_height / 2)
+    if rows:
+        v = float(np.median(rows))
+        if v < top:
+            return v
+    return top - grid.cell_h
+
+
+def fit_boundaries(props: Proposals, grid: CellGrid, settings: DecodeSettings,
+                   camera: CameraModel | None = None) -> list[Boundary]:
+    """One boundary per slot (several for "other"), fitted by RANSAC; ordered by slot."""
+    rng = np.random.default_rng(settings.seed)
+    groups = {s: np.flatnonzero(props.slots == s) for s in range(len(SLOTS))}
+    horizon = None
+    if camera is None:
+        horizon = estimate_horizon_row([props.points_px[i] for i in groups.values()], grid)
+    out = []
+    for slot, idx in groups.items():
+        for _ in range(settings.max_other if slot == OTHER else 1):
+            if len(idx) < settings.min_points:
+                break
+            b = _fit_one(props, idx, slot, settings, rng, camera, horizon)
+            if b is None:
+                break
+            out.append(b[0])
+            idx = idx[~b[1]]
+    return out
+
+
+def _fit_one(props: Proposals, idx: np.ndarray, slot: int, settings: DecodeSettings,
+             rng: np.random.Generator, camera: CameraModel | None, horizon: float | None
+             ) -> tuple[Boundary, np.ndarray] | None:
+    """RANSAC on the proposals `idx`: (boundary, inlier mask over idx) or None."""
+    pts = props.points_px[idx]
+    xy = None
+    if camera is not None:
+        xy, ok = camera.pixels_to_ground(pts)
+        ok &= np.all(np.isfinite(xy), axis=-1)
+        dist = np.abs(xy[:, 0] - camera.position_m[0])
+        ok &= dist < 150.0  # rows at the horizon map to no usable ground
+        x = xy[:, 0]
+        basis, target = np.stack([np.ones_like(x), x, x * x], -1), xy[:, 1]
+        scale = np.maximum(dist, 1.0) / camera.fx  # metres per pixel across, at that distance
+    else:
+        d = pts[:, 1] - horizon
+        ok = d > 1.0
+        d = np.where(ok, d, 1.0)
+        basis, target = np.stack([np.ones_like(d), d, 1.0 / d], -1), pts[:, 0]
+        scale = np.ones_like(d)
+    if ok.sum() < settings.min_points:
+        return None
+    fit = ransac_fit(basis[ok], target[ok], scale[ok], settings.inlier_px, settings.iterations,
+                     rng)
+    if fit is None or fit[1].sum() < settings.min_points:
+        return None
+    coeffs, inl_ok = fit
+    inliers = np.zeros(len(idx), bool)
+    inliers[np.flatnonzero(ok)[inl_ok]] = True
+    boundary = Boundary(
+        slot=slot,
+        coeffs=np.asarray(coeffs, dtype=float),
+        frame="ground" if camera is not None else "image",
+        points_px=pts[inliers],
+        score=float(props.scores[idx][inliers].mean()),
+        points_xy=None if xy is None else xy[inliers],
+        horizon_row=horizon,
+    )
+    return boundary, inliers
+
+
+def ego_estimate(boundaries: list[Boundary], camera: CameraModel | None, x_ref: float,
+                 lane_width_m: float, width_tolerance_m: float) -> LaneEstimate:
+    """The ego lane from the ego-left and ego-right ground boundaries: offset at `x_ref`
+    (slots are the camera's: a rear camera's ego-left is the vehicle's right boundary).
+
+    Only a pair is trusted: one side and an assumed width would hide a slot mistake (the next
+    lane's boundary taken for the ego one), and the pair's width is checked against the lane's.
+    """
+    if camera is None:
+        return LaneEstimate.invalid("no camera: boundaries are in the image only", x_m=x_ref)
+    by_slot = {b.slot: b for b in boundaries if b.frame == "ground"}
+    left, right = by_slot.get(SLOTS.index("ego-left")), by_slot.get(SLOTS.index("ego-right"))
+    if camera.rotation[0, 2] > 0:  # optical axis (-z column) points back: its left is our right
+        left, right = right, left
+    if left is None or right is None:
+        missing = " and ".join(n for n, b in (("left", left), ("right", right)) if b is None)
+        return LaneEstimate.invalid(f"ego pair not found ({missing} missing)", x_m=x_ref)
+    y_left, y_right = float(_poly(left.coeffs, x_ref)), float(_poly(right.coeffs, x_ref))
+    width = y_left - y_right
+    if abs(width - lane_width_m) > width_tolerance_m:
+        return LaneEstimate.invalid(f"ego pair {width:.2f} m apart, not a lane", x_m=x_ref)
+    return LaneEstimate(
+        valid=True,
+        offset_m=-(y_left + y_right) / 2.0,
+        x_m=x_ref,
+        left=left.coeffs.copy(),
+        right=right.coeffs.copy(),
+        confidence=float(min(left.score, right.score)),
+        image_points={"left": left.points_px, "right": right.points_px},
+    )
