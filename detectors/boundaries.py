@@ -27,19 +27,27 @@ def fit_boundary(xy: np.ndarray, rules: LaneRules, camera_x_m: float = 0.0) -> B
     """Weighted least-squares y(x): a parabola over long spans, a line over short ones.
 
     A pixel's lateral uncertainty grows with its distance from the camera, so each point is
-    weighted by 1 / distance (polyfit weights multiply the residuals). None if unfit.
+    weighted by 1 / distance (polyfit weights multiply the residuals). Points further than
+    `rules.inlier_m` from the fit (a vehicle's edge or a shadow's beside the paint) are dropped
+    and the rest fitted again, twice at most. None if unfit.
     """
-    if len(xy) < 3:
-        return None
-    x, y = xy[:, 0], xy[:, 1]
-    weights = 1.0 / np.maximum(np.abs(x - camera_x_m), 1.0)
-    span = float(x.max() - x.min())
-    if span < rules.min_span_m:
-        return None
-    degree = 2 if span >= rules.quadratic_span_m else 1
-    c = np.polyfit(x, y, degree, w=weights)[::-1]
-    coeffs = np.zeros(3)
-    coeffs[: degree + 1] = c
+    coeffs = None
+    for _ in range(3):
+        if len(xy) < 3:
+            return None
+        x, y = xy[:, 0], xy[:, 1]
+        span = float(x.max() - x.min())
+        if span < rules.min_span_m:
+            return None
+        degree = 2 if span >= rules.quadratic_span_m else 1
+        weights = 1.0 / np.maximum(np.abs(x - camera_x_m), 1.0)
+        c = np.polyfit(x, y, degree, w=weights)[::-1]
+        coeffs = np.zeros(3)
+        coeffs[: degree + 1] = c
+        inliers = np.abs(y - (coeffs[0] + coeffs[1] * x + coeffs[2] * x * x)) <= rules.inlier_m
+        if rules.inlier_m <= 0 or inliers.all() or inliers.sum() < 0.5 * len(xy):
+            break
+        xy = xy[inliers]
     if abs(2.0 * coeffs[2]) > rules.max_curvature_1pm or not np.all(np.isfinite(coeffs)):
         return None
     return Boundary(coeffs, len(xy), span, xy)
@@ -67,6 +75,27 @@ def parallel(
     return left, right
 
 
+def plausible(b: Boundary | None, x_ref: float, rules: LaneRules,
+              other: Boundary | None = None) -> bool:
+    """A lane boundary runs along the road, and a short one alone says little far from itself.
+
+    Thin features of other vehicles, warped to the ground, run away from the camera at steep
+    angles: a boundary whose direction at `x_ref` is further than `max_heading_deg` from the
+    car's is not one. A short fit with no partner (`parallel` gives a short one its partner's
+    direction) is dropped when `x_ref` lies more than `max_extrapolation` times its span
+    beyond its points: a one-metre piece of paint beside a vehicle fixes no direction.
+    """
+    if b is None:
+        return False
+    slope = b.coeffs[1] + 2.0 * b.coeffs[2] * x_ref
+    if abs(slope) > math.tan(math.radians(rules.max_heading_deg)):
+        return False
+    if other is not None or b.x_span_m >= rules.quadratic_span_m:
+        return True
+    gap = float(np.min(np.abs(b.points_xy[:, 0] - x_ref)))
+    return gap <= rules.max_extrapolation * b.x_span_m
+
+
 def assemble(
     left: Boundary | None,
     right: Boundary | None,
@@ -78,9 +107,20 @@ def assemble(
 ) -> LaneEstimate:
     """Offset at `x_ref` from the two boundaries, or from one and the lane width."""
     width = lane_width_m or rules.lane_width_m
+    left, right = (b if plausible(b, x_ref, rules, other) else None
+                   for b, other in ((left, right), (right, left)))
     if left is not None and right is not None:
         measured = float(poly_eval(left.coeffs, x_ref) - poly_eval(right.coeffs, x_ref))
-        if abs(measured - width) > rules.width_tolerance_m:
+        lanes = round(measured / width)
+        if lanes >= 2 and abs(measured - lanes * width) <= rules.width_tolerance_m * lanes:
+            # Two (or more) lanes apart: both are real lines and the ego lane's line between
+            # them is in a dash gap. The car's own lane lies against the nearer one.
+            if abs(poly_eval(left.coeffs, x_ref)) <= abs(poly_eval(right.coeffs, x_ref)):
+                right = None
+            else:
+                left = None
+            confidence *= 0.5
+        elif abs(measured - width) > rules.width_tolerance_m:
             # Inconsistent pair: keep the side with more support.
             if left.n_points * left.x_span_m >= right.n_points * right.x_span_m:
                 right = None

@@ -15,6 +15,7 @@ from detectors.birds_eye import detector_view
 from detectors.boundaries import Boundary, assemble, support_confidence
 from detectors.config import DetectorsConfig, GroundWindow, load_config
 from detectors.image_stage import binary_bird_eye
+from detectors.vehicle_mask import VehicleFilter
 from lanekeep.camera_model import CameraModel
 
 
@@ -34,6 +35,7 @@ class ClassicalDetector:
         self.camera = camera
         self.config = config or load_config()
         self.view, self.x_ref = detector_view(camera, self.config, distortion)
+        self.vehicles = VehicleFilter.of(self.view, self.config.preprocess)
 
     @property
     def window(self) -> GroundWindow:
@@ -56,7 +58,7 @@ class ClassicalDetector:
 
     def detect(self, frame: np.ndarray) -> LaneEstimate:
         bev, noise = binary_bird_eye(frame, self.camera, self.view, self.config.preprocess,
-                                     self.binarise)
+                                     self.binarise, self.vehicles)
         if bev is None:
             self.reset()
             return LaneEstimate.invalid(noise, self.x_ref)

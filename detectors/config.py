@@ -70,6 +70,15 @@ class Preprocess:
     streak_max_tilt_deg: float = 15.0  # how far from vertical a streak may lean
     destreak_width_px: float = 6.0  # bright features narrower than this along a row (pixels of
     # a 720-row frame at full resolution) are opened away before binarising: rain streaks
+    # Other vehicles (detectors/vehicle_mask.py): the dark band under a vehicle hides the road
+    # above it in its columns; 0 turns the cue off.
+    vehicle_dark_ratio: float = 0.3  # darker than this share of the road's median: underside
+    vehicle_min_width_m: float = 1.0  # a dark run this wide (across the road) or wider ...
+    vehicle_max_width_m: float = 4.5  # ... and no wider is a vehicle's underside
+    vehicle_margin_m: float = 0.3  # the body reaches this far beside its dark band
+    vehicle_edge_px: int = 2  # working pixels along a row from vehicle-dark that are not paint
+    max_paint_width_m: float = 0.35  # wider bird's-eye runs are not paint; 0 = keep all
+    paint_blur_px: float = 3.0  # working pixels of spread added to that width at each distance
 
     def __post_init__(self) -> None:
         if not 0.1 <= self.scale <= 1.0:
@@ -78,6 +87,13 @@ class Preprocess:
             raise InvalidValue("destreak_width_px", f"must be >= 0, got {self.destreak_width_px}")
         if self.streak_min_rows < 0:
             raise InvalidValue("streak_min_rows", f"must be >= 0, got {self.streak_min_rows}")
+        if not 0.0 <= self.vehicle_dark_ratio < 1.0:
+            raise InvalidValue("vehicle_dark_ratio",
+                               f"must be in [0, 1), got {self.vehicle_dark_ratio}")
+        if not 0.0 < self.vehicle_min_width_m <= self.vehicle_max_width_m:
+            raise InvalidValue("vehicle_min_width_m", "must be > 0 and <= vehicle_max_width_m")
+        if self.max_paint_width_m < 0 or self.paint_blur_px < 0 or self.vehicle_margin_m < 0:
+            raise InvalidValue("max_paint_width_m", "widths and margins must be >= 0")
 
 
 @dataclass(frozen=True)
@@ -91,6 +107,9 @@ class LaneRules:
     min_span_m: float = 2.0  # a boundary must cover this much x
     quadratic_span_m: float = 8.0  # fit a parabola only over at least this x span
     max_curvature_1pm: float = 0.05  # |2 c2| above this: a bad fit (R < 20 m)
+    max_heading_deg: float = 20.0  # a boundary's direction at the look-ahead, from the car's
+    max_extrapolation: float = 1.5  # a short lone boundary reaches this many spans at most
+    inlier_m: float = 0.25  # points further from a boundary's fit are refitted without; 0 = off
 
     def __post_init__(self) -> None:
         if not self.lane_width_m > 0:

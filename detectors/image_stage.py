@@ -13,6 +13,7 @@ import cv2
 import numpy as np
 
 from detectors.birds_eye import BirdsEye
+from detectors.vehicle_mask import VehicleFilter
 from lanekeep.camera_model import CameraModel
 
 
@@ -130,15 +131,20 @@ def reject_noise(mask: np.ndarray, max_fill: float, min_coherence: float) -> str
 
 
 def binary_bird_eye(frame: np.ndarray, camera: CameraModel, view: BirdsEye, preprocess,
-                    binarise) -> tuple[np.ndarray | None, str]:
+                    binarise, vehicles: VehicleFilter | None = None
+                    ) -> tuple[np.ndarray | None, str]:
     """A frame's binary bird's-eye view (0/255), or None and why its binary image is noise.
 
     The image stage both models share; `binarise` is each model's own thresholding of the ROI.
+    `vehicles` (detectors/vehicle_mask.py) drops what other vehicles cover and runs wider
+    than paint.
     """
     check_frame(frame, camera)
     roi = crop_and_scale(frame, view.crop_top, preprocess.scale)
     roi = open_along_rows(roi, destreak_pixels(preprocess, frame.shape[0]))
     mask = binarise(roi)
+    if vehicles is not None:
+        mask = vehicles.hide_vehicles(mask, roi)
     # Fill first (a flooded mask is noise whatever it holds); the speckle test after the rain
     # streaks are gone, for a 1-px streak fails the opening just as sensor noise does.
     noise = reject_noise(mask, preprocess.max_fill, 0.0)
@@ -149,5 +155,5 @@ def binary_bird_eye(frame: np.ndarray, camera: CameraModel, view: BirdsEye, prep
     noise = reject_noise(mask, 1.0, preprocess.min_coherence)
     if noise:
         return None, noise
-    bev = view.warp(mask)
-    return np.where(bev >= 128, 255, 0).astype(np.uint8), ""
+    bev = np.where(view.warp(mask) >= 128, 255, 0).astype(np.uint8)
+    return (bev if vehicles is None else vehicles.narrow(bev)), ""

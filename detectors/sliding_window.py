@@ -2,10 +2,11 @@
 
 Pipeline per frame: (undistortion folded into the bird's-eye warp when the camera has a
 distortion model) ROI below the ground window's far edge at reduced resolution; binary =
-(Sobel-x of HLS lightness on a bright ridge) | (white: high lightness) | (yellow: hue in range
-and saturated); bird's-eye warp; a column histogram of the near part of the view gives one
-start per side (the peak nearest the car within the expected lane half-width); windows slide
-from the near edge outwards, re-centring on their pixels; a 2nd-order y(x) per boundary in the
+(Sobel-x of HLS lightness) | (white: high lightness) | (yellow: hue in range and saturated),
+all on a bright ridge; what other vehicles cover dropped (detectors/vehicle_mask.py);
+bird's-eye warp; a column histogram of the near part of the view gives one start per side
+(the peak nearest the car within the expected lane half-width); windows slide from the near
+edge outwards, re-centring on their pixels; a 2nd-order y(x) per boundary in the
 vehicle frame; the offset at the look-ahead. With a previous fit, pixels are taken in a band
 around it instead (`reset()` forgets it). Fixed-size windows lose a boundary that bends out of
 them faster than they can follow, which is this model's weakness in sharp turns.
@@ -39,34 +40,43 @@ class SlidingWindowDetector(ClassicalDetector):
         """Sobel-x on lightness | white lightness (both on a bright ridge) | yellow hue+sat."""
         cfg = self.config.sliding_window
         hls = cv2.cvtColor(roi, cv2.COLOR_RGB2HLS)
-        hue, light, sat = hls[..., 0], hls[..., 1], hls[..., 2]
-        if cfg.illumination_max_gain > 1.0:
-            light = self._compensate_shade(light)
-        grad = np.abs(cv2.Sobel(light, cv2.CV_16S, 1, 0, ksize=cfg.sobel_kernel))
-        norm = {1: 1.0, 3: 4.0, 5: 48.0 / 4.0, 7: 640.0 / 10.0}[cfg.sobel_kernel]
+        hue, raw, sat = hls[..., 0], hls[..., 1], hls[..., 2]
+        row = np.ones((1, cfg.local_block_px), np.uint8)
         # A ridge is brighter than the darker of its row neighbours a block away (white
         # top-hat along the row): paint narrower than the block is, the lit edge of anything
-        # wider (a snowy verge, the sunny side of a shadow's edge) is not.
-        row = np.ones((1, cfg.local_block_px), np.uint8)
-        ridge = cv2.morphologyEx(light, cv2.MORPH_TOPHAT, row) >= cfg.min_lightness_gain
+        # wider (a snowy verge, the sunny side of a shadow's edge) is not. Measured on the
+        # raw lightness and then scaled by the shade gain: the gain itself changes across a
+        # shadow's edge and would make a bright halo on its dark side (a ridge along every
+        # long straight edge of a vehicle's shadow, parallel to the lane).
+        tophat = cv2.morphologyEx(raw, cv2.MORPH_TOPHAT, row)
+        light = raw
+        if cfg.illumination_max_gain > 1.0:
+            light, gain = self._compensate_shade(raw)
+            ridge = tophat.astype(np.float32) * gain >= cfg.min_lightness_gain
+        else:
+            ridge = tophat >= cfg.min_lightness_gain
+        grad = np.abs(cv2.Sobel(light, cv2.CV_16S, 1, 0, ksize=cfg.sobel_kernel))
+        norm = {1: 1.0, 3: 4.0, 5: 48.0 / 4.0, 7: 640.0 / 10.0}[cfg.sobel_kernel]
         ridge = cv2.dilate(ridge.astype(np.uint8), np.ones((3, 3), np.uint8)) > 0
         edges = (grad >= cfg.sobel_min * norm) & ridge
         # White paint is a bright ridge too: a snowy verge or a sunlit kerb is as light as
         # paint but as wide as the local block, so it reads as the background, not a stripe.
         white = (light >= cfg.white_lightness) & (sat <= cfg.white_saturation_max) & ridge
         lo, hi = cfg.yellow_hue
+        # Yellow paint is a ridge as well: a yellow car's body is as yellow but wider.
         yellow = ((hue >= lo) & (hue <= hi) & (sat >= cfg.yellow_saturation)
-                  & (light >= cfg.yellow_lightness))
+                  & (light >= cfg.yellow_lightness) & ridge)
         return ((edges | white | yellow) * 255).astype(np.uint8)
 
-    def _compensate_shade(self, light: np.ndarray) -> np.ndarray:
-        """Lightness scaled so the local background reads the configured target level."""
+    def _compensate_shade(self, light: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Lightness scaled so the local background reads the configured target level, and
+        the gain per pixel."""
         cfg = self.config.sliding_window
         block = (cfg.illumination_block_px, cfg.illumination_block_px)
         background = cv2.blur(light, block).astype(np.float32)
         gain = np.clip(cfg.illumination_target / np.maximum(background, 1.0), 1.0,
                        cfg.illumination_max_gain)
-        return np.clip(light.astype(np.float32) * gain, 0, 255).astype(np.uint8)
+        return np.clip(light.astype(np.float32) * gain, 0, 255).astype(np.uint8), gain
 
     def _starts(self, bev: np.ndarray) -> list[float | None]:
         """Histogram peak column per side (left, right) nearest the car, or None.

@@ -171,3 +171,130 @@ def test_detectors_import_no_mujoco():
                             timeout=120)
     assert result.returncode == 0, result.stderr
     assert result.stdout.strip() == "ok"
+
+
+# -- other vehicles (detectors/vehicle_mask.py, boundaries.plausible) ---------------------------
+VAN_SCENARIO = "tools/tuning/tune_traffic_lead_van_three_lanes.toml"  # unscored: tuning data
+
+
+def test_runs_wider_than_paint_are_dropped_and_paint_is_kept():
+    from detectors.vehicle_mask import drop_wide_runs
+
+    bev = np.zeros((3, 40), np.uint8)
+    bev[:, 5:8] = 255  # 3 columns: paint
+    bev[:, 20:32] = 255  # 12 columns: a body panel seen from above it
+    out = drop_wide_runs(bev, np.full(3, 7.0))
+    assert (out[:, 5:8] == 255).all() and not out[:, 20:32].any()
+
+
+def test_the_dark_band_of_a_vehicle_hides_the_road_above_it_and_shade_does_not():
+    from detectors.vehicle_mask import hidden_by_vehicles, vehicle_dark
+
+    grey = np.full((60, 200), 100, np.uint8)
+    grey[40:44, 80:120] = 10  # underside: 40 px at 20 px/m = 2 m wide
+    grey[50:58, 0:200] = 45  # a building's shade across the whole road: not vehicle-dark
+    grey[20:22, 10:14] = 10  # a dark speck: 0.2 m, not a vehicle
+    grey[57:, 150:190] = 10  # dark, 2 m wide, but reaching the bottom: the ego car's hood
+    px_per_m = np.full(60, 20.0)
+    hidden = hidden_by_vehicles(vehicle_dark(grey, 0.3), px_per_m, 1.0, 4.5, 0.3)
+    assert hidden[:44, 80:120].all() and hidden[:44, 74:80].all()  # band, above, margin
+    assert not hidden[44:].any() and not hidden[:, :70].any() and not hidden[:, 130:].any()
+
+
+@pytest.mark.parametrize("coeffs, span, other, ok", [
+    ([1.8, 0.0, 0.0], 12.0, None, True),
+    ([1.8, 0.7, 0.0], 12.0, None, False),  # 35 deg off the car's heading: not a lane line
+    ([1.8, 0.0, 0.0], 1.5, None, False),  # 1.5 m of paint 8 m beyond the look-ahead, alone
+    ([1.8, 0.0, 0.0], 1.5, "partner", True),  # ... fine beside a partner (parallel refits it)
+])
+def test_plausible_boundaries(coeffs, span, other, ok):
+    from detectors.boundaries import Boundary, plausible
+    from detectors.config import LaneRules
+
+    xs = np.linspace(12.0, 12.0 + span, 20)
+    b = Boundary(np.array(coeffs), 20, span, np.stack([xs, np.full(20, 1.8)], 1))
+    partner = b if other else None
+    assert plausible(b, 4.0, LaneRules(), partner) is ok
+
+
+@pytest.fixture(scope="module")
+def van_ahead():
+    """Front and rear frames with a white van 6 m ahead and a car 4.5 m behind (1280x720, the
+    detectors' camera), their poses and the vehicles' footprints for the checks."""
+    from lanekeep.scenario import load_scenario
+    from lanekeep.world import build
+    from lanekeep.world_traffic import update_dynamic
+
+    world = build(load_scenario(VAN_SCENARIO))
+    update_dynamic(world, 0.0)
+    mujoco.mj_forward(world.model, world.data)
+    with CameraRig(world.model) as rig:
+        frames = {c: rig.render_rgb(world.data, c).copy() for c in ("front", "rear")}
+        models = dict(rig.cameras)
+    return world, frames, models
+
+
+@pytest.mark.parametrize("camera", ["front", "rear"])
+@pytest.mark.parametrize("name", ["hough", "sliding_window"])
+def test_vehicles_ahead_and_behind_are_not_taken_for_paint(van_ahead, camera, name):
+    """No binary pixel where the van ahead (or the car behind) stands or what it hides, and the
+    estimate is either honest about seeing no lane or within 30 cm."""
+    from detectors.image_stage import binary_bird_eye
+
+    world, frames, models = van_ahead
+    detector = make_detector(name, models[camera])
+    bev, _ = binary_bird_eye(frames[camera], detector.camera, detector.view,
+                             detector.config.preprocess, detector.binarise, detector.vehicles)
+    car = world.car.pose()
+    ahead = 1.0 if camera == "front" else -1.0
+    # The vehicle in the ego lane on this camera's side, in the car's frame.
+    x, y, yaw = car
+    c, s = math.cos(yaw), math.sin(yaw)
+    local = []
+    for track, spec in zip(world.conditions.vehicles, world.scenario.conditions.vehicles,
+                           strict=True):
+        dx, dy = world.data.body(track.name).xpos[:2] - np.array([x, y])
+        local.append((c * dx + s * dy, -s * dx + c * dy, 0.5 * spec.length_m))
+    tx, ty, half_length = min((p for p in local if p[0] * ahead > 0 and abs(p[1]) < 1.0),
+                              key=lambda p: abs(p[0]))
+    near_x = tx - ahead * half_length  # its end facing the camera
+    cols, rows = np.meshgrid(np.arange(detector.view.cols), np.arange(detector.view.rows))
+    gx, gy = detector.view.to_ground(cols, rows)
+    behind_it = ((gx - near_x) * ahead > 0.3) & (np.abs(gy - ty) < 0.8)
+    assert behind_it.sum() > 50  # the check looks somewhere
+    assert not bev[behind_it].any()
+    detector.reset()
+    est = detector.detect(frames[camera])
+    if est.valid:
+        truth = lane_truth(world.road, *car, world.scenario.road.ego_lane, lookahead_m=est.x_m)
+        assert abs(est.offset_m - truth.offset_m) < 0.3, est
+
+
+@pytest.mark.parametrize("car_y_m, kept", [(0.8, "right"), (-0.8, "left")])
+def test_a_pair_two_lanes_apart_keeps_the_line_the_car_is_beside(car_y_m, kept):
+    """A dashed line in its gap between two solid ones: the pair found is two lanes wide.
+    Keeping the better-supported side put the centre a lane off when that side was the far
+    line; the car's own lane lies against the nearer line."""
+    from detectors.boundaries import Boundary, assemble
+    from detectors.config import load_config
+    from lanekeep.camera_model import CameraModel
+
+    rules = load_config().lane
+    width = rules.lane_width_m
+    x = np.linspace(4.0, 20.0, 40)
+
+    def line(y_m: float, n: int) -> Boundary:
+        return Boundary(np.array([y_m, 0.0, 0.0]), n, float(x[-1] - x[0]),
+                        np.c_[x[:n], np.full(n, y_m)])
+
+    # The ego lane [-w/2, w/2] around the car at car_y_m, plus the next lane on the far side:
+    # the far line gets more support, so support alone would choose it.
+    near = -width / 2 - car_y_m if kept == "right" else width / 2 - car_y_m
+    far = near + 2 * width if kept == "right" else near - 2 * width
+    lines = {kept: line(near, 20), ("left" if kept == "right" else "right"): line(far, 40)}
+    camera = CameraModel.from_mounting("front", np.array([[500, 0, 640], [0, 500, 360],
+                                                          [0, 0, 1]]), 1280, 720, 1.5, 0.0)
+    est = assemble(lines["left"], lines["right"], 8.0, rules, camera, 1.0)
+    assert est.valid
+    assert est.offset_m == pytest.approx(car_y_m, abs=1e-6)
+    assert getattr(est, kept) is not None
