@@ -21,12 +21,14 @@ import numpy as np
 
 from lanekeep.camera_model import CameraModel
 from lanekeep.gl_backend import RendererUnavailable
+from lanekeep.weather_effects import needs_depth
 
 # Geom groups (see mjcf/car.xml and lanekeep/world.py).
 GROUP_WORLD = 0
 GROUP_MARKING = 1
 GROUP_CAR_BODY = 2
 GROUP_CAR_COLLISION = 3
+GROUP_HOOD = 4  # the ego car's hood: seen by the front camera when `show_hood` is on
 GROUP_SHADOW = 5  # translucent shadow geoms: hidden from the segmentation render
 
 
@@ -69,13 +71,20 @@ class RenderSettings:
     # MuJoCo fog. Scenes without fog put it beyond the far plane (world_conditions), where it
     # changes no pixel; turning it off there saves ~5% of a render (41.5 vs 39.4 ms a pair).
     fog: bool = True
+    show_hood: bool = False  # the front camera sees the ego car's hood (GROUP_HOOD)
+    # Read the depth buffer of each colour render (for depth-aware weather; about 3 ms a
+    # frame). Episodes turn it on for fog and rain and then do the fog in image space
+    # (lanekeep/weather_effects.py), with MuJoCo's linear fog off.
+    depth: bool = False
 
     @classmethod
     def of(cls, scenario, width: int | None = None, height: int | None = None
            ) -> RenderSettings:
         """The settings a scenario's cameras render with (its size unless given)."""
+        depth = needs_depth(scenario.conditions)
         return cls(width or scenario.camera.width, height or scenario.camera.height,
-                   scenario.camera.shadows, fog=scenario.conditions.fog > 0.0)
+                   scenario.camera.shadows, fog=scenario.conditions.fog > 0.0 and not depth,
+                   show_hood=scenario.camera.show_hood, depth=depth)
 
 
 # Set while no MuJoCo render runs in this process. Mesa's llvmpipe rasterises with a thread per
@@ -97,8 +106,10 @@ def _rendering():
 class CameraRig:
     """One reused `mujoco.Renderer` per camera; RGB and segmentation renders.
 
-    The ego car's geoms are hidden (groups 2 and 3) as on AirSim's onboard cameras; the
-    segmentation render also hides the translucent shadow geoms so the marking masks are exact.
+    The ego car's geoms are hidden (groups 2 and 3) as on AirSim's onboard cameras, except its
+    hood (group 4) on the front camera when `show_hood` is set (it hides paint there in the
+    segmentation too); the segmentation render hides the translucent shadow geoms so the
+    marking masks are exact.
     Call `close()` (or use as a context manager): EGL teardown at interpreter exit is noisy.
     """
 
@@ -120,31 +131,53 @@ class CameraRig:
             }
         except Exception as exc:  # noqa: BLE001 - any GL failure means the same thing to a user
             raise RendererUnavailable(str(exc)) from exc
-        self._rgb_option = mujoco.MjvOption()
-        self._seg_option = mujoco.MjvOption()
-        for option in (self._rgb_option, self._seg_option):
-            option.geomgroup[GROUP_CAR_BODY] = 0
-            option.geomgroup[GROUP_CAR_COLLISION] = 0
-            option.geomgroup[GROUP_SHADOW] = 1
-        self._seg_option.geomgroup[GROUP_SHADOW] = 0
+        self._rgb_option, self._seg_option = {}, {}
+        for name in self.CAMERA_NAMES:
+            rgb, seg = mujoco.MjvOption(), mujoco.MjvOption()
+            for option in (rgb, seg):
+                option.geomgroup[GROUP_CAR_BODY] = 0
+                option.geomgroup[GROUP_CAR_COLLISION] = 0
+                option.geomgroup[GROUP_SHADOW] = 1
+                option.geomgroup[GROUP_HOOD] = int(self.settings.show_hood and name == "front")
+            seg.geomgroup[GROUP_SHADOW] = 0
+            self._rgb_option[name], self._seg_option[name] = rgb, seg
+        self._depth_raw = np.empty((h, w), np.float32)
+        extent = model.stat.extent
+        self._znear = np.float32(model.vis.map.znear * extent)
+        self._zfar = np.float32(model.vis.map.zfar * extent)
         self._closed = False
 
     def render_rgb(self, data: mujoco.MjData, camera: str) -> np.ndarray:
         """RGB uint8 image (H, W, 3) of one camera."""
         renderer = self._renderers[camera]
         renderer.disable_segmentation_rendering()
-        renderer.update_scene(data, camera=camera, scene_option=self._rgb_option)
+        renderer.update_scene(data, camera=camera, scene_option=self._rgb_option[camera])
         renderer.scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = self.settings.shadows
         renderer.scene.flags[mujoco.mjtRndFlag.mjRND_FOG] = self.settings.fog
         with _rendering():
             return renderer.render()
+
+    def render_rgb_depth(self, data: mujoco.MjData, camera: str, step_px: int = 4
+                         ) -> tuple[np.ndarray, np.ndarray]:
+        """RGB (H, W, 3) and the z-depth in metres of the same pass at every `step_px`-th
+        pixel (rows and columns from step_px // 2), read from the depth buffer (~3 ms)."""
+        rgb = self.render_rgb(data, camera)
+        renderer = self._renderers[camera]
+        with _rendering():
+            mujoco.mjr_readPixels(None, self._depth_raw, renderer._rect, renderer._mjr_context)
+        # The buffer is bottom-up and in reversed-Z (as mujoco.Renderer linearises it).
+        raw = self._depth_raw[::-1][step_px // 2::step_px, step_px // 2::step_px]
+        near, far = self._znear, self._zfar
+        c = np.float32(0.5) * (far + near) / (far - near) - np.float32(0.5)
+        d = far * near / (far - near)
+        return rgb, (d / (raw.astype(np.float64) + c)).astype(np.float32)
 
     def render_segmentation(self, data: mujoco.MjData, camera: str) -> np.ndarray:
         """Geom id per pixel (H, W) int32, -1 where no geom (sky)."""
         renderer = self._renderers[camera]
         renderer.enable_segmentation_rendering()
         try:
-            renderer.update_scene(data, camera=camera, scene_option=self._seg_option)
+            renderer.update_scene(data, camera=camera, scene_option=self._seg_option[camera])
             renderer.scene.flags[mujoco.mjtRndFlag.mjRND_FOG] = False  # ids must stay exact
             with _rendering():
                 seg = renderer.render()

@@ -63,8 +63,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--heading", type=float, default=0.0, help="heading error (deg, + = left)")
     p.add_argument("--out", default="out/render", help="output folder")
     p.add_argument("--no-effects", action="store_true",
-                   help="the bare render, without the scenario's image effects (rain, snow, "
-                        "noise, motion blur, low light)")
+                   help="the bare render, without the scenario's image effects (fog, rain, "
+                        "snow, wet reflections, motion blur) and camera model (exposure, "
+                        "noise, vignetting)")
     p.set_defaults(func=_cmd_render)
 
     for module in _optional_command_modules():

@@ -26,7 +26,7 @@ from lanekeep.scenario import ESTIMATION_MODES, Scenario, ScenarioError
 
 
 def check_scenario(scenario: Scenario, seconds: float | None = None) -> None:
-    """Everything about a scenario that building its episode would reject, checked in ~10 ms
+    """Everything about a scenario that building its episode would reject, checked in 30-160 ms
     so that a bad scenario fails before anything runs or any file is written (`lanekeep
     bench` checks every scenario before a worker starts): the world's cross-field checks
     (lanekeep.world.check_scenario), the detector names, and that `seconds` makes at least

@@ -1,160 +1,84 @@
-"""Image-space effects that MuJoCo does not render: rain, lens drops, snow, motion blur, noise.
+"""What happens to a rendered frame before the car sees it: the weather, then the camera.
 
-Order, as light reaches the sensor: motion blur of the scene during the exposure, falling rain or
-snow in front of the camera, water drops on the lens, then the sensor: low-light gain and noise
-(Gaussian read noise plus shot noise whose variance grows with the signal), quantised to uint8.
+Order, as light reaches the sensor: the scene's weather in depth (motion blur, fog, falling rain
+or snow, drops on the lens; lanekeep/weather_effects.py), then the camera's own chain
+(vignetting, auto-exposure, read and shot noise, tone curve, optional JPEG;
+lanekeep/camera_sensor.py). The camera chain is on by default, as on every real camera; a
+`CameraConfig` with `read_noise_dn = 0`, `auto_exposure = false`, `vignetting = 0` and
+`jpeg_quality = 0` passes a weatherless frame through unchanged.
 
-`ImageEffects` is made once per camera and episode: it precomputes kernels and a noise bank and
-keeps the lens drops (they stay on the lens and slide down slowly). Every random choice per frame
-comes from the `numpy.random.Generator` passed in, so a seed gives bit-identical frames.
-`apply(image, conditions, rng)` is the one-shot form. Each effect costs about 1.5-8.5 ms on a
-1280x720 frame (rain with lens drops 6, snow 4, noise 8, motion blur 1.5, night gain and noise 8.5).
+`ImageEffects` is made once per camera and episode (the lens drops and the auto-exposure keep
+state). Every random choice per frame comes from the `numpy.random.Generator` passed in, so a
+seed gives bit-identical frames. `apply(image, conditions, rng)` is the one-shot form.
 """
 
 from __future__ import annotations
 
-import math
-
-import cv2
 import numpy as np
 
-from lanekeep.scenario import Conditions
+from lanekeep.camera_model import CameraModel
+from lanekeep.camera_sensor import CameraSensor
+from lanekeep.scenario import CameraConfig, Conditions
+from lanekeep.weather_effects import DEPTH_STEP_PX, Weather, needs_depth
+from lanekeep.world_lighting import LIGHTING
 
-NOISE_BANK_FRAMES = 2  # the noise bank holds this many frames of Gaussian noise
-READ_NOISE_DN = 8.0  # read-noise standard deviation at noise = 1 (digital numbers, 0..255)
-SHOT_GAIN_DN = 1.2  # shot-noise variance per DN of signal at noise = 1
-NIGHT_GAIN = {"day": 1.0, "dawn": 1.3, "dusk": 1.4, "night": 1.8}  # auto-exposure gain
-NIGHT_NOISE = {"day": 0.0, "dawn": 0.15, "dusk": 0.2, "night": 0.35}  # extra noise from the gain
-RAIN_ANGLE_RAD = 0.25  # streak slant from vertical
-BLUR_PX_AT_15MPS = 9.0  # vertical motion-blur length at 15 m/s, motion_blur = 1, 720 rows
+FAR_M = 1000.0  # depth assumed everywhere when none is given (the far clip plane)
+DEFAULT_FOVY_DEG = 88.54  # the front camera's (mjcf/car.xml), for frames without a model
 
 
-def _lut(values: np.ndarray) -> np.ndarray:
-    return np.clip(values, 0, 255).astype(np.uint8)
+def default_camera(height: int, width: int) -> CameraModel:
+    """A forward camera 1.5 m high, pitched 10 deg up, of the front camera's field of view."""
+    focal = (height / 2.0) / np.tan(np.radians(DEFAULT_FOVY_DEG) / 2.0)
+    K = np.array([[focal, 0.0, (width - 1) / 2.0], [0.0, focal, (height - 1) / 2.0],  # noqa: N806
+                  [0.0, 0.0, 1.0]])
+    return CameraModel.from_mounting("front", K, width, height, 1.5, np.radians(10.0), 1.0)
 
 
 class ImageEffects:
-    """The image effects of one scenario for one camera of size (height, width)."""
+    """The weather and the camera of one scenario for one camera of size (height, width).
+
+    `camera_model` places the weather (focus of expansion, depth rays; default: a front camera),
+    `airlight_rgb` is the fog colour in 0..255 (default: the time of day's sky horizon),
+    `frame_period_s` the auto-exposure's clock.
+    """
 
     def __init__(self, conditions: Conditions, height: int, width: int,
-                 rng: np.random.Generator) -> None:
+                 rng: np.random.Generator, camera: CameraConfig | None = None,
+                 camera_model: CameraModel | None = None, airlight_rgb=None,
+                 frame_period_s: float = 0.1) -> None:
         self.conditions = conditions
         self.height, self.width = height, width
-        self.scale = height / 720.0
-        c = conditions
-        gain = NIGHT_GAIN[c.time_of_day]
-        self.noise_level = min(1.0, c.noise + NIGHT_NOISE[c.time_of_day])
-        # Tone curve (gain, then the whitening of snow and the mist of rain) as one uint8 LUT.
-        x = np.arange(256, dtype=np.float64) * gain
-        haze = 0.35 * c.snow + 0.12 * c.rain
-        x = x * (1.0 - haze) + 235.0 * haze
-        self.tone = None if gain == 1.0 and haze == 0.0 else _lut(np.round(x))
-        if self.noise_level > 0.0:
-            bank_rows = NOISE_BANK_FRAMES * height
-            self.noise_bank = rng.standard_normal((bank_rows, width * 3), dtype=np.float32)
-            sd = np.sqrt(READ_NOISE_DN**2 + SHOT_GAIN_DN * np.arange(256)) * self.noise_level
-            self.noise_sd4 = _lut(np.round(4.0 * sd))  # quarter-DN steps, <= 255 (sd <= 19 DN)
-        # Lens drops: centre (x, y), radius in pixels; they stay and slide down.
-        n_drops = int(round(14 * c.rain))
-        r = rng.uniform(8.0, 30.0, n_drops) * self.scale
-        self.drops = np.c_[rng.uniform(0, width, n_drops), rng.uniform(0, height, n_drops), r]
+        self.needs_depth = needs_depth(conditions)
+        model = camera_model or default_camera(height, width)
+        if (model.height, model.width) != (height, width):
+            model = model.scaled(width, height)
+        if airlight_rgb is None:
+            airlight_rgb = 255.0 * np.asarray(LIGHTING[conditions.time_of_day][3][1])
+        self.weather = Weather(conditions, model, airlight_rgb, rng)
+        self.sensor = CameraSensor(camera or CameraConfig(), conditions.noise, height, width,
+                                   frame_period_s, rng)
 
-    # -- per-frame effects ---------------------------------------------------------------------
-    def motion_blur(self, image: np.ndarray, speed_mps: float) -> np.ndarray:
-        """Vertical box blur (road texture streams down the image), length proportional to speed."""
-        length = int(round(BLUR_PX_AT_15MPS * self.scale * self.conditions.motion_blur
-                           * abs(speed_mps) / 15.0))
-        if length < 2:
-            return image
-        return cv2.blur(image, (1, length))
-
-    def rain(self, image: np.ndarray, rng: np.random.Generator) -> np.ndarray:
-        """Slanted, motion-blurred bright streaks of falling drops."""
-        amount = self.conditions.rain
-        h, w = self.height, self.width
-        n = int(1400 * amount * (w * h) / (1280 * 720))
-        length = rng.uniform(30.0, 90.0, n) * self.scale
-        x0 = rng.uniform(-0.2 * w, w, n)
-        y0 = rng.uniform(-0.1 * h, h, n)
-        dx, dy = length * math.sin(RAIN_ANGLE_RAD), length * math.cos(RAIN_ANGLE_RAD)
-        lines = np.stack([np.c_[x0, y0], np.c_[x0 + dx, y0 + dy]], 1).round().astype(np.int32)
-        layer = np.zeros((h, w), np.uint8)
-        bright = int(40 + 40 * amount)
-        cv2.polylines(layer, list(lines), False, bright, 1, cv2.LINE_AA)
-        layer = cv2.GaussianBlur(layer, (3, 5), 0)
-        return cv2.add(image, cv2.merge([layer, layer, layer]))
-
-    def lens_drops(self, image: np.ndarray, rng: np.random.Generator) -> np.ndarray:
-        """Water drops on the lens: soft discs showing a blurred, brightened view."""
-        if len(self.drops) == 0:
-            return image
-        self.drops[:, 1] += rng.uniform(0.0, 1.5, len(self.drops)) * self.scale  # slide down
-        gone = self.drops[:, 1] - self.drops[:, 2] > self.height
-        self.drops[gone, 1] = -self.drops[gone, 2]
-        small = cv2.resize(image, (self.width // 8, self.height // 8), interpolation=cv2.INTER_AREA)
-        small = cv2.blur(small, (3, 3))
-        blurred = cv2.resize(small, (self.width, self.height), interpolation=cv2.INTER_LINEAR)
-        blurred = cv2.convertScaleAbs(blurred, alpha=1.1, beta=12)
-        mask = np.zeros((self.height // 4, self.width // 4), np.uint8)
-        for x, y, r in self.drops:
-            cv2.circle(mask, (int(x / 4), int(y / 4)), max(1, int(r / 4)), 255, -1, cv2.LINE_AA)
-        mask = cv2.resize(cv2.blur(mask, (3, 3)), (self.width, self.height))
-        alpha = cv2.merge([mask, mask, mask])
-        return cv2.add(cv2.multiply(image, 255 - alpha, scale=1 / 255),
-                       cv2.multiply(blurred, alpha, scale=1 / 255))
-
-    def snow(self, image: np.ndarray, rng: np.random.Generator) -> np.ndarray:
-        """Flakes of three sizes, soft-edged (near ones larger and blurrier)."""
-        amount = self.conditions.snow
-        h, w = self.height, self.width
-        layer = np.zeros((h, w), np.uint8)
-        for radius, count in ((1, 1800), (2, 500), (4, 90)):
-            n = int(count * amount * (w * h) / (1280 * 720))
-            rad = max(1, int(round(radius * self.scale)))
-            dots = np.zeros((h, w), np.uint8)
-            dots[rng.integers(0, h, n), rng.integers(0, w, n)] = 255
-            kernel = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * rad + 1, 2 * rad + 1))
-            layer = cv2.max(layer, cv2.dilate(dots, kernel))
-        layer = cv2.GaussianBlur(layer, (5, 5), 0)
-        alpha = cv2.merge([layer, layer, layer])
-        white = np.full_like(image, 245)
-        return cv2.add(cv2.multiply(image, 255 - alpha, scale=1 / 255),
-                       cv2.multiply(white, alpha, scale=1 / 255))
-
-    def sensor(self, image: np.ndarray, rng: np.random.Generator) -> np.ndarray:
-        """Low-light gain and tone, then read + shot noise from the noise bank."""
-        if self.tone is not None:
-            image = cv2.LUT(image, self.tone)
-        if self.noise_level <= 0.0:
-            return image
-        h = self.height
-        start = int(rng.integers(0, self.noise_bank.shape[0] - h + 1))
-        noise = self.noise_bank[start : start + h].reshape(h, self.width, 3)
-        scaled = cv2.multiply(noise, cv2.LUT(image, self.noise_sd4), scale=0.25, dtype=cv2.CV_32F)
-        return cv2.add(image, scaled, dtype=cv2.CV_8U)  # saturates and rounds
-
-    def __call__(self, image: np.ndarray, rng: np.random.Generator,
-                 speed_mps: float = 0.0) -> np.ndarray:
-        """All effects of the conditions on one RGB uint8 frame (H, W, 3); returns a new array."""
-        c = self.conditions
+    def __call__(self, image: np.ndarray, rng: np.random.Generator, speed_mps: float = 0.0,
+                 depth_m: np.ndarray | None = None) -> np.ndarray:
+        """All effects on one RGB uint8 frame (H, W, 3); returns a new array. `depth_m`: the
+        render's z-depth at every DEPTH_STEP_PX-th pixel; without it the scene counts as far
+        (rain streaks everywhere) and there is no fog (MuJoCo's own fog may be in the frame)."""
         if image.shape != (self.height, self.width, 3) or image.dtype != np.uint8:
             raise ValueError(f"expected uint8 ({self.height}, {self.width}, 3), got "
                              f"{image.dtype} {image.shape}")
-        out = image
-        if c.motion_blur > 0.0:
-            out = self.motion_blur(out, speed_mps)
-        if c.rain > 0.0:
-            out = self.rain(out, rng)
-        if c.snow > 0.0:
-            out = self.snow(out, rng)
-        if c.rain > 0.0:
-            out = self.lens_drops(out, rng)
-        out = self.sensor(out, rng)
-        return out if out is not image else image.copy()
+        conditions = self.conditions
+        if self.needs_depth and depth_m is None:
+            shape = (len(range(DEPTH_STEP_PX // 2, self.height, DEPTH_STEP_PX)),
+                     len(range(DEPTH_STEP_PX // 2, self.width, DEPTH_STEP_PX)))
+            depth_m = np.full(shape, FAR_M, np.float32)
+            if conditions.fog > 0.0:  # no depth, no fog: the frame carries MuJoCo's
+                self.weather.extinction_per_m = 0.0
+        out = self.weather(image, depth_m, rng, speed_mps)
+        return self.sensor(out, rng)
 
 
 def apply(image: np.ndarray, conditions: Conditions, rng: np.random.Generator,
-          speed_mps: float = 0.0) -> np.ndarray:
-    """One-shot form of ImageEffects (new lens drops each call): image -> image."""
+          speed_mps: float = 0.0, camera: CameraConfig | None = None) -> np.ndarray:
+    """One-shot form of ImageEffects (new lens drops, a settled exposure): image -> image."""
     h, w = image.shape[:2]
-    return ImageEffects(conditions, h, w, rng)(image, rng, speed_mps)
+    return ImageEffects(conditions, h, w, rng, camera)(image, rng, speed_mps)

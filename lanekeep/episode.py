@@ -30,6 +30,7 @@ from lanekeep.conditions import ImageEffects
 from lanekeep.control import PaperGains, SpeedController, SteeringPID
 from lanekeep.ground_truth import lane_centre_at, lane_centre_fit, lane_offsets
 from lanekeep.metrics import EpisodeReport, Metrics
+from lanekeep.paint_visibility import visible_paint
 from lanekeep.paper_mode import estimator_settings, front_detector_config
 from lanekeep.record import EpisodeInfo, NullRecorder, Recorder
 from lanekeep.scenario import Scenario
@@ -107,8 +108,11 @@ class Episode:
         self.rig = CameraRig(self.world.model,
                              RenderSettings.of(scenario, width, height))
         self.rng = np.random.default_rng(scenario.seed)
-        # One effects pipeline per camera: lens drops persist and slide between frames.
-        self.effects = {name: ImageEffects(scenario.conditions, height, width, self.rng)
+        # One effects pipeline per camera: lens drops and the auto-exposure keep state.
+        airlight = 255.0 * self.world.model.vis.rgba.fog[:3]  # the fog colour of the world
+        self.effects = {name: ImageEffects(scenario.conditions, height, width, self.rng,
+                                           scenario.camera, self.rig.cameras[name], airlight,
+                                           scenario.control_period_s)
                         for name in self.rig.CAMERA_NAMES}
         self.dt_s = scenario.control_period_s
         self.front: dict[str, Detector] = {
@@ -179,9 +183,14 @@ class Episode:
         data = self.world.data
         frames = {}
         for name in self.rig.CAMERA_NAMES:
-            rgb = self.rig.render_rgb(data, name)
+            depth = None
+            if self.rig.settings.depth:
+                rgb, depth = self.rig.render_rgb_depth(data, name)
+            else:
+                rgb = self.rig.render_rgb(data, name)
             self.clock.lap(f"render_{name}")
-            frames[name] = self.effects[name](rgb, self.rng, speed_mps=self.world.car.speed_mps())
+            frames[name] = self.effects[name](rgb, self.rng, speed_mps=self.world.car.speed_mps(),
+                                              depth_m=depth)
             self.clock.lap(f"effects_{name}")
         return frames
 
@@ -311,11 +320,18 @@ class Episode:
         )
 
     def _marking_masks(self) -> dict[str, np.ndarray]:
-        """Per camera, where the paint is now (segmentation render; for the recording)."""
-        data = self.world.data
-        return {name: self.world.marking_mask(self.rig.render_segmentation(data, name)
-                                              ).astype(np.uint8)
-                for name in self.rig.CAMERA_NAMES}
+        """Per camera, the paint the camera can see now (for the recording): the segmentation
+        render's paint, less what fog or darkness hides (lanekeep/paint_visibility.py)."""
+        data, masks = self.world.data, {}
+        for name in self.rig.CAMERA_NAMES:
+            paint = self.world.marking_mask(self.rig.render_segmentation(data, name))
+            bare, depth = self.rig.render_rgb_depth(data, name)
+            fx = self.effects[name]
+            weather = fx.weather
+            masks[name] = visible_paint(
+                paint, bare, weather.range_m(depth), weather.extinction_per_m,
+                float(weather.airlight.mean()), fx.sensor.gain).astype(np.uint8)
+        return masks
 
     def _wheels_outside_lane(self) -> bool:
         world = self.world

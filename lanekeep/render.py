@@ -1,9 +1,10 @@
 """Snapshots of a scenario: front/rear RGB and colourised segmentation PNGs at a road pose.
 
-The RGB frames are what the car's cameras deliver: the render with the scenario's image
-effects (rain, snow, noise, motion blur, low light), drawn from the scenario seed as an episode
-draws them, so the snapshot at the start pose is the episode's first frame; `effects=False`
-gives the bare render.
+The RGB frames are what the car's cameras deliver: the render with the scenario's weather (fog,
+rain, snow, motion blur, from the render's depth) and camera model (vignetting, exposure, noise,
+tone, JPEG), drawn from the scenario seed as an episode draws them, so the snapshot at the
+start pose is the episode's first frame; `effects=False` gives the bare render (without fog
+where the scenario's fog is done in image space).
 """
 
 from __future__ import annotations
@@ -45,6 +46,28 @@ def colourise_segmentation(world: World, geom_ids: np.ndarray) -> np.ndarray:
     return out
 
 
+def make_effects(scenario: Scenario, world: World, rig: CameraRig,
+                 rng: np.random.Generator) -> dict[str, ImageEffects]:
+    """The image effects of each camera as an episode makes them (same draws from `rng`)."""
+    airlight = 255.0 * world.model.vis.rgba.fog[:3]
+    settings = rig.settings
+    return {cam: ImageEffects(scenario.conditions, settings.height, settings.width, rng,
+                              scenario.camera, rig.cameras[cam], airlight,
+                              scenario.control_period_s)
+            for cam in rig.CAMERA_NAMES}
+
+
+def camera_frame(rig: CameraRig, world: World, cam: str, effects: ImageEffects | None,
+                 rng: np.random.Generator, speed_mps: float) -> np.ndarray:
+    """What camera `cam` delivers now: the render (with its depth where the weather needs
+    it) through its effects; `effects=None` gives the bare render."""
+    if rig.settings.depth:
+        rgb, depth = rig.render_rgb_depth(world.data, cam)
+    else:
+        rgb, depth = rig.render_rgb(world.data, cam), None
+    return rgb if effects is None else effects(rgb, rng, speed_mps=speed_mps, depth_m=depth)
+
+
 def render_snapshot(scenario: Scenario, out_dir: Path, at_s: float | None = None,
                     offset_m: float = 0.0, heading_deg: float = 0.0,
                     effects: bool = True) -> list[Path]:
@@ -68,13 +91,10 @@ def render_snapshot(scenario: Scenario, out_dir: Path, at_s: float | None = None
     speed = scenario.start.speed_mps
     with CameraRig(world.model, settings) as rig:
         rng = np.random.default_rng(scenario.seed)  # as Episode: one stream, cameras in order
-        camera_effects = {cam: ImageEffects(scenario.conditions, settings.height,
-                                            settings.width, rng)
-                          for cam in rig.CAMERA_NAMES}
+        camera_effects = make_effects(scenario, world, rig, rng)
         for cam in rig.CAMERA_NAMES:
-            rgb = rig.render_rgb(world.data, cam)
-            if effects:
-                rgb = camera_effects[cam](rgb, rng, speed_mps=speed)
+            rgb = camera_frame(rig, world, cam, camera_effects[cam] if effects else None, rng,
+                               speed)
             seg = colourise_segmentation(world, rig.render_segmentation(world.data, cam))
             for name, image in ((f"{cam}.png", rgb), (f"{cam}_seg.png", seg)):
                 path = out_dir / name

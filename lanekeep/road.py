@@ -229,7 +229,9 @@ class Road:
             if lead_m <= 0.0:
                 pieces += main
                 continue
-            period = style.dash_m + style.gap_m if style.kind == "dashed" else 0.0
+            periodic = style.kind in ("dashed", "dots") or (
+                style.kind == "worn" and style.pattern == "dashed")
+            period = style.dash_m + style.gap_m if periodic else 0.0
             before = math.ceil(lead_m / period) * period if period else lead_m
             extra = self.rng_seed + LEAD_SEED_OFFSET
             head = [replace(p, s_start_m=p.s_start_m - before, s_end_m=p.s_end_m - before)

@@ -22,7 +22,9 @@ from pathlib import Path
 
 from lanekeep.config_io import ConfigError, InvalidValue, from_dict
 from lanekeep.markings import MarkingStyle
+from lanekeep.pavement import PavementStyle
 from lanekeep.road import Road, SegmentSpec
+from lanekeep.roadside_config import Roadside
 from lanekeep.sensors import SensorsConfig
 
 TIMES_OF_DAY = ("day", "dawn", "dusk", "night")
@@ -42,6 +44,12 @@ class RoadConfig:
     ego_lane: int = 0  # lane the car starts in, 0 = rightmost
     markings: tuple[MarkingStyle, ...] = ()  # one per boundary, rightmost first; () = default
     start_heading_deg: float = 0.0
+    # The pavement (lanekeep/pavement.py): surface "asphalt" | "concrete"; the rest 0..1.
+    surface: str = "asphalt"
+    asphalt_tone: float = 0.5  # 0 fresh black .. 1 old, sun-bleached grey
+    cracks: float = 0.3
+    patches: float = 0.2
+    tyre_marks: float = 0.4  # darker wheel paths and oil strip in every lane
 
     def __post_init__(self):
         if not self.segments:
@@ -58,6 +66,12 @@ class RoadConfig:
                 f"need n_lanes + 1 = {self.n_lanes + 1} styles (one per boundary), "
                 f"got {len(self.markings)}",
             )
+        _ = self.pavement  # validates the pavement keys
+
+    @property
+    def pavement(self) -> PavementStyle:
+        return PavementStyle(self.surface, self.asphalt_tone, self.cracks, self.patches,
+                             self.tyre_marks)
 
     @property
     def length_m(self) -> float:
@@ -91,11 +105,28 @@ class CameraConfig:
     height: int = 720
     shadows: bool = False
     antialias_samples: int = 0
+    # The camera model (lanekeep/camera_sensor.py), on by default as on a real camera.
+    read_noise_dn: float = 1.0  # sensor read noise (digital numbers, before the gain)
+    auto_exposure: bool = True  # causal gain from the past frames' metering
+    exposure_time_constant_s: float = 0.3  # how fast the exposure follows the scene
+    vignetting: float = 0.2  # corner darkening of the lens, 0 none .. 0.6
+    jpeg_quality: int = 0  # JPEG compression of every frame, 0 = off, else 10..100
+    show_hood: bool = True  # the ego car's hood at the bottom of the front image
 
     def __post_init__(self):
         for key in ("width", "height"):
             if not getattr(self, key) > 0:
                 raise InvalidValue(key, f"must be > 0, got {getattr(self, key)}")
+        if not 0.0 <= self.read_noise_dn <= 20.0:
+            raise InvalidValue("read_noise_dn", f"must be in [0, 20], got {self.read_noise_dn}")
+        if not 0.01 <= self.exposure_time_constant_s <= 10.0:
+            raise InvalidValue("exposure_time_constant_s",
+                               f"must be in [0.01, 10] s, got {self.exposure_time_constant_s}")
+        if not 0.0 <= self.vignetting <= 0.6:
+            raise InvalidValue("vignetting", f"must be in [0, 0.6], got {self.vignetting}")
+        if not (self.jpeg_quality == 0 or 10 <= self.jpeg_quality <= 100):
+            raise InvalidValue("jpeg_quality",
+                               f"must be 0 (off) or 10..100, got {self.jpeg_quality}")
         if self.antialias_samples not in (0, 2, 4, 8):
             raise InvalidValue("antialias_samples",
                                f"must be 0, 2, 4 or 8, got {self.antialias_samples}")
@@ -167,9 +198,11 @@ class Conditions:
     """Light, weather, road surface, traffic and sensor conditions; all off by default.
 
     Rendered by MuJoCo (lanekeep/world_conditions.py): sun and time of day, shadows, speed bumps,
-    wet asphalt and puddles, fog, headlights, other vehicles, snow on the verges. Applied to the
-    images (lanekeep/conditions.py): rain streaks and lens drops, snowflakes, sensor noise,
-    motion blur, low-light gain. The default sun reproduces world.py's clear-day light.
+    wet asphalt and puddles, headlights, other vehicles, snow on the verges. Applied to the
+    images with the render's depth (lanekeep/weather_effects.py): Koschmieder fog, rain streaks
+    in depth, wet-road reflections, lens drops, snowflakes, motion blur; `noise` is extra read
+    noise of the camera model (lanekeep/camera_sensor.py, which also does the exposure). The
+    default sun reproduces world.py's clear-day light.
     """
 
     time_of_day: str = "day"  # "day" | "dawn" | "dusk" | "night"; headlights on unless "day"
@@ -274,6 +307,7 @@ class Scenario:
     conditions: Conditions = field(default_factory=Conditions)
     estimation: EstimationConfig = field(default_factory=EstimationConfig)
     sensors: SensorsConfig = field(default_factory=SensorsConfig)
+    roadside: Roadside = field(default_factory=Roadside)  # props: lanekeep/world_props.py
     source: str = field(default="", metadata={"toml": False})  # file it was read from
 
     def __post_init__(self):

@@ -1,7 +1,8 @@
 """Builds the MuJoCo world of a scenario with `mujoco.MjSpec`: the car, road, markings, sky.
 
 The car comes from mjcf/car.xml; everything else is added procedurally:
-  - the road surface: one textured ribbon mesh per road segment (asphalt with grain),
+  - the road surface: one textured mesh per road segment (asphalt or concrete with joints,
+    cracks, patches and tyre marks: lanekeep/pavement.py),
     gravel shoulders, and a grass ground plane that also carries the tyre contacts;
   - lane markings: one mesh geom per boundary, road segment and paint brightness, so that the
     segmentation render gives exact per-boundary masks (`World.marking_boundary[geom_id]`);
@@ -19,8 +20,10 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from lanekeep import textures
+from lanekeep import pavement, textures
 from lanekeep.cameras import GROUP_MARKING, GROUP_WORLD
+from lanekeep.markings import MarkingPiece
+from lanekeep.pavement import LANE_U, SLAB_M
 from lanekeep.road import Road
 from lanekeep.road_mesh import Ribbon, ribbon
 from lanekeep.scenario import Scenario, ScenarioError
@@ -38,6 +41,10 @@ from lanekeep.world_parts import (
 )
 from lanekeep.world_traffic import update_dynamic
 from mjcf import CAR_XML
+
+PAVEMENT_SEED = 0x9A5E  # the pavement texture's own generator: [scenario seed, this]
+PAINT_SEED = 0x9A17  # the worn paint texture's
+DOT_HEIGHT_M = 0.015  # a Botts' dot's dome above the paint layer
 
 
 @dataclass
@@ -133,17 +140,44 @@ def _add_environment(spec: mujoco.MjSpec, road: Road, scenario: Scenario,
     )
 
 
-def _asphalt_mesh(road: Road, s0: float, s1: float, right: float, left: float,
-                  layout: WorldLayout, grid_step_m: float | None) -> Ribbon:
-    """One segment's asphalt: a single ribbon, or (per-vertex spot lighting) a grid of strips
-    `grid_step_m` wide, each cut at most twice as long."""
-    if grid_step_m is None:
-        return ribbon(road, s0, s1, right, left, ROAD_Z_M, layout.tile_m)
-    cuts = np.linspace(right, left, max(1, math.ceil((left - right) / grid_step_m)) + 1)
-    return Ribbon.concatenate([
-        ribbon(road, s0, s1, a, b, ROAD_Z_M, layout.tile_m, max_step_m=2 * grid_step_m)
-        for a, b in zip(cuts[:-1], cuts[1:], strict=True)
-    ])
+def _atlas_strip(road: Road, s0: float, s1: float, r0: float, r1: float, u0: float,
+                 u1: float, v_shift: float, layout: WorldLayout,
+                 grid_step_m: float | None) -> Ribbon:
+    """A ribbon from r0 to r1 whose texture u runs from u0 to u1 (a part of the pavement atlas)
+    and v = s / period + v_shift; with per-vertex spot lighting, a grid of strips `grid_step_m`
+    wide, each cut at most twice as long."""
+    lo, hi = min(r0, r1), max(r0, r1)
+    n_strips = 1 if grid_step_m is None else max(1, math.ceil((hi - lo) / grid_step_m))
+    cuts = np.linspace(lo, hi, n_strips + 1)
+    step = 2.0 if grid_step_m is None else 2.0 * grid_step_m
+    strips = []
+    for a, b in zip(cuts[:-1], cuts[1:], strict=True):
+        strip = ribbon(road, s0, s1, a, b, ROAD_Z_M, tile_m=1.0, max_step_m=step)
+        r, s = strip.texcoords[:, 0], strip.texcoords[:, 1]  # metres (tile 1 m)
+        uv = np.stack([u0 + (u1 - u0) * (r - r0) / (r1 - r0),
+                       s / layout.pavement_period_m + v_shift], 1)
+        strips.append(Ribbon(strip.vertices, strip.faces, uv))
+    return Ribbon.concatenate(strips)
+
+
+def _asphalt_mesh(road: Road, s0: float, s1: float, layout: WorldLayout,
+                  grid_step_m: float | None) -> Ribbon:
+    """One segment's pavement: each lane and each shoulder mapped onto its part of the atlas
+    (lanekeep/pavement.py). Lanes start the texture one slab apart, so neighbours differ while
+    concrete's transverse joints still run straight across the road."""
+    slab_v = SLAB_M / layout.pavement_period_m
+    edge_right, edge_left = road.boundary_r(0), road.boundary_r(road.n_lanes)
+    strips = [  # shoulders: u = LANE_U at the edge line, 1 at the outer side
+        _atlas_strip(road, s0, s1, edge_right, edge_right - layout.shoulder_m, LANE_U, 1.0,
+                     0.0, layout, grid_step_m),
+        _atlas_strip(road, s0, s1, edge_left, edge_left + layout.shoulder_m, LANE_U, 1.0,
+                     slab_v * road.n_lanes, layout, grid_step_m),
+    ]
+    for lane in range(road.n_lanes):
+        strips.append(_atlas_strip(road, s0, s1, road.boundary_r(lane),
+                                   road.boundary_r(lane + 1), 0.0, LANE_U, slab_v * lane,
+                                   layout, grid_step_m))
+    return Ribbon.concatenate(strips)
 
 
 def _surface_pieces(road: Road, layout: WorldLayout) -> list[tuple[float, float]]:
@@ -160,7 +194,7 @@ def _add_road_surface(spec: mujoco.MjSpec, road: Road, layout: WorldLayout,
     edge_right, edge_left = road.boundary_r(0), road.boundary_r(road.n_lanes)
     asphalt_right, asphalt_left = edge_right - layout.shoulder_m, edge_left + layout.shoulder_m
     for i, (s0, s1) in enumerate(_surface_pieces(road, layout)):
-        asphalt = _asphalt_mesh(road, s0, s1, asphalt_right, asphalt_left, layout, grid_step_m)
+        asphalt = _asphalt_mesh(road, s0, s1, layout, grid_step_m)
         add_mesh_geom(spec, f"road_{i}", asphalt, "asphalt", GROUP_WORLD)
         gravel = Ribbon.concatenate(
             [
@@ -173,10 +207,27 @@ def _add_road_surface(spec: mujoco.MjSpec, road: Road, layout: WorldLayout,
         add_mesh_geom(spec, f"shoulder_{i}", gravel, "gravel", GROUP_WORLD)
 
 
+def _dot_mesh(road: Road, piece: MarkingPiece, sides: int = 8) -> Ribbon:
+    """A raised pavement marker: a low dome (a fan of `sides` triangles around a raised
+    centre), which catches the light as a ceramic Botts' dot does."""
+    radius = piece.width_m / 2.0
+    s_mid = 0.5 * (piece.s_start_m + piece.s_end_m)
+    ang = np.linspace(0.0, 2.0 * np.pi, sides, endpoint=False)
+    s = np.r_[s_mid, s_mid + radius * np.cos(ang)]
+    r = np.r_[piece.r_m, piece.r_m + radius * np.sin(ang)]
+    z = np.r_[MARKING_Z_M + DOT_HEIGHT_M, np.full(sides, MARKING_Z_M)]
+    verts = np.c_[road.position(s, r), z]
+    k = np.arange(1, sides + 1)
+    faces = np.stack([np.zeros(sides, int), k, np.roll(k, -1)], 1).astype(np.int32)
+    uv = np.c_[r - piece.r_m, s - s_mid] / piece.width_m
+    return Ribbon(verts, faces, uv)
+
+
 def _add_markings(
     spec: mujoco.MjSpec, road: Road, layout: WorldLayout
 ) -> dict[str, int]:
-    """Marking meshes grouped by (boundary, segment, brightness level); name -> boundary."""
+    """Marking meshes grouped by (boundary, segment, brightness level); name -> boundary.
+    Faded levels use the worn paint texture (asphalt showing through pits and scuffs)."""
     styles = road.markings
     groups: dict[tuple[int, int, int], list[Ribbon]] = {}
     bounds = road.segment_bounds()
@@ -186,8 +237,9 @@ def _add_markings(
         segment = int(np.searchsorted(starts, piece.s_start_m, side="right") - 1)
         level = int(np.clip(round(piece.brightness * (levels - 1)), 0, levels - 1))
         half = piece.width_m / 2.0
-        strip = ribbon(road, piece.s_start_m, piece.s_end_m, piece.r_m - half, piece.r_m + half,
-                       MARKING_Z_M, tile_m=1.0, max_step_m=1.0)
+        strip = _dot_mesh(road, piece) if piece.dot else ribbon(
+            road, piece.s_start_m, piece.s_end_m, piece.r_m - half, piece.r_m + half,
+            MARKING_Z_M, tile_m=1.0, max_step_m=1.0)
         groups.setdefault((piece.boundary, segment, level), []).append(strip)
     names: dict[str, int] = {}
     for (boundary, segment, level), strips in sorted(groups.items()):
@@ -196,7 +248,7 @@ def _add_markings(
         material = f"paint_b{boundary}_l{level}"
         if material not in {m.name for m in spec.materials}:
             add_material(
-                spec, material, "paint",
+                spec, material, "paint" if level == levels - 1 else "paint_worn",
                 rgba=[*(colour * brightness), 1.0], specular=0.2, shininess=0.3,
             )
         name = f"marking_b{boundary}_s{segment}_l{level}"
@@ -216,10 +268,14 @@ def build_spec(
     spec.visual.global_.offwidth = max(scenario.camera.width, 1280)
     spec.visual.global_.offheight = max(scenario.camera.height, 720)
     rng = np.random.default_rng(scenario.seed)
-    add_texture(spec, "asphalt", textures.asphalt(rng, layout.texture_px))
+    add_texture(spec, "asphalt", pavement.pavement(
+        np.random.default_rng([scenario.seed, PAVEMENT_SEED]), scenario.road.pavement,
+        road.lane_width_m, layout.shoulder_m, layout.pavement_period_m, layout.texture_px))
     add_texture(spec, "gravel", textures.gravel(rng))
     add_texture(spec, "grass", textures.grass(rng))
     add_texture(spec, "paint", textures.paint(rng))
+    add_texture(spec, "paint_worn", textures.worn_paint(np.random.default_rng([scenario.seed,
+                                                                               PAINT_SEED])))
     look = appearance_of(scenario, road)
     surf = look.surfaces
     add_material(spec, "asphalt", "asphalt", rgba=list(surf.asphalt_rgba),
@@ -261,10 +317,11 @@ def _check_control_period(scenario: Scenario, timestep: float) -> None:
 
 
 def check_scenario(scenario: Scenario) -> None:
-    """The checks across a scenario's fields that `build` makes, in ~10 ms instead of its ~1 s:
-    the build's own code on the bare car (the road, the conditions added to the car's MjSpec:
-    speed bumps beyond the road, vehicles in a lane that does not exist, shadows the sun cannot
-    cast) and the control period against the physics timestep.
+    """The checks across a scenario's fields that `build` makes, in 30-160 ms instead of its
+    1-2 s: the build's own code on the bare car (the road, the conditions and props added to
+    the car's MjSpec: speed bumps beyond the road, vehicles in a lane that does not exist,
+    shadows the sun cannot cast, a sign beyond the road) and the control period against the
+    physics timestep.
 
     Raises:
       ScenarioError: naming the scenario's file and key.

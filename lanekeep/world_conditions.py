@@ -23,8 +23,10 @@ work is split by concern: lanekeep/world_lighting.py (car lights), world_roadsid
     Scenes without fog put it beyond the far clip plane, so the render flag can stay on.
   - Snow: white verges (the grass and gravel materials use the snow texture made here) and snow
     drifts over the asphalt shoulders.
-  - Other vehicles: mocap bodies (body box + cabin + axles) moved along their lanes by
-    `update_dynamic(world, t_s)`; `occluded_marking_share` measures how much paint they hide.
+  - Other vehicles: cars, vans and trucks built from primitives (lanekeep/vehicle_assets.py:
+    wheels on the ground, windows, lights, contact and cast shadows) on mocap bodies moved
+    along their lanes by `update_dynamic(world, t_s)`; `occluded_marking_share` measures how
+    much paint they hide.
 """
 
 from __future__ import annotations
@@ -41,6 +43,7 @@ from lanekeep.world_lighting import (
     sun_direction,
 )
 from lanekeep.world_parts import ConditionsInfo, WorldLayout
+from lanekeep.world_props import add_props
 from lanekeep.world_roadside import add_bumps, add_shadow_zone, add_snow, add_wet, overlay_alpha
 from lanekeep.world_traffic import add_vehicle
 
@@ -63,6 +66,7 @@ def add_conditions(spec: mujoco.MjSpec, scenario: Scenario, road: Road,
                           rgba=[0.0, 0.0, 0.0, overlay_alpha(zone.darkness)],
                           specular=0.0, shininess=0.0)
         add_shadow_zone(spec, road, zone, i, to_sun, rng, info, layout)
+    add_props(spec, scenario, road, to_sun, info, layout)  # after the zones: their shadows
     if cond.speed_bumps_m:
         spec.add_material(name="cond_bump", rgba=[0.95, 0.75, 0.1, 1.0], specular=0.2)
         add_bumps(spec, road, cond, info, layout)

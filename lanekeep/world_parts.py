@@ -25,8 +25,9 @@ class WorldLayout:
 
     shoulder_m: float = 1.5  # asphalt beyond the outer edge line
     gravel_m: float = 1.2  # gravel strip beyond the asphalt
-    tile_m: float = 4.0  # asphalt texture period
-    texture_px: int = 512
+    tile_m: float = 4.0  # texture period of the gravel and of overlays on the road
+    pavement_period_m: float = 9.0  # pavement texture period along the road (2 concrete slabs)
+    texture_px: int = 1024  # pavement texture rows (along the road); half as many columns
     paint_brightness_levels: int = 4  # worn paint is quantised into this many materials
     # The road continues straight this far before s = 0 and after its end (Road.position
     # extrapolates there), so the rear camera at the start does not see the asphalt end.

@@ -10,10 +10,11 @@ import cv2
 import mujoco
 import numpy as np
 
+from lanekeep import prop_assets as assets
 from lanekeep import textures
 from lanekeep.cameras import GROUP_SHADOW, GROUP_WORLD
 from lanekeep.road import Road
-from lanekeep.road_mesh import Ribbon, ribbon
+from lanekeep.road_mesh import Ribbon
 from lanekeep.scenario import Conditions, ShadowZone
 from lanekeep.world_appearance import SNOW_TEXTURE
 from lanekeep.world_parts import (
@@ -24,12 +25,14 @@ from lanekeep.world_parts import (
     add_texture,
     yaw_quat,
 )
+from lanekeep.world_snow import add_snow_cover
 
 BUMP_LENGTH_M = 0.6  # chord of a speed bump along the road
 BUMP_STRIPE_RAISE_M = 0.004  # the stripes (cylinders) stand this much proud of the bump
 DRAPE_MARGIN_M = 0.004  # a shadow draped over a bump floats this far above its stripes
 DRAPE_STRIPS = 12  # flat strips a draped shadow follows a bump's arc with (sagitta < 1 mm)
 _MIN_PIECE_M2 = 1e-6
+RUT_PUDDLE_SHARE = 0.7  # puddles that lie in a wheel path
 
 
 def overlay_alpha(opacity: float) -> float:
@@ -67,8 +70,8 @@ def _area(poly: np.ndarray) -> float:
     """Signed (shoelace) area of a polygon (n, 2): > 0 when counter-clockwise."""
     if len(poly) < 3:
         return 0.0
-    x, y = poly[:, 0], poly[:, 1]
-    return 0.5 * float(np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y))
+    x, y = poly[:, 0], poly[:, 1]  # (slices, not np.roll: called thousands of times)
+    return 0.5 * float(x[:-1] @ y[1:] - x[1:] @ y[:-1] + x[-1] * y[0] - x[0] * y[-1])
 
 
 def _clip(poly: np.ndarray, normal: np.ndarray, offset: float) -> np.ndarray:
@@ -108,14 +111,15 @@ def disjoint_pieces(polygons: list[np.ndarray]) -> list[np.ndarray]:
     Overlapping triangles of one translucent mesh blend once each: where two casters' shadows
     overlapped, the road was shaded twice. Each polygon loses what earlier ones cover.
     """
+    polygons = [np.asarray(p, dtype=float) for p in polygons]
+    lo = np.array([p.min(0) for p in polygons]).reshape(-1, 2)
+    hi = np.array([p.max(0) for p in polygons]).reshape(-1, 2)
     out = []
     for i, poly in enumerate(polygons):
-        pieces = [np.asarray(poly, dtype=float)]
-        lo, hi = pieces[0].min(0), pieces[0].max(0)
-        for hole in polygons[:i]:
-            if (hole.min(0) > hi).any() or (hole.max(0) < lo).any():
-                continue
-            pieces = [p for piece in pieces for p in _minus(piece, hole)]
+        pieces = [poly]
+        near = np.flatnonzero(np.all((lo[:i] <= hi[i]) & (hi[:i] >= lo[i]), axis=1))
+        for j in near:
+            pieces = [p for piece in pieces for p in _minus(piece, polygons[j])]
         out.extend(pieces)
     return out
 
@@ -144,14 +148,17 @@ def _shadow_per_height(road: Road, s: float, to_sun: np.ndarray) -> tuple[np.nda
 def add_shadow_zone(spec: mujoco.MjSpec, road: Road, zone: ShadowZone, index: int,
                     to_sun: np.ndarray, rng: np.random.Generator, info: ConditionsInfo,
                     layout: WorldLayout) -> None:
+    """Buildings with facades or trees with crowns (lanekeep/prop_assets.py) beside the road,
+    tall enough that the sun throws their shadows `zone.reach` across it: one mesh per material
+    and one shadow overlay per zone."""
     sign = 1.0 if zone.side == "left" else -1.0
     face_r = _verge_r(road, zone.side, layout) + sign * 1.0  # casters stand 1 m beyond the gravel
     width = road.boundary_r(road.n_lanes) - road.boundary_r(0)
     target_r = road.boundary_r(road.n_lanes if zone.side == "right" else 0)
     target_r += sign * width * (1.0 - zone.reach)
-    polygons = []
+    casters = assets.Props()
+    variety = rng.spawn(1)[0]  # facades and crowns: the zone's own stream, `rng` draws as before
     s = zone.s_start_m
-    k = 0
     while s < zone.s_end_m:
         if zone.kind == "buildings":
             length = min(rng.uniform(10.0, 24.0), zone.s_end_m - s)
@@ -168,50 +175,24 @@ def add_shadow_zone(spec: mujoco.MjSpec, road: Road, zone: ShadowZone, index: in
             )
         reach_height = abs(face_r - target_r) / abs(lateral) * rng.uniform(1.0, 1.15)
         th = float(road.heading_at(s_mid))
-        t_hat = np.array([math.cos(th), math.sin(th)])
-        n_hat = np.array([-math.sin(th), math.cos(th)])
         centre = road.position(s_mid, face_r + sign * 0.5 * depth)
-        name = f"cond_{zone.kind}_{index}_{k}"
         if zone.kind == "buildings":
             height = float(np.clip(reach_height, 3.0, 80.0))
-            shade = rng.uniform(0.45, 0.8)
-            spec.worldbody.add_geom(
-                name=name, type=mujoco.mjtGeom.mjGEOM_BOX, group=GROUP_WORLD,
-                pos=[*centre, 0.5 * height], quat=yaw_quat(th),
-                size=[0.5 * length, 0.5 * depth, 0.5 * height],
-                rgba=[shade, shade * rng.uniform(0.85, 1.0), shade * rng.uniform(0.75, 0.95), 1.0],
-                contype=0, conaffinity=0,
-            )
-            corners = np.array([[a, b] for a in (-0.5, 0.5) for b in (-0.5, 0.5)])
-            foot = centre + corners[:, :1] * length * t_hat + corners[:, 1:] * depth * n_hat
-            box = np.concatenate([np.c_[foot, np.zeros(4)], np.c_[foot, np.full(4, height)]])
-            polygons.append(cast_shadow(box, to_sun))
+            rng.uniform(0.45, 0.8, 3)  # (the boxes' colour before facades: keeps the draws)
+            assets.building(casters, variety, centre, th, length, depth, height)
         else:
             radius = 0.5 * length
             crown = float(np.clip(reach_height, 2.0 * radius + 2.0, 25.0))  # canopy centre
-            trunk = crown - 0.8 * radius
-            spec.worldbody.add_geom(
-                name=f"{name}_trunk", type=mujoco.mjtGeom.mjGEOM_CYLINDER, group=GROUP_WORLD,
-                pos=[*centre, 0.5 * trunk], size=[0.25, 0.5 * trunk, 0],
-                rgba=[0.3, 0.22, 0.15, 1.0], contype=0, conaffinity=0,
-            )
-            spec.worldbody.add_geom(
-                name=name, type=mujoco.mjtGeom.mjGEOM_ELLIPSOID, group=GROUP_WORLD,
-                pos=[*centre, crown], size=[radius, radius, 0.8 * radius],
-                rgba=[0.12, rng.uniform(0.3, 0.42), 0.1, 1.0], contype=0, conaffinity=0,
-            )
-            ang = np.linspace(0.0, 2 * np.pi, 24, endpoint=False)
-            ring = np.stack([np.cos(ang), np.sin(ang)], 1)
-            canopy = np.concatenate([
-                np.c_[centre + radius * ring, np.full(24, crown)],
-                np.c_[centre + 0.6 * radius * ring, np.full(24, crown + 0.6 * radius)],
-                np.c_[centre + 0.6 * radius * ring, np.full(24, crown - 0.6 * radius)],
-            ])
-            polygons.append(cast_shadow(canopy, to_sun))
-        info.caster_names.append(name)
+            rng.uniform(0.3, 0.42)  # (the lollipop's green before crowns: keeps the draws)
+            column = max(0.0, 0.75 * (crown - radius - 3.0))  # leaves down a tall tree
+            assets.tree(casters, variety, centre, crown, radius, column)
         gap = length * (1.0 - zone.coverage) / zone.coverage * rng.uniform(0.6, 1.4)
         s += length + gap
-        k += 1
+    for material, meshes in sorted(casters.meshes.items()):
+        name = f"cond_{zone.kind}_{index}_{material.removeprefix('prop_')}"
+        add_mesh_geom(spec, name, Ribbon.concatenate(meshes), material, GROUP_WORLD)
+        info.caster_names.append(name)
+    polygons = [cast_shadow(points, to_sun) for points in casters.casters]
     if polygons:
         add_mesh_geom(spec, f"cond_shadow_{index}",
                       _polygon_mesh(disjoint_pieces(polygons), OVERLAY_Z_M),
@@ -316,7 +297,8 @@ def _drape_shadows(spec: mujoco.MjSpec, centre: np.ndarray, heading: float, half
 def add_wet(spec: mujoco.MjSpec, road: Road, cond: Conditions, rng: np.random.Generator,
              info: ConditionsInfo, layout: WorldLayout) -> None:
     """Puddles as dark glossy overlays (the wet asphalt itself is a material tint decided in
-    lanekeep/world_appearance.py)."""
+    lanekeep/world_appearance.py). Most lie in the wheel paths, where traffic wears ruts:
+    long and narrow along the lane; the rest anywhere on the pavement, rounder."""
     w = cond.wet
     right = road.boundary_r(0) - layout.shoulder_m + 0.3
     left = road.boundary_r(road.n_lanes) + layout.shoulder_m - 0.3
@@ -324,9 +306,15 @@ def add_wet(spec: mujoco.MjSpec, road: Road, cond: Conditions, rng: np.random.Ge
     ang = np.linspace(0.0, 2 * np.pi, 16, endpoint=False)
     polygons = []
     for _ in range(n):
-        s, r = rng.uniform(0.0, road.length_m), rng.uniform(right, left)
-        a, b = rng.uniform(0.4, 1.5), rng.uniform(0.3, 0.8)
-        th = float(road.heading_at(s)) + rng.uniform(-0.3, 0.3)
+        s = rng.uniform(0.0, road.length_m)
+        if rng.random() < RUT_PUDDLE_SHARE:
+            lane = int(rng.integers(road.n_lanes))
+            r = road.lane_center_r(lane) + rng.choice([-0.85, 0.85]) + rng.normal(0.0, 0.08)
+            a, b, turn = rng.uniform(0.6, 2.5), rng.uniform(0.15, 0.4), rng.uniform(-0.08, 0.08)
+        else:
+            r = rng.uniform(right, left)
+            a, b, turn = rng.uniform(0.4, 1.5), rng.uniform(0.3, 0.8), rng.uniform(-0.3, 0.3)
+        th = float(road.heading_at(s)) + turn
         c, sn = math.cos(th), math.sin(th)
         local = np.stack([a * np.cos(ang), b * np.sin(ang)], 1)
         rot = local @ np.array([[c, sn], [-sn, c]])
@@ -339,20 +327,14 @@ def add_wet(spec: mujoco.MjSpec, road: Road, cond: Conditions, rng: np.random.Ge
 
 def add_snow(spec: mujoco.MjSpec, road: Road, cond: Conditions,
               rng: np.random.Generator, layout: WorldLayout) -> None:
-    """The snow texture that the verge materials use (lanekeep/world_appearance.py) and snow
-    drifts over the asphalt shoulders."""
+    """The snow texture that the verge materials use (lanekeep/world_appearance.py) and packed
+    snow on the carriageway between the wheel paths (lanekeep/world_snow.py)."""
     tex = textures.gravel(rng)
     snow = np.clip(235 + (tex.astype(np.int16) - tex.mean()) * 0.25, 0, 255).astype(np.uint8)
     add_texture(spec, SNOW_TEXTURE, snow)
-    spec.add_material(name="cond_snowdrift",
-                      rgba=[0.95, 0.96, 0.98, overlay_alpha(0.35 + 0.55 * cond.snow)],
-                      specular=0.1, shininess=0.1)
-    inner = 0.25 + 0.9 * (1.0 - cond.snow)  # distance kept clear of the edge lines (m)
-    for i, (s0, s1) in enumerate(road.segment_bounds()):
-        drifts = Ribbon.concatenate([
-            ribbon(road, s0, s1, road.boundary_r(0) - layout.shoulder_m,
-                   road.boundary_r(0) - inner, OVERLAY_Z_M, layout.tile_m),
-            ribbon(road, s0, s1, road.boundary_r(road.n_lanes) + inner,
-                   road.boundary_r(road.n_lanes) + layout.shoulder_m, OVERLAY_Z_M, layout.tile_m),
-        ])
-        add_mesh_geom(spec, f"cond_snowdrift_{i}", drifts, "cond_snowdrift", GROUP_SHADOW)
+    spec.add_material(name="cond_snow_cover", rgba=[0.93, 0.94, 0.97, 1.0], specular=0.15,
+                      shininess=0.2)
+    spec.materials[-1].textures[mujoco.mjtTextureRole.mjTEXROLE_RGB] = SNOW_TEXTURE
+    spec.add_material(name="cond_snow_slush", rgba=[0.62, 0.62, 0.63, overlay_alpha(0.5)],
+                      specular=0.3, shininess=0.3)
+    add_snow_cover(spec, road, cond, rng, layout, "cond_snow_cover", "cond_snow_slush")

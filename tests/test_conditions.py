@@ -11,9 +11,16 @@ import numpy as np
 import pytest
 
 from lanekeep import conditions as effects
+from lanekeep.camera_sensor import tone_curve
 from lanekeep.cameras import CameraRig, RenderSettings
 from lanekeep.render import place_on_road
-from lanekeep.scenario import Conditions, ScenarioError, load_scenario, parse_scenario
+from lanekeep.scenario import (
+    CameraConfig,
+    Conditions,
+    ScenarioError,
+    load_scenario,
+    parse_scenario,
+)
 from lanekeep.world import build
 from lanekeep.world_traffic import occluded_marking_share, update_dynamic
 
@@ -241,20 +248,28 @@ def clear_frame(straight_world):
 
 
 def _hf_energy(rgb):
-    """Laplacian energy of the sky (the top third: smooth without weather)."""
-    sky = _grey(rgb[: rgb.shape[0] // 3]).astype(np.float32)
-    return float(np.mean(cv2.Laplacian(sky, cv2.CV_32F) ** 2))
+    """Laplacian energy of the bottom third (a flat road in the test frame)."""
+    road = _grey(rgb[2 * rgb.shape[0] // 3:]).astype(np.float32)
+    return float(np.mean(cv2.Laplacian(road, cv2.CV_32F) ** 2))
 
 
 @pytest.mark.parametrize("condition", ["rain", "snow"])
-def test_rain_and_snow_raise_high_frequency_energy(clear_frame, condition):
-    out = effects.apply(clear_frame, Conditions(**{condition: 0.8}), np.random.default_rng(1))
-    assert out.shape == clear_frame.shape and out.dtype == np.uint8
-    assert _hf_energy(out) > 5.0 * _hf_energy(clear_frame) + 1.0
+def test_rain_and_snow_raise_high_frequency_energy(condition):
+    flat = np.full((720, 1280, 3), 60, np.uint8)  # a smooth dark road: rain and snow show
+    out = effects.apply(flat, Conditions(**{condition: 0.8}), np.random.default_rng(1),
+                        speed_mps=15.0, camera=BARE_CAMERA)
+    assert out.shape == flat.shape and out.dtype == np.uint8
+    assert _hf_energy(flat) == 0.0 and _hf_energy(out) > 3.0  # streaks / flakes: texture
+
+
+# The weather alone, through a camera that adds nothing (the auto-exposure would undo a
+# whitening, as a real one does).
+BARE_CAMERA = CameraConfig(read_noise_dn=0.0, auto_exposure=False, vignetting=0.0)
 
 
 def test_snow_whitens_the_image(clear_frame):
-    out = effects.apply(clear_frame, Conditions(snow=0.8), np.random.default_rng(1))
+    out = effects.apply(clear_frame, Conditions(snow=0.8), np.random.default_rng(1),
+                        camera=BARE_CAMERA)
     assert _grey(out).mean() > _grey(clear_frame).mean() + 15
 
 
@@ -262,21 +277,39 @@ def test_noise_raises_the_residual_against_a_denoised_image(clear_frame):
     def residual(img):
         return float(np.abs(img.astype(float) - cv2.medianBlur(img, 3)).mean())
 
-    out = effects.apply(clear_frame, Conditions(noise=0.5), np.random.default_rng(1))
+    out = effects.apply(clear_frame, Conditions(noise=0.5), np.random.default_rng(1),
+                        camera=BARE_CAMERA)
     assert residual(out) > 2.0 * residual(clear_frame)
-    assert abs(_grey(out).mean() - _grey(clear_frame).mean()) < 3.0  # zero-mean noise
+    tone_only = effects.apply(clear_frame, Conditions(), np.random.default_rng(1),
+                              camera=BARE_CAMERA)
+    assert abs(_grey(out).mean() - _grey(tone_only).mean()) < 3.0  # zero-mean noise
 
 
-def test_motion_blur_smooths_along_the_image_columns_only():
-    rows = np.zeros((720, 1280, 3), np.uint8)
-    rows[::2] = 200  # horizontal stripes: smeared by a vertical blur
-    cols = np.zeros((720, 1280, 3), np.uint8)
-    cols[:, ::2] = 200  # vertical stripes: untouched
+def test_motion_blur_is_radial_about_the_focus_of_expansion():
+    """Forward motion streams the image away from the focus of expansion (FOE): a horizontal
+    line far below it is smeared vertically (its peak drops), one through it is not; a vertical
+    line far beside it is smeared, one straight below it is not."""
     cond = Conditions(motion_blur=1.0)
-    rng = np.random.default_rng(1)
-    assert np.abs(np.diff(_grey(effects.apply(rows, cond, rng, 15.0)), axis=0)).max() < 30
-    assert np.array_equal(effects.apply(cols, cond, rng, 15.0), cols)
-    assert np.array_equal(effects.apply(rows, cond, rng, 0.0), rows)  # no speed, no blur
+
+    def blurred(img, speed):
+        fx = effects.ImageEffects(cond, 720, 1280, np.random.default_rng(1), BARE_CAMERA)
+        return _grey(fx(img, np.random.default_rng(1), speed)), fx.weather.foe
+
+    _, (u_foe, v_foe) = blurred(np.zeros((720, 1280, 3), np.uint8), 0.0)
+    u0, v0 = int(round(u_foe)), int(round(v_foe))
+    lines = np.zeros((720, 1280, 3), np.uint8)  # lines 3 px wide (1-px detail is softened:
+    lines[v0 - 1:v0 + 2] = lines[699:702] = 200  # the scaled exposures are made at half size)
+    lines[:, u0 - 1:u0 + 2] = lines[:, 1249:1252] = 200  # through the FOE and beside it
+    tone = _grey(effects.apply(lines, Conditions(), np.random.default_rng(1),
+                               camera=BARE_CAMERA))
+    out, _ = blurred(lines, 15.0)
+    peak = tone.max()
+    assert out[v0 - 2:v0 + 3, u0 + 20:u0 + 60].max() > 0.9 * peak  # through the FOE: sharp
+    assert out[690:711, u0 + 20:u0 + 60].max(axis=0).max() < 0.8 * peak  # below: smeared
+    assert out[v0 + 20:v0 + 60, u0 - 2:u0 + 3].max() > 0.9 * peak  # below the FOE: sharp
+    assert out[v0 - 60:v0 - 20, 1235:1266].max(axis=1).max() < 0.8 * peak  # beside: smeared
+    still, _ = blurred(lines, 0.0)
+    assert np.array_equal(still, tone)  # no speed, no blur
 
 
 def test_night_gain_brightens_and_adds_noise(clear_frame):
@@ -300,9 +333,17 @@ def test_effects_are_deterministic_for_a_seed(clear_frame):
     assert not np.array_equal(a[0], a[1])  # frames differ within an episode
 
 
-def test_no_conditions_leave_the_image_unchanged(clear_frame):
+def test_no_conditions_and_a_bare_camera_give_the_tone_curve_only(clear_frame):
+    out = effects.apply(clear_frame, Conditions(), np.random.default_rng(0), camera=BARE_CAMERA)
+    tone = np.round(255.0 * tone_curve(np.arange(256) / 255.0)).astype(np.uint8)
+    assert np.array_equal(out, cv2.LUT(clear_frame, tone)) and out is not clear_frame
+
+
+def test_the_default_camera_changes_even_a_clear_frame(clear_frame):
+    """Noise, vignetting and exposure are always on (lanekeep/camera_sensor.py)."""
     out = effects.apply(clear_frame, Conditions(), np.random.default_rng(0))
-    assert np.array_equal(out, clear_frame) and out is not clear_frame
+    assert not np.array_equal(out, clear_frame)
+    assert abs(_grey(out).mean() - _grey(clear_frame).mean()) < 25
 
 
 # -- schema ----------------------------------------------------------------------------------------

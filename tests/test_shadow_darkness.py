@@ -91,32 +91,22 @@ def _grey(rgb: np.ndarray) -> np.ndarray:
     ("case4_half_shade_straight", 170.0, 200.0),  # the end of the shade, half way along
 ])
 def test_shaded_asphalt_lets_one_minus_darkness_of_the_sunlit_light_through(name, s_from, s_to):
+    """The same pixels of a shaded patch of the ego lane, rendered with and without the
+    scenario's shadows: the shade passes 1 - darkness of the light. (Comparing a shaded patch
+    with a sunlit one beside it measures the pavement too: wheel paths, cracks and patches
+    differ by more than the 10% tolerance within a metre.)"""
     scenario = load_scenario(name)
     (zone,) = scenario.conditions.shadows
-    world = build(scenario)
-    s_car, s_shade, s_sun = _find_view(world, s_from, s_to)
-    pose = _place(world, s_car)
-    rig = CameraRig(world.model, RenderSettings.of(scenario, W, H))
-    try:
-        rgb = rig.render_rgb(world.data, "front")
-        camera = rig.cameras["front"]
-    finally:
-        rig.close()
+    s_car, s_shade, s_sun = _find_view(build(scenario), s_from, s_to)
+    g, g0, camera, pose, world = _pixel_ratio(scenario, s_car)
     shade, sun = (_patch_mask(world, camera, pose, s) for s in (s_shade, s_sun))
-    out = cv2.cvtColor(rgb, cv2.COLOR_RGB2BGR)
-    cv2.imwrite(f"/tmp/shadow_{name.split('_')[0]}.png", out)
-    for mask, colour in ((shade, (0, 0, 255)), (sun, (0, 255, 0))):
-        contours, _ = cv2.findContours(mask.astype(np.uint8), cv2.RETR_EXTERNAL,
-                                       cv2.CHAIN_APPROX_SIMPLE)
-        cv2.drawContours(out, contours, -1, colour, 1)
-    cv2.imwrite(f"/tmp/shadow_{name.split('_')[0]}_patches.png", out)
     assert shade.sum() >= 30 and sun.sum() >= 30
-    g = _grey(rgb)
-    ratio = np.median(g[shade]) / np.median(g[sun])
+    ratio = np.median(g[shade] / np.maximum(g0[shade], 1.0))
     assert ratio == pytest.approx(1.0 - zone.darkness, rel=0.10), (
-        f"shaded/sunlit {ratio:.3f} at s = {s_shade:.1f} / {s_sun:.1f} m (car at {s_car:.1f} m), "
+        f"shaded/unshaded {ratio:.3f} at s = {s_shade:.1f} m (car at {s_car:.1f} m), "
         f"darkness {zone.darkness}"
     )
+    assert np.median(g[sun] / np.maximum(g0[sun], 1.0)) == pytest.approx(1.0, abs=0.02)
 
 
 def _covering(polygons, xy: np.ndarray) -> np.ndarray:

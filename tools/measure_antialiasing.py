@@ -37,9 +37,9 @@ def measure(name: str, seed_offset: int, every: int, seconds: float | None) -> d
     import lanekeep  # noqa: F401 - EGL before mujoco
     from detectors.registry import make_detector
     from lanekeep.cameras import CameraRig, RenderSettings
-    from lanekeep.conditions import ImageEffects
     from lanekeep.episode import Episode
     from lanekeep.ground_truth import lane_truth
+    from lanekeep.render import make_effects
     from lanekeep.scenario import load_scenario
 
     scenario = load_scenario(name)
@@ -52,12 +52,11 @@ def measure(name: str, seed_offset: int, every: int, seconds: float | None) -> d
         rigs, detectors, effects = {}, {}, {}
         for variant in VARIANTS:
             world.model.vis.quality.offsamples = 4 if variant == "msaa4" else 0
-            rig = CameraRig(world.model, RenderSettings(1280, 720, scenario.camera.shadows))
+            rig = CameraRig(world.model, RenderSettings.of(scenario, 1280, 720))
             rigs[variant] = rig
             # Each variant's own effects, made alike (lens drops persist between frames).
-            effects[variant] = {cam: ImageEffects(scenario.conditions, 720, 1280,
-                                                  np.random.default_rng(scenario.seed))
-                                for cam in rig.CAMERA_NAMES}
+            effects[variant] = make_effects(scenario, world, rig,
+                                            np.random.default_rng(scenario.seed))
             detectors[variant] = {
                 **{d: make_detector(d, rig.cameras["front"]) for d in est.front_detectors},
                 "reference": make_detector(est.reference_detector,
@@ -75,10 +74,15 @@ def measure(name: str, seed_offset: int, every: int, seconds: float | None) -> d
                         frames = {}
                         for cam in rigs[variant].CAMERA_NAMES:
                             start = time.perf_counter()
-                            rgb = _variant_frame(variant, rigs[variant].render_rgb(world.data,
-                                                                                    cam))
+                            rig = rigs[variant]
+                            if rig.settings.depth:  # the weather needs the depth too
+                                rgb, depth = rig.render_rgb_depth(world.data, cam)
+                            else:
+                                rgb, depth = rig.render_rgb(world.data, cam), None
+                            rgb = _variant_frame(variant, rgb)
                             render_s[variant] += time.perf_counter() - start
-                            frames[cam] = effects[variant][cam](rgb, rng, speed)
+                            frames[cam] = effects[variant][cam](rgb, rng, speed_mps=speed,
+                                                                depth_m=depth)
                         for det_name, det in detectors[variant].items():
                             camera = "front" if det_name != "reference" else est.reference_camera
                             e = det.detect(frames[camera])

@@ -326,8 +326,7 @@ def render_front(scenario, at_s: float | None = None
     Only the front camera is rendered, plus its segmentation for the marking mask.
     """
     from lanekeep.cameras import CameraRig, RenderSettings
-    from lanekeep.conditions import ImageEffects
-    from lanekeep.render import place_on_road
+    from lanekeep.render import camera_frame, make_effects, place_on_road
     from lanekeep.world import build
 
     world = build(scenario)
@@ -339,10 +338,8 @@ def render_front(scenario, at_s: float | None = None
     settings = RenderSettings.of(scenario)
     with CameraRig(world.model, settings) as rig:
         rng = np.random.default_rng(scenario.seed)
-        effects = {cam: ImageEffects(scenario.conditions, settings.height, settings.width, rng)
-                   for cam in rig.CAMERA_NAMES}
-        rgb = effects["front"](rig.render_rgb(world.data, "front"), rng,
-                               speed_mps=scenario.start.speed_mps)
+        effects = make_effects(scenario, world, rig, rng)
+        rgb = camera_frame(rig, world, "front", effects["front"], rng, scenario.start.speed_mps)
         paint = world.marking_mask(rig.render_segmentation(world.data, "front"))
         horizon = camera_horizon_row(rig.cameras["front"])
     return rgb, paint, horizon

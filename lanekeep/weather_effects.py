@@ -1,0 +1,241 @@
+"""Weather and motion between the scene and the lens: fog, falling rain, snowflakes, drops on
+the lens, motion blur. They use the render's depth (lanekeep/cameras.py reads it from the same
+pass as the colour) so that they sit in the scene, not on top of it.
+
+  - Fog: Koschmieder's law on the range of every pixel, I = I0 t + A (1 - t) with
+    t = exp(-3 d / V) (V: the meteorological visibility, 5% contrast left), A the airlight (the
+    fog colour the world gives the sky's horizon). It replaces MuJoCo's linear fog, which is a
+    wall at 0.6 V.
+  - Rain: streaks in three depth layers (0.8-2, 2-5, 5-12 m), each hidden where the scene is
+    nearer than its layer. A drop's image motion during the exposure is its fall plus the car's
+    motion: away from the focus of expansion on the front camera, towards the focus of
+    contraction on the rear one, longer the nearer the drop. A streak blends towards the
+    airlight (a drop refracts the sky), so it shows on the road and hardly on the sky.
+  - Wet road: a screen-space reflection. On ground pixels (the depth matches the flat ground's)
+    the scene above the horizon is mirrored about the horizon row (distant objects reflect
+    there on a flat wet surface), blurred vertically (a rough water film), and blended with
+    Schlick's Fresnel reflectance of water (R0 = 0.02) at the ray's grazing angle, times
+    WET_FILM * wet (the share of the surface under a water film).
+  - Motion blur: a zoom blur about the focus of expansion (the image flow of forward motion
+    grows with the distance from it), scaled by the speed.
+  - Snowflakes and lens drops as before (flakes of three sizes; drops that stay on the lens and
+    slide down).
+
+Every random choice per frame comes from the generator passed in; `Weather` is made once per
+camera and episode.
+"""
+
+from __future__ import annotations
+
+import math
+
+import cv2
+import numpy as np
+
+from lanekeep.camera_model import CameraModel
+from lanekeep.scenario import Conditions
+from lanekeep.world_lighting import fog_visibility_m
+
+DEPTH_STEP_PX = 4  # the depth map is read at a quarter of the image resolution
+RAIN_LAYERS_M = ((0.8, 2.0), (2.0, 5.0), (5.0, 12.0))  # near and far edge of each layer
+RAIN_STREAKS_PER_LAYER = (350, 550, 700)  # at rain = 1 on a 1280x720 frame
+RAIN_FALL_MPS = 7.0  # terminal velocity of a rain drop
+EXPOSURE_S = 0.005  # the camera's exposure time: how long a drop's streak is
+WATER_R0 = 0.02  # Fresnel reflectance of water at normal incidence
+WET_FILM = 0.5  # share of the road under a mirror-like water film at wet = 1
+REFLECTION_BLUR = 15  # vertical blur of the reflection at 720 rows (a rough film)
+BLUR_SCALE_PER_MPS = 0.0022  # zoom-blur scale per m/s at motion_blur = 1 (9 px at the bottom)
+
+
+def needs_depth(conditions: Conditions) -> bool:
+    """Whether a scenario's weather needs the depth render (fog, rain or a wet road)."""
+    return conditions.fog > 0.0 or conditions.rain > 0.0 or conditions.wet > 0.0
+
+
+def focus_of_expansion(camera: CameraModel, forward: bool) -> np.ndarray:
+    """Pixel (u, v) where the car's straight-ahead (or straight-behind) direction projects."""
+    uv, _ = camera.project(camera.position_m + [1000.0 if forward else -1000.0, 0.0, 0.0])
+    return np.asarray(uv, dtype=float).reshape(2)
+
+
+class Weather:
+    """The weather of one scenario for one camera (`camera`: its model at the frame size)."""
+
+    def __init__(self, conditions: Conditions, camera: CameraModel, airlight_rgb,
+                 rng: np.random.Generator) -> None:
+        self.conditions = c = conditions
+        self.camera = camera
+        self.height, self.width = h, w = camera.height, camera.width
+        self.scale = h / 720.0
+        self.forward = camera.rotation[0, 2] < 0.0  # optical axis (-z) points along +x
+        self.foe = focus_of_expansion(camera, self.forward)
+        self.airlight = np.asarray(airlight_rgb, dtype=float)
+        # Range per unit z-depth at the depth map's pixels (the ray's length to its z).
+        v, u = np.mgrid[DEPTH_STEP_PX // 2:h:DEPTH_STEP_PX, DEPTH_STEP_PX // 2:w:DEPTH_STEP_PX]
+        self.ray_factor = np.sqrt(1.0 + ((u - camera.cx) / camera.fx) ** 2
+                                  + ((v - camera.cy) / camera.fy) ** 2).astype(np.float32)
+        self.extinction_per_m = 3.0 / fog_visibility_m(c.fog) if c.fog > 0.0 else 0.0
+        air = np.clip(np.round(self.airlight), 0, 255).astype(np.uint8)
+        self.air_image = np.empty((h, w, 3), np.uint8)
+        self.air_image[:] = air
+        veil = 0.35 * c.snow
+        self.snow_veil = np.round(np.arange(256) * (1.0 - veil) + 235.0 * veil).astype(np.uint8)
+        self._init_reflection(camera, v, u)
+        # Lens drops: centre (x, y), radius in pixels; they stay and slide down.
+        n_drops = int(round(14 * c.rain))
+        r = rng.uniform(8.0, 30.0, n_drops) * self.scale
+        self.drops = np.c_[rng.uniform(0, w, n_drops), rng.uniform(0, h, n_drops), r]
+
+    @staticmethod
+    def _blend(image: np.ndarray, other: np.ndarray, alpha: np.ndarray) -> np.ndarray:
+        """image (1 - alpha) + other alpha, alpha uint8 (H, W) in 1/255."""
+        a3 = cv2.merge([alpha, alpha, alpha])
+        return cv2.add(cv2.multiply(image, 255 - a3, scale=1 / 255),
+                       cv2.multiply(other, a3, scale=1 / 255))
+
+    def _full(self, small: np.ndarray, interpolation=cv2.INTER_LINEAR) -> np.ndarray:
+        return cv2.resize(small, (self.width, self.height), interpolation=interpolation)
+
+    def _init_reflection(self, camera: CameraModel, v: np.ndarray, u: np.ndarray) -> None:
+        """The flat ground's z-depth at the depth map's pixels, the horizon row, and the
+        reflection's strength per row below it."""
+        xy, valid = camera.pixels_to_ground(np.stack([u, v], -1).astype(float))
+        ground = np.concatenate([xy, np.zeros(xy.shape[:-1] + (1,))], -1)
+        z = camera.to_opencv_frame(np.where(valid[..., None], ground, 0.0))[..., 2]
+        self.ground_z = np.where(valid, z, np.inf).astype(np.float32)
+        self.horizon = int(np.clip(round(camera.horizon_row()), 1, self.height - 1))
+        rows = np.arange(self.height, dtype=float)
+        below = np.arctan(np.maximum(rows - camera.horizon_row(), 0.0) / camera.fy)
+        fresnel = WATER_R0 + (1 - WATER_R0) * (1.0 - np.sin(below)) ** 5
+        share = np.where(rows >= self.horizon, WET_FILM * self.conditions.wet * fresnel, 0.0)
+        self.reflect_alpha = np.round(255 * share).astype(np.uint8)[:, None]
+        self.reflect_rows = int(min(np.count_nonzero(self.reflect_alpha >= 5),
+                                    self.horizon, self.height - self.horizon))
+
+    def wet_reflection(self, image: np.ndarray, depth_m: np.ndarray) -> np.ndarray:
+        """Mirror the view above the horizon onto the wet ground below it (Fresnel-weighted)."""
+        n, top = self.reflect_rows, self.horizon
+        if n < 2:
+            return image
+        ground = np.abs(depth_m - self.ground_z) < 0.04 * self.ground_z
+        mask = self._full(ground.astype(np.uint8) * 255, cv2.INTER_LINEAR)[top:top + n]
+        mirror = image[top - n:top][::-1]
+        k = max(3, int(REFLECTION_BLUR * self.scale) | 1)
+        mirror = cv2.blur(mirror, (3, k))
+        alpha = cv2.multiply(mask, np.broadcast_to(self.reflect_alpha[top:top + n], mask.shape),
+                             scale=1 / 255)
+        out = image.copy()
+        out[top:top + n] = self._blend(image[top:top + n], mirror, alpha)
+        return out
+
+    def range_m(self, depth_m: np.ndarray) -> np.ndarray:
+        """Full-resolution distance of every pixel from the quarter-resolution z-depth."""
+        return self._full(depth_m * self.ray_factor)
+
+    # -- effects ------------------------------------------------------------------------------
+    def fog_alpha(self, depth_m: np.ndarray) -> np.ndarray:
+        """Koschmieder: the airlight's share 1 - exp(-3 d / V) of every pixel (uint8, 1/255)."""
+        transmit = np.exp(-self.extinction_per_m * depth_m * self.ray_factor)
+        return self._full(np.round(255.0 * (1.0 - transmit)).astype(np.uint8))
+
+    def motion_blur(self, image: np.ndarray, speed_mps: float) -> np.ndarray:
+        """Zoom blur about the focus of expansion: the frame and two exposures scaled 1 + k/2
+        and 1 + k, the scaled ones made at half resolution (they are blurred anyway)."""
+        k = BLUR_SCALE_PER_MPS * self.conditions.motion_blur * abs(speed_mps)
+        if k * math.hypot(self.width, self.height) / 2 < 1.5:
+            return image
+        w2, h2 = self.width // 2, self.height // 2
+        half = cv2.resize(image, (w2, h2), interpolation=cv2.INTER_AREA)
+        fx, fy = self.foe / 2.0
+        taps = []
+        for s in (1.0 + k / 2.0, 1.0 + k):
+            m = np.array([[s, 0.0, fx * (1 - s)], [0.0, s, fy * (1 - s)]])
+            taps.append(cv2.warpAffine(half, m, (w2, h2), borderMode=cv2.BORDER_REPLICATE))
+        scaled = self._full(cv2.addWeighted(taps[0], 0.5, taps[1], 0.5, 0.0))
+        return cv2.addWeighted(image, 1.0 / 3.0, scaled, 2.0 / 3.0, 0.0)
+
+    def rain_alpha(self, depth_m: np.ndarray, rng: np.random.Generator,
+                   speed_mps: float) -> np.ndarray:
+        """Streaks in depth layers, hidden behind nearer scene: their share of the airlight
+        (uint8, 1/255)."""
+        amount = self.conditions.rain
+        h, w = self.height, self.width
+        f = self.camera.fy
+        sign = 1.0 if self.forward else -1.0  # away from / towards the focus
+        alpha = np.zeros((h, w), np.uint8)
+        for (near, far), count in zip(RAIN_LAYERS_M, RAIN_STREAKS_PER_LAYER, strict=True):
+            n = int(count * amount * (w * h) / (1280 * 720))
+            z = rng.uniform(near, far, n)
+            p0 = np.c_[rng.uniform(0, w, n), rng.uniform(0, h, n)]
+            velocity = sign * (p0 - self.foe) * abs(speed_mps)
+            velocity[:, 1] += f * RAIN_FALL_MPS
+            p1 = p0 + velocity * (EXPOSURE_S / z)[:, None]
+            lines = np.stack([p0, p1], 1).round().astype(np.int32)
+            layer = np.zeros((h, w), np.uint8)
+            bright = int(round(255 * (0.15 + 0.25 * amount) * 1.8 / (1.0 + near)))
+            cv2.polylines(layer, list(lines), False, bright, 1, cv2.LINE_AA)
+            behind = np.where(depth_m > near, 255, 0).astype(np.uint8)  # scene beyond the layer
+            alpha = cv2.max(alpha, cv2.min(layer, self._full(behind, cv2.INTER_NEAREST)))
+        return cv2.GaussianBlur(alpha, (3, 5), 0)
+
+    def lens_drops(self, image: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+        """Water drops on the lens: soft discs showing a blurred, brightened view."""
+        if len(self.drops) == 0:
+            return image
+        self.drops[:, 1] += rng.uniform(0.0, 1.5, len(self.drops)) * self.scale  # slide down
+        gone = self.drops[:, 1] - self.drops[:, 2] > self.height
+        self.drops[gone, 1] = -self.drops[gone, 2]
+        small = cv2.resize(image, (self.width // 8, self.height // 8), interpolation=cv2.INTER_AREA)
+        blurred = self._full(cv2.blur(small, (3, 3)))
+        blurred = cv2.convertScaleAbs(blurred, alpha=1.1, beta=12)
+        mask = np.zeros((self.height // 4, self.width // 4), np.uint8)
+        for x, y, r in self.drops:
+            cv2.circle(mask, (int(x / 4), int(y / 4)), max(1, int(r / 4)), 255, -1, cv2.LINE_AA)
+        mask = self._full(cv2.blur(mask, (3, 3)))
+        out = image.copy()
+        for x, y, r in self.drops:  # blend only around each drop
+            x0, y0 = max(0, int(x - r - 6)), max(0, int(y - r - 6))
+            x1, y1 = min(self.width, int(x + r + 7)), min(self.height, int(y + r + 7))
+            if x1 > x0 and y1 > y0:
+                out[y0:y1, x0:x1] = self._blend(image[y0:y1, x0:x1], blurred[y0:y1, x0:x1],
+                                                mask[y0:y1, x0:x1])
+        return out
+
+    def snow(self, image: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+        """Flakes of three sizes, soft-edged (near ones larger and blurrier)."""
+        amount = self.conditions.snow
+        h, w = self.height, self.width
+        layer = np.zeros((h, w), np.uint8)
+        for radius, count in ((1, 1800), (2, 500), (4, 90)):
+            n = int(count * amount * (w * h) / (1280 * 720))
+            rad = max(1, int(round(radius * self.scale)))
+            dots = np.zeros((h, w), np.uint8)
+            dots[rng.integers(0, h, n), rng.integers(0, w, n)] = 255
+            kernel = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * rad + 1, 2 * rad + 1))
+            layer = cv2.max(layer, cv2.dilate(dots, kernel))
+        out = self._blend(image, np.full_like(image, 245), cv2.GaussianBlur(layer, (5, 5), 0))
+        return cv2.LUT(out, self.snow_veil)  # falling snow whitens the whole view
+
+    def __call__(self, image: np.ndarray, depth_m: np.ndarray | None,
+                 rng: np.random.Generator, speed_mps: float = 0.0) -> np.ndarray:
+        """The weather on one RGB uint8 frame; `depth_m` is the z-depth at every
+        DEPTH_STEP_PX-th pixel (needed when `needs_depth`). Returns the input when no weather."""
+        c = self.conditions
+        out = image
+        if c.motion_blur > 0.0:
+            out = self.motion_blur(out, speed_mps)
+        if c.wet > 0.0:
+            out = self.wet_reflection(out, depth_m)
+        if c.fog > 0.0 or c.rain > 0.0:  # both veil the scene with the airlight: one blend
+            alpha = self.fog_alpha(depth_m) if c.fog > 0.0 else None
+            if c.rain > 0.0:
+                streaks = self.rain_alpha(depth_m, rng, speed_mps)
+                # the streaks' share of what the fog leaves: a + s (1 - a)
+                alpha = streaks if alpha is None else cv2.add(
+                    alpha, cv2.multiply(streaks, 255 - alpha, scale=1 / 255))
+            out = self._blend(out, self.air_image, alpha)
+        if c.snow > 0.0:
+            out = self.snow(out, rng)
+        if c.rain > 0.0:
+            out = self.lens_drops(out, rng)
+        return out
