@@ -130,6 +130,22 @@ def reject_noise(mask: np.ndarray, max_fill: float, min_coherence: float) -> str
     return ""
 
 
+def drop_speckle(mask: np.ndarray, min_coherence: float) -> tuple[np.ndarray, str]:
+    """A binary ROI without its speckle, or why nothing coherent is left.
+
+    Grainy asphalt under a shade gain, or sensor noise, binarises into isolated pixels. When
+    fewer than `min_coherence` of the pixels survive a 2x2 opening the speckle dominates: the
+    opened mask (the coherent strokes: paint, edges) goes on instead of the whole frame being
+    rejected, as a shaded road with clear paint was; a frame with nothing coherent is noise.
+    """
+    if reject_noise(mask, 1.0, min_coherence) == "":
+        return mask, ""
+    opened = cv2.morphologyEx(mask, cv2.MORPH_OPEN, np.ones((2, 2), np.uint8))
+    if cv2.countNonZero(opened) == 0:
+        return mask, "binary image is all speckle: noise"
+    return opened, ""
+
+
 def binary_bird_eye(frame: np.ndarray, camera: CameraModel, view: BirdsEye, preprocess,
                     binarise, vehicles: VehicleFilter | None = None
                     ) -> tuple[np.ndarray | None, str]:
@@ -152,7 +168,7 @@ def binary_bird_eye(frame: np.ndarray, camera: CameraModel, view: BirdsEye, prep
         return None, noise
     min_rows, max_width = streak_pixels(preprocess, frame.shape[0])
     mask = remove_streaks(mask, min_rows, preprocess.streak_max_tilt_deg, max_width)
-    noise = reject_noise(mask, 1.0, preprocess.min_coherence)
+    mask, noise = drop_speckle(mask, preprocess.min_coherence)
     if noise:
         return None, noise
     bev = np.where(view.warp(mask) >= 128, 255, 0).astype(np.uint8)
