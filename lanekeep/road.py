@@ -141,6 +141,14 @@ class Road:
         th = self._theta(sc, self._seg_index(sc))
         return float(th) if th.ndim == 0 else th
 
+    @property
+    def closed(self) -> bool:
+        """The road ends where it starts, in the same direction (a track to lap): within
+        1 mm and 1 mrad."""
+        gap = np.hypot(*(self.position(self.length_m) - self.position(0.0)))
+        turn = (self.heading_at(self.length_m) - self.heading_at(0.0) + math.pi) % (2 * math.pi)
+        return bool(gap < 1e-3 and abs(turn - math.pi) < 1e-3)
+
     def curvature_at(self, s):
         """Curvature of the centreline at s (1/m, + = left); 0 beyond the ends."""
         s = np.asarray(s, dtype=float)

@@ -13,6 +13,7 @@ MuJoCo collides meshes by their convex hull, which for a curved ribbon is meanin
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import re
 from dataclasses import dataclass
@@ -263,6 +264,8 @@ def build_spec(
     """The scenario's MjSpec, the marking geom names with their boundary index, and what the
     scenario's conditions added (lanekeep/world_conditions.py)."""
     layout = layout or WorldLayout()
+    if road.closed:  # a track: its start and end meet, and a lead would lie across it
+        layout = dataclasses.replace(layout, lead_m=0.0)
     spec = mujoco.MjSpec.from_file(str(CAR_XML))
     spec.modelname = f"lanekeep_{scenario.name}"
     spec.visual.global_.offwidth = max(scenario.camera.width, 1280)

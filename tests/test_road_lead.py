@@ -48,3 +48,23 @@ def test_the_rear_camera_at_the_start_sees_paint_to_the_horizon():
     # Paint reaches the horizon's neighbourhood: row 151 of 360 here; without the lead the
     # lines stop 10 m behind the car, at row 166 (measured with WorldLayout(lead_m=0)).
     assert rows.min() <= 158, rows.min()
+
+
+def test_a_closed_track_has_no_lead_across_itself():
+    """tools/soak's track ends where it starts: a straight lead after its end would lie over
+    its first straight (and one before its start across its last curve), two surfaces in one
+    place; a closed road is built without them."""
+    from pathlib import Path
+
+    from lanekeep.scenario import load_scenario
+    from lanekeep.world import build_spec
+
+    track = load_scenario(Path(__file__).parents[1] / "tools" / "soak" / "loop_track.toml")
+    road = track.build_road()
+    assert road.closed and not load_scenario("clear_curve").build_road().closed
+    spec, _, _ = build_spec(track, road)
+    model = spec.compile()
+    ends = [road.segment_bounds()[0][0], road.segment_bounds()[-1][1]]
+    assert ends == [0.0, road.length_m]
+    assert len([g for g in range(model.ngeom) if model.geom(g).name.startswith("road_")]) \
+        == len(road.segment_bounds())
