@@ -26,6 +26,9 @@ __all__ = ["MarkingPiece", "MarkingStyle", "Road", "SegmentSpec"]
 
 SEGMENT_KINDS = ("straight", "arc", "clothoid")
 TABLE_STEP_M = 0.1  # spacing of the exact position table
+# The longest road a scenario may build (its meshes and position table grow with it): 20 km,
+# 18 minutes at 66 km/h; a longer drive laps a closed track (tools/soak).
+MAX_ROAD_M = 20_000.0
 COARSE_STEP_M = 0.5  # spacing of the nearest-point search table
 LEAD_SEED_OFFSET = 7919  # worn paint before the start and after the end draws its own runs
 _GL_X, _GL_W = np.polynomial.legendre.leggauss(4)  # Gauss-Legendre nodes/weights on [-1, 1]
@@ -44,8 +47,8 @@ class SegmentSpec:
     def __post_init__(self):
         if self.kind not in SEGMENT_KINDS:
             raise InvalidValue("kind", f"must be one of {SEGMENT_KINDS}, got {self.kind!r}")
-        if not self.length_m > 0:
-            raise InvalidValue("length_m", f"must be > 0, got {self.length_m}")
+        if not 0 < self.length_m <= MAX_ROAD_M:
+            raise InvalidValue("length_m", f"must be in (0, {MAX_ROAD_M:g}] m, got {self.length_m}")
         if self.kind == "straight" and self.curvature_1pm != 0:
             raise InvalidValue("curvature_1pm", "a straight segment has curvature 0")
         if self.kind != "clothoid" and self.end_curvature_1pm not in (0.0, self.curvature_1pm):

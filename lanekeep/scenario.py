@@ -23,7 +23,7 @@ from pathlib import Path
 from lanekeep.config_io import ConfigError, InvalidValue, from_dict
 from lanekeep.markings import MarkingStyle
 from lanekeep.pavement import PavementStyle
-from lanekeep.road import Road, SegmentSpec
+from lanekeep.road import MAX_ROAD_M, Road, SegmentSpec
 from lanekeep.roadside_config import Roadside
 from lanekeep.sensors import SensorsConfig
 
@@ -54,6 +54,9 @@ class RoadConfig:
     def __post_init__(self):
         if not self.segments:
             raise InvalidValue("segments", "at least one segment is needed")
+        if not sum(seg.length_m for seg in self.segments) <= MAX_ROAD_M:
+            raise InvalidValue("segments", f"the road may be at most {MAX_ROAD_M:g} m long, "
+                                           f"got {sum(seg.length_m for seg in self.segments):g}")
         if not 1 <= self.n_lanes <= 4:
             raise InvalidValue("n_lanes", f"must be 1..4, got {self.n_lanes}")
         if not self.lane_width_m > 0:

@@ -112,13 +112,16 @@ def _loads_or_says_why(text: str) -> None:
         assert str(err).strip(), "an error must say what is wrong"
 
 
-@settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+# Derandomised: CI sees the same 300 documents on every run (a search that finds a new failure
+# by chance would make CI flaky); search further by hand with other settings.
+@settings(max_examples=300, deadline=None, derandomize=True,
+          suppress_health_check=[HealthCheck.too_slow])
 @given(edited_documents())
 def test_an_edited_scenario_loads_or_raises_the_projects_error(document):
     _loads_or_says_why(to_toml(document))
 
 
-@settings(max_examples=150, deadline=None)
+@settings(max_examples=150, deadline=None, derandomize=True)
 @given(st.text(max_size=200))
 def test_any_text_loads_or_raises_the_projects_error(text):
     _loads_or_says_why(text)
@@ -130,3 +133,18 @@ def test_the_writer_round_trips_every_shipped_scenario():
         assert tomllib.loads(to_toml(document)) == document, name
         _loads_or_says_why(to_toml(document))
         parse_scenario(to_toml(document))  # and they load
+
+
+def test_a_road_too_long_to_build_is_refused_before_any_allocation():
+    """Found by the search above: a segment 2e10 m long asked the road's position table for
+    1.46 TiB (a MemoryError, not the project's error). Roads are at most 20 km."""
+    import pytest
+
+    from lanekeep.scenario import ScenarioError
+
+    base = BASES["clear_straight"]
+    for length in (2e10, math.inf, 20_001.0):
+        document = {**base, "road": {**base["road"], "segments": [
+            {"kind": "straight", "length_m": length}]}}
+        with pytest.raises(ScenarioError, match="length_m"):
+            parse_scenario(to_toml(document))
