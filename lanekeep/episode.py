@@ -29,6 +29,7 @@ from lanekeep.cameras import CameraRig, RenderSettings
 from lanekeep.conditions import ImageEffects
 from lanekeep.control import PaperGains, SpeedController, SteeringPID
 from lanekeep.ground_truth import lane_centre_at, lane_centre_fit, lane_offsets
+from lanekeep.interrupts import stop_point, stop_requested
 from lanekeep.metrics import EpisodeReport, Metrics
 from lanekeep.paint_visibility import visible_paint
 from lanekeep.paper_mode import estimator_settings, front_detector_config
@@ -356,10 +357,14 @@ class Episode:
         steps = self.total_steps if seconds is None else int(round(seconds / self.dt_s))
         reason = ""
         try:
-            for _ in range(steps):
-                result = self.step()
-                if on_step is not None:
-                    on_step(result, steps)
+            with stop_point():  # under the CLI a stop signal ends the loop between steps
+                for _ in range(steps):
+                    if stop_requested():
+                        reason = "interrupted"
+                        break
+                    result = self.step()
+                    if on_step is not None:
+                        on_step(result, steps)
         except KeyboardInterrupt:
             reason = "interrupted"
         except SimulationError as err:  # the steps so far stand; the recording is kept
