@@ -26,7 +26,6 @@ from detectors.registry import make_detector
 from estimators.lane_estimator import CLOSED_LOOP_TRACKER, EstimatorOutput, LaneEstimator
 from estimators.odometry import DeadReckoning
 from lanekeep.cameras import CameraRig, RenderSettings
-from lanekeep.conditions import ImageEffects
 from lanekeep.control import PaperGains, SpeedController, SteeringPID
 from lanekeep.ground_truth import lane_centre_at, lane_centre_fit, lane_offsets
 from lanekeep.interrupts import stop_point, stop_requested
@@ -34,6 +33,7 @@ from lanekeep.metrics import EpisodeReport, Metrics
 from lanekeep.paint_visibility import visible_paint
 from lanekeep.paper_mode import estimator_settings, front_detector_config
 from lanekeep.record import EpisodeInfo, NullRecorder, Recorder
+from lanekeep.render import make_effects
 from lanekeep.scenario import Scenario
 from lanekeep.sensors import VehicleSensors, VehicleSignals
 from lanekeep.timing import StageClock
@@ -110,11 +110,7 @@ class Episode:
                              RenderSettings.of(scenario, width, height))
         self.rng = np.random.default_rng(scenario.seed)
         # One effects pipeline per camera: lens drops and the auto-exposure keep state.
-        airlight = 255.0 * self.world.model.vis.rgba.fog[:3]  # the fog colour of the world
-        self.effects = {name: ImageEffects(scenario.conditions, height, width, self.rng,
-                                           scenario.camera, self.rig.cameras[name], airlight,
-                                           scenario.control_period_s)
-                        for name in self.rig.CAMERA_NAMES}
+        self.effects = make_effects(scenario, self.world, self.rig, self.rng)
         self.dt_s = scenario.control_period_s
         self.front: dict[str, Detector] = {
             name: make_detector(name, self.rig.cameras["front"],

@@ -48,7 +48,7 @@ def colourise_segmentation(world: World, geom_ids: np.ndarray) -> np.ndarray:
 
 def make_effects(scenario: Scenario, world: World, rig: CameraRig,
                  rng: np.random.Generator) -> dict[str, ImageEffects]:
-    """The image effects of each camera as an episode makes them (same draws from `rng`)."""
+    """The image effects of each camera, as `Episode` makes them (same draws from `rng`)."""
     airlight = 255.0 * world.model.vis.rgba.fog[:3]
     settings = rig.settings
     return {cam: ImageEffects(scenario.conditions, settings.height, settings.width, rng,
