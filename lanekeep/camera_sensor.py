@@ -26,6 +26,7 @@ LUT for gain and tone.
 
 from __future__ import annotations
 
+import functools
 import math
 
 import cv2
@@ -49,6 +50,17 @@ def tone_curve(t: np.ndarray) -> np.ndarray:
     lifts deep shadows (12 DN -> 20 DN, 38 -> 53) as a camera's gamma does, with slope 1 at
     black (so a gained-up 8-bit night sky does not band); monotonic."""
     return t + TOE_LIFT * t**TOE_ONSET * (1.0 - t) ** TOE_POWER
+
+
+@functools.lru_cache(maxsize=256)
+def _tone_lut(gain: float) -> np.ndarray:
+    """Gain + tone curve as one uint8 LUT. Built from the rounded gain it is cached under, so a
+    frame does not depend on which gains came before; bounded, so an hour of exposure changes
+    (tools/soak) does not grow memory. Read-only: it is shared."""
+    t = np.clip(np.arange(256) * gain / 255.0, 0.0, 1.0)
+    lut = np.clip(np.round(255.0 * tone_curve(t)), 0, 255).astype(np.uint8)
+    lut.flags.writeable = False
+    return lut
 
 
 def vignetting_map(height: int, width: int, strength: float) -> np.ndarray:
@@ -84,7 +96,6 @@ class CameraSensor:
         self.vignette = (vignetting_map(height, width, camera.vignetting)
                          if camera.vignetting > 0.0 else None)
         self.log_gain: float | None = None  # None until the first frame is metered
-        self._luts: dict[float, np.ndarray] = {}
 
     @property
     def gain(self) -> float:
@@ -102,12 +113,8 @@ class CameraSensor:
         return max(float(road.mean()), 1.0), max(float(top), 1.0)
 
     def _tone_for(self, gain: float) -> np.ndarray:
-        """Gain + tone curve as one uint8 LUT (cached: the gain settles)."""
-        key = round(gain, 4)
-        if key not in self._luts:
-            t = np.clip(np.arange(256) * gain / 255.0, 0.0, 1.0)
-            self._luts[key] = np.clip(np.round(255.0 * tone_curve(t)), 0, 255).astype(np.uint8)
-        return self._luts[key]
+        """Gain + tone curve as one uint8 LUT, for the gain rounded to 1e-4."""
+        return _tone_lut(round(gain, 4))
 
     def _update_exposure(self, metering_dn: tuple[float, float]) -> None:
         mean, top = metering_dn

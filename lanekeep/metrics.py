@@ -103,9 +103,32 @@ class EpisodeReport:
 
 
 @dataclass
+class _ErrorSums:
+    """Running sums of a signed error (m): what RMSE and max need, in constant memory, so an
+    hour-long episode (tools/soak) does not hold every step's value."""
+
+    count: int = 0
+    sum_sq: float = 0.0
+    max_abs: float = 0.0
+
+    def add(self, error_m: float) -> None:
+        self.count += 1
+        self.sum_sq += error_m * error_m
+        self.max_abs = max(self.max_abs, abs(error_m))
+
+    def rms_cm(self) -> float:
+        return math.sqrt(self.sum_sq / self.count) * 100 if self.count else math.nan
+
+    def max_cm(self) -> float:
+        return self.max_abs * 100 if self.count else math.nan
+
+
+@dataclass
 class _SourceAccumulator:
-    offset_errors: list[float] = field(default_factory=list)
-    lateral_errors: list[np.ndarray] = field(default_factory=list)
+    offsets: _ErrorSums = field(default_factory=_ErrorSums)
+    lanes: int = 0               # steps with a lane centre line
+    lateral_sum_m: float = 0.0   # sum over those steps of the mean error over the ADE points
+    final_sum_m: float = 0.0     # sum over those steps of the error at the last ADE point
     valid: int = 0
     steps: int = 0
 
@@ -119,7 +142,7 @@ class Metrics:
         if self.ade_points_m.ndim != 1 or not np.all(np.diff(self.ade_points_m) > 0):
             raise ValueError(f"ade_points_m must increase (FDE is at the last), got {ade_points_m}")
         self._sources = {name: _SourceAccumulator() for name in source_names}
-        self._car_offsets: list[float] = []
+        self._car = _ErrorSums()
         self._departed = False
         self.lane_departures = 0
         self.mmae_switches = 0
@@ -132,7 +155,7 @@ class Metrics:
         acc.steps += 1
         if estimate_m is not None and math.isfinite(estimate_m):
             acc.valid += 1
-            acc.offset_errors.append(estimate_m - truth_m)
+            acc.offsets.add(estimate_m - truth_m)
 
     def add_lane(self, name: str, centre: np.ndarray | None, truth_y: np.ndarray) -> None:
         """Lateral errors of lane centre `centre` ([c0, c1, c2]; None = no lane this step)
@@ -144,10 +167,13 @@ class Metrics:
         if centre is None:
             return
         error = np.abs(poly_eval(centre, self.ade_points_m) - truth_y)
-        self._sources[name].lateral_errors.append(error)
+        acc = self._sources[name]
+        acc.lanes += 1
+        acc.lateral_sum_m += float(error.mean())
+        acc.final_sum_m += float(error[-1])
 
     def add_car(self, true_offset_m: float, wheels_outside_lane: bool) -> None:
-        self._car_offsets.append(true_offset_m)
+        self._car.add(true_offset_m)
         if wheels_outside_lane and not self._departed:
             self.lane_departures += 1
         self._departed = wheels_outside_lane
@@ -165,24 +191,22 @@ class Metrics:
                wall_s: float = 0.0, stop_reason: str = "") -> EpisodeReport:
         sources = {}
         for name, acc in self._sources.items():
-            errors = np.asarray(acc.offset_errors)
-            lateral = np.asarray(acc.lateral_errors)
             sources[name] = SourceReport(
-                rmse_cm=float(np.sqrt(np.mean(errors**2)) * 100) if len(errors) else math.nan,
-                max_cm=float(np.max(np.abs(errors)) * 100) if len(errors) else math.nan,
-                ade_cm=float(lateral.mean() * 100) if len(lateral) else math.nan,
-                fde_cm=float(lateral[:, -1].mean() * 100) if len(lateral) else math.nan,
+                rmse_cm=acc.offsets.rms_cm(),
+                max_cm=acc.offsets.max_cm(),
+                ade_cm=acc.lateral_sum_m / acc.lanes * 100 if acc.lanes else math.nan,
+                fde_cm=acc.final_sum_m / acc.lanes * 100 if acc.lanes else math.nan,
                 valid_share=acc.valid / acc.steps if acc.steps else 0.0,
             )
-        car = np.asarray(self._car_offsets)
+        car = self._car
         return EpisodeReport(
             scenario=scenario,
             seed=seed,
-            duration_s=len(car) * dt_s,
-            steps=len(car),
+            duration_s=car.count * dt_s,
+            steps=car.count,
             sources=sources,
-            car_rms_cm=float(np.sqrt(np.mean(car**2)) * 100) if len(car) else math.nan,
-            car_max_cm=float(np.max(np.abs(car)) * 100) if len(car) else math.nan,
+            car_rms_cm=car.rms_cm(),
+            car_max_cm=car.max_cm(),
             lane_departures=self.lane_departures,
             mmae_switches=self.mmae_switches,
             no_estimate_s=self._no_estimate_steps * dt_s,
