@@ -29,6 +29,7 @@ TABLE_STEP_M = 0.1  # spacing of the exact position table
 # The longest road a scenario may build (its meshes and position table grow with it): 20 km,
 # 18 minutes at 66 km/h; a longer drive laps a closed track (tools/soak).
 MAX_ROAD_M = 20_000.0
+MAX_LANES = 5  # a five-lane carriageway: the widest the dataset (lanekeep/dataset.py) builds
 COARSE_STEP_M = 0.5  # spacing of the nearest-point search table
 LEAD_SEED_OFFSET = 7919  # worn paint before the start and after the end draws its own runs
 _GL_X, _GL_W = np.polynomial.legendre.leggauss(4)  # Gauss-Legendre nodes/weights on [-1, 1]
@@ -78,8 +79,8 @@ class Road:
     ):
         if not segments:
             raise ValueError("a road needs at least one segment")
-        if not 1 <= n_lanes <= 4:
-            raise ValueError(f"n_lanes must be 1..4, got {n_lanes}")
+        if not 1 <= n_lanes <= MAX_LANES:
+            raise ValueError(f"n_lanes must be 1..{MAX_LANES}, got {n_lanes}")
         if not lane_width_m > 0:
             raise ValueError(f"lane_width_m must be > 0, got {lane_width_m}")
         markings = tuple(markings) if markings else default_markings(n_lanes)

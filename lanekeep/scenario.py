@@ -23,7 +23,7 @@ from pathlib import Path
 from lanekeep.config_io import ConfigError, InvalidValue, from_dict
 from lanekeep.markings import MarkingStyle
 from lanekeep.pavement import PavementStyle
-from lanekeep.road import MAX_ROAD_M, Road, SegmentSpec
+from lanekeep.road import MAX_LANES, MAX_ROAD_M, Road, SegmentSpec
 from lanekeep.roadside_config import Roadside
 from lanekeep.sensors import SensorsConfig
 
@@ -57,8 +57,8 @@ class RoadConfig:
         if not sum(seg.length_m for seg in self.segments) <= MAX_ROAD_M:
             raise InvalidValue("segments", f"the road may be at most {MAX_ROAD_M:g} m long, "
                                            f"got {sum(seg.length_m for seg in self.segments):g}")
-        if not 1 <= self.n_lanes <= 4:
-            raise InvalidValue("n_lanes", f"must be 1..4, got {self.n_lanes}")
+        if not 1 <= self.n_lanes <= MAX_LANES:
+            raise InvalidValue("n_lanes", f"must be 1..{MAX_LANES}, got {self.n_lanes}")
         if not self.lane_width_m > 0:
             raise InvalidValue("lane_width_m", f"must be > 0, got {self.lane_width_m}")
         if not 0 <= self.ego_lane < self.n_lanes:
@@ -115,8 +115,27 @@ class CameraConfig:
     vignetting: float = 0.2  # corner darkening of the lens, 0 none .. 0.6
     jpeg_quality: int = 0  # JPEG compression of every frame, 0 = off, else 10..100
     show_hood: bool = True  # the ego car's hood at the bottom of the front image
+    # The mounting of both onboard cameras, changed from the car's own (mjcf/car.xml: 1.5 m
+    # high, front pitched 10 deg up with a 120 deg horizontal field of view): other cameras, as
+    # real rigs and the datasets (lanekeep/dataset.py) have. Applied by lanekeep/camera_mount.py
+    # to the compiled model, so the detectors' camera models (read from it) stay exact.
+    mount_height_m: float = 0.0  # 0 = the car's 1.5 m; else the cameras' height above ground
+    pitch_offset_deg: float = 0.0  # added to each camera's pitch, + = looking up
+    roll_deg: float = 0.0  # about each camera's optical axis, + = image turns anticlockwise
+    yaw_offset_deg: float = 0.0  # about the car's vertical axis, + = towards the car's left
+    fov_scale: float = 1.0  # scales tan(field of view / 2): < 1 a longer lens
 
     def __post_init__(self):
+        if not (self.mount_height_m == 0.0 or 0.5 <= self.mount_height_m <= 4.0):
+            raise InvalidValue("mount_height_m",
+                               f"must be 0 (the car's) or 0.5..4 m, got {self.mount_height_m}")
+        for key, limit in (("pitch_offset_deg", 30.0), ("roll_deg", 20.0),
+                           ("yaw_offset_deg", 30.0)):
+            if not -limit <= getattr(self, key) <= limit:
+                raise InvalidValue(key, f"must be in [-{limit:g}, {limit:g}] deg, "
+                                        f"got {getattr(self, key)}")
+        if not 0.3 <= self.fov_scale <= 1.5:
+            raise InvalidValue("fov_scale", f"must be in [0.3, 1.5], got {self.fov_scale}")
         for key in ("width", "height"):
             if not getattr(self, key) > 0:
                 raise InvalidValue(key, f"must be > 0, got {getattr(self, key)}")

@@ -22,6 +22,7 @@ import mujoco
 import numpy as np
 
 from lanekeep import pavement, textures
+from lanekeep.camera_mount import apply_camera_mount
 from lanekeep.cameras import GROUP_MARKING, GROUP_WORLD
 from lanekeep.markings import MarkingPiece
 from lanekeep.pavement import LANE_U, SLAB_M
@@ -352,6 +353,7 @@ def build(scenario: Scenario, layout: WorldLayout | None = None) -> World:
         road = scenario.build_road()
         spec, marking_names, conditions = build_spec(scenario, road, layout)
         model = spec.compile()
+        apply_camera_mount(model, scenario.camera)
         _check_control_period(scenario, model.opt.timestep)
     except ScenarioError:
         raise

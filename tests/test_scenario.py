@@ -123,7 +123,7 @@ def test_wrong_type_names_key(text, key, tmp_path):
     [
         (MINIMAL.replace("length_m = 100", "length_m = -1"), "road.segments[0].length_m"),
         (MINIMAL.replace("'straight'", "'loop'").replace('"straight"', '"loop"'), "kind"),
-        (MINIMAL.replace("[road]", "[road]\nn_lanes = 5"), "road.n_lanes"),
+        (MINIMAL.replace("[road]", "[road]\nn_lanes = 6"), "road.n_lanes"),
         (MINIMAL.replace("[road]", "[road]\nego_lane = 2"), "road.ego_lane"),
         (MINIMAL + "[[road.markings]]\nkind = 'solid'", "road.markings"),
         (MINIMAL + "[conditions]\ntime_of_day = 'noon'", "conditions.time_of_day"),

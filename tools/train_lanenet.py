@@ -1,0 +1,223 @@
+"""Train LaneNet (detectors/lanenet_model.py) from scratch on the simulated dataset, on a CPU.
+
+    python tools/make_dataset.py --out data/lanenet            # first: the data (~16 min)
+    python tools/train_lanenet.py --data data/lanenet --out detectors/weights/lanenet.pt
+
+Seeded (initial weights, shuffling, augmentation): the same data and arguments give the same
+weights on the same machine. Each epoch goes once over the training sequences (T frames each,
+from a zero state, so the first frame of every sequence trains the single-frame case), each
+sequence flipped left-right with probability 0.5 (slots swap sides) and given a random
+exposure, contrast, tint and noise: real cameras differ in all of them. After every epoch the
+validation split is scored and the best epoch's weights are kept (checkpoint choice on the
+simulated validation split, never on real photos):
+
+  val point accuracy: per labelled boundary and label row band, is there a cell of that band
+  with objectness > 0.5 whose x lies within 20 px (at 1280) of the label, as TuSimple's rule
+  counts points; `ego` counts the ego pair only, with its slot right.
+
+A JSON-lines log (one line per epoch: losses, validation scores, alpha, seconds) goes beside
+the weights; the weights file carries the same figures in its metadata.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from detectors.lanenet import save_weights
+from detectors.lanenet_model import LaneNet, LaneNetConfig, architecture_summary
+from detectors.lanenet_targets import CellGrid, LossWeights, Targets, encode, lanenet_loss
+from lanekeep.dataset import LABEL_HEIGHT, LABEL_WIDTH, frame_label, load_split, read_recipe
+
+FLIP_SLOTS = np.array([1, 0, 3, 2, 4], np.int64)  # ego-left <-> ego-right, next-left <-> next-right
+
+
+def targets_of(data: dict, grid: CellGrid, flip: bool) -> dict[str, np.ndarray]:
+    """Per-cell targets of every stored frame, (N, T, rows, cols) each."""
+    n, t = data["xs"].shape[:2]
+    out = {"objectness": np.zeros((n, t, grid.rows, grid.cols), np.float32),
+           "x_offset": np.zeros((n, t, grid.rows, grid.cols), np.float32),
+           "slot": np.full((n, t, grid.rows, grid.cols), -1, np.int64),
+           "marking": np.zeros((n, t, grid.rows, grid.cols), np.float32)}
+    for i in range(n):
+        for k in range(t):
+            xs, slots, paint = data["xs"][i, k], data["slots"][i, k].astype(np.int64), \
+                data["paint"][i, k]
+            if flip:
+                xs = (LABEL_WIDTH - 1) - xs
+                slots = np.where(slots >= 0, FLIP_SLOTS[np.maximum(slots, 0)], -1)
+                paint = paint[:, ::-1]
+            tg: Targets = encode(frame_label(xs, slots, paint), grid)
+            out["objectness"][i, k] = tg.objectness
+            out["x_offset"][i, k] = tg.x_offset
+            out["slot"][i, k] = tg.slot
+            out["marking"][i, k] = tg.marking
+    return out
+
+
+def augment(frames: torch.Tensor, gen: torch.Generator) -> torch.Tensor:
+    """uint8 (B, T, 3, H, W) -> float 0..1 with one random exposure, contrast, tint and noise
+    per sequence (the same over its frames, as one camera gives)."""
+    x = frames.float() / 255.0
+    b = x.shape[0]
+
+    def u(lo: float, hi: float, *shape: int) -> torch.Tensor:
+        return lo + (hi - lo) * torch.rand(b, *shape, generator=gen)
+
+    gain = u(0.6, 1.5, 1, 1, 1, 1)
+    tint = u(0.9, 1.1, 1, 3, 1, 1)
+    mean = x.mean(dim=(1, 2, 3, 4), keepdim=True)
+    contrast = u(0.7, 1.3, 1, 1, 1, 1)
+    x = (x - mean) * contrast + mean
+    x = x * gain * tint
+    grey = (torch.rand(b, generator=gen) < 0.1).view(b, 1, 1, 1, 1)
+    x = torch.where(grey, x.mean(dim=2, keepdim=True).expand_as(x), x)
+    x = x + u(0.0, 0.03, 1, 1, 1, 1) * torch.randn(x.shape, generator=gen)
+    return x.clamp(0.0, 1.0)
+
+
+def point_accuracy(obj_logits: torch.Tensor, x_offset: torch.Tensor, slot_logits: torch.Tensor,
+                   targets: dict[str, torch.Tensor], grid: CellGrid) -> tuple[float, float]:
+    """(all-boundary, ego) share of labelled row bands that a confident cell of the band hits
+    within 20 px of the label (see the module docstring)."""
+    pred = torch.sigmoid(obj_logits) > 0.5  # (..., rows, cols)
+    cols = torch.arange(grid.cols, dtype=torch.float32)
+    x_pred = (cols + x_offset) * grid.cell_w - 0.5
+    slot_pred = slot_logits.argmax(dim=-3)
+    pos = targets["objectness"] > 0.5
+    x_true = (cols + targets["x_offset"]) * grid.cell_w - 0.5
+    # For each labelled cell, the nearest confident cell of the same row band (bands, c, c').
+    d = (x_pred.unsqueeze(-2) - x_true.unsqueeze(-1)).abs()
+    d = torch.where(pred.unsqueeze(-2), d, torch.full_like(d, float("inf")))
+    nearest, j = d.min(dim=-1)
+    hit = pos & (nearest < 20.0)
+    slot_right = torch.gather(slot_pred, -1, j) == targets["slot"]
+    ego = pos & (targets["slot"] <= 1)
+    return (float(hit.sum() / pos.sum().clamp(min=1)),
+            float((hit & slot_right & ego).sum() / ego.sum().clamp(min=1)))
+
+
+def to_tensors(targets: dict[str, np.ndarray], idx: np.ndarray) -> dict[str, torch.Tensor]:
+    return {k: torch.from_numpy(v[idx]) for k, v in targets.items()}
+
+
+def evaluate(model: LaneNet, data: dict, targets: dict, grid: CellGrid, batch: int
+             ) -> dict[str, float]:
+    model.eval()
+    losses, accs = [], []
+    with torch.inference_mode():
+        for start in range(0, len(data["frames"]), batch):
+            idx = np.arange(start, min(start + batch, len(data["frames"])))
+            frames = torch.from_numpy(data["frames"][idx]).permute(0, 1, 4, 2, 3)
+            out, _ = model(frames)
+            tg = to_tensors(targets, idx)
+            _, parts = lanenet_loss(out, tg)
+            losses.append(parts["total"] * len(idx))
+            accs.append(np.array(point_accuracy(out.objectness, out.x_offset, out.slot, tg, grid))
+                        * len(idx))
+    n = len(data["frames"])
+    acc = np.sum(accs, axis=0) / n
+    return {"val_loss": float(np.sum(losses) / n), "val_point_acc": float(acc[0]),
+            "val_ego_acc": float(acc[1])}
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--data", required=True, help="dataset folder (tools/make_dataset.py)")
+    parser.add_argument("--out", default="detectors/weights/lanenet.pt")
+    parser.add_argument("--epochs", type=int, default=24)
+    parser.add_argument("--batch", type=int, default=8, help="sequences per step")
+    parser.add_argument("--lr", type=float, default=3e-3)
+    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--threads", type=int, default=2)
+    parser.add_argument("--limit", type=int, default=0, help="use only N training sequences")
+    args = parser.parse_args(argv)
+    from tqdm import tqdm
+
+    torch.set_num_threads(args.threads)
+    torch.manual_seed(args.seed)
+    start = time.perf_counter()
+    recipe, worlds = read_recipe(Path(args.data))
+    train, val = load_split(Path(args.data), "train"), load_split(Path(args.data), "val")
+    if args.limit:
+        train = {k: v[:args.limit] for k, v in train.items()}
+    config = LaneNetConfig()
+    rows, cols = config.grid
+    grid = CellGrid(LABEL_WIDTH, LABEL_HEIGHT, rows, cols)
+    targets = [targets_of(train, grid, flip=False), targets_of(train, grid, flip=True)]
+    val_targets = targets_of(val, grid, flip=False)
+    print(f"data: {len(train['frames'])} training sequences of {train['frames'].shape[1]} "
+          f"frames, {len(val['frames'])} validation; targets in "
+          f"{time.perf_counter() - start:.0f} s", file=sys.stderr)
+
+    model = LaneNet(config, seed=args.seed)
+    opt = torch.optim.AdamW(model.parameters(), lr=args.lr, weight_decay=1e-4)
+    steps_per_epoch = math.ceil(len(train["frames"]) / args.batch)
+    sched = torch.optim.lr_scheduler.OneCycleLR(opt, max_lr=args.lr, pct_start=0.1,
+                                                total_steps=args.epochs * steps_per_epoch)
+    gen = torch.Generator().manual_seed(args.seed)
+    rng = np.random.default_rng(args.seed)
+    log_path = Path(args.out).with_suffix(".log.jsonl")
+    Path(args.out).parent.mkdir(parents=True, exist_ok=True)
+    log_path.write_text("")
+    best: dict | None = None
+    weights = LossWeights()
+    for epoch in range(args.epochs):
+        model.train()
+        order = rng.permutation(len(train["frames"]))
+        flips = rng.random(len(order)) < 0.5
+        sums: dict[str, float] = {}
+        bar = tqdm(range(steps_per_epoch), desc=f"epoch {epoch + 1}/{args.epochs}",
+                   unit="step", leave=False)
+        for step in bar:
+            idx = order[step * args.batch:(step + 1) * args.batch]
+            flip = flips[step * args.batch:(step + 1) * args.batch]
+            frames = torch.from_numpy(train["frames"][idx]).permute(0, 1, 4, 2, 3)
+            frames = torch.where(torch.from_numpy(flip).view(-1, 1, 1, 1, 1),
+                                 frames.flip(-1), frames)
+            tg = {k: torch.where(torch.from_numpy(flip).view(-1, 1, 1, 1),
+                                 torch.from_numpy(targets[1][k][idx]),
+                                 torch.from_numpy(targets[0][k][idx]))
+                  for k in targets[0]}
+            out, _ = model(augment(frames, gen))
+            loss, parts = lanenet_loss(out, tg, weights)
+            opt.zero_grad(set_to_none=True)
+            loss.backward()
+            torch.nn.utils.clip_grad_norm_(model.parameters(), 5.0)
+            opt.step()
+            sched.step()
+            for k, v in parts.items():
+                sums[k] = sums.get(k, 0.0) + v
+            bar.set_postfix(loss=f"{sums['total'] / (step + 1):.3f}")
+        scores = evaluate(model, val, val_targets, grid, args.batch)
+        row = {"epoch": epoch + 1, **{f"train_{k}": v / steps_per_epoch for k, v in sums.items()},
+               **scores, "alpha": model.alpha.item(), "lr": sched.get_last_lr()[0],
+               "elapsed_s": time.perf_counter() - start}
+        with log_path.open("a") as f:
+            f.write(json.dumps(row) + "\n")
+        print(f"epoch {epoch + 1}: loss {row['train_total']:.3f} val loss {scores['val_loss']:.3f}"
+              f" point acc {scores['val_point_acc']:.3f} ego acc {scores['val_ego_acc']:.3f}"
+              f" alpha {row['alpha']:.3f} ({row['elapsed_s']:.0f} s)", file=sys.stderr)
+        score = scores["val_point_acc"] + scores["val_ego_acc"]
+        if best is None or score > best["score"]:
+            best = {"score": score, **row}
+            meta = {"recipe": {"data": str(args.data), "worlds": worlds,
+                               **{k: v for k, v in vars(recipe).items()}},
+                    "command": " ".join(["python tools/train_lanenet.py", *(argv or sys.argv[1:])]),
+                    "chosen": row, "architecture": architecture_summary(model)}
+            save_weights(model, args.out, meta)
+    total = time.perf_counter() - start
+    print(json.dumps({"weights": args.out, "wall_s": round(total), "best_epoch": best["epoch"],
+                      "val_point_acc": best["val_point_acc"], "val_ego_acc": best["val_ego_acc"]}))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
