@@ -141,7 +141,7 @@ def boundary_labels(world: World, pose: tuple[float, float, float], s_car: float
 def frame_label(xs: np.ndarray, slots: np.ndarray, mask: np.ndarray | None = None) -> FrameLabel:
     """The `FrameLabel` (targets' input) of one stored frame's row-sampled boundaries."""
     out = []
-    for x, slot in zip(xs, slots):
+    for x, slot in zip(xs, slots, strict=True):
         ok = np.isfinite(x)
         if slot < 0 or ok.sum() < 2:
             continue

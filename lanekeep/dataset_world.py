@@ -104,7 +104,8 @@ def _markings(rng: np.random.Generator, n_lanes: int) -> tuple[MarkingStyle, ...
 def _camera(rng: np.random.Generator) -> CameraConfig:
     """A camera whose horizon falls between rows 200 and 450 (front, at 720 rows)."""
     hfov = float(rng.uniform(62.0, 120.0))
-    fov_scale = math.tan(math.radians(hfov / 2)) / math.tan(math.radians(NOMINAL_FRONT_HFOV_DEG / 2))
+    nominal = math.tan(math.radians(NOMINAL_FRONT_HFOV_DEG / 2))
+    fov_scale = math.tan(math.radians(hfov / 2)) / nominal
     f = 640.0 / math.tan(math.radians(hfov / 2))
     horizon = float(rng.uniform(200.0, 450.0))
     pitch = math.degrees(math.atan((359.5 - horizon) / f))
