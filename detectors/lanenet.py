@@ -66,8 +66,9 @@ def load_weights(path: str | Path) -> LaneNet:
     try:
         blob = torch.load(str(p), map_location="cpu", weights_only=True)
     except Exception as exc:  # noqa: BLE001 - any unpickling failure means the same thing
-        raise WeightsError(p, f"not a readable weights file ({type(exc).__name__}: "
-                              f"{str(exc).splitlines()[0] if str(exc) else ''})") from None
+        # torch's own text advises weights_only=False, which we never do: name the kind only.
+        raise WeightsError(p, "not a torch weights file (corrupt, truncated or another format; "
+                              f"{type(exc).__name__})") from None
     if not isinstance(blob, dict) or blob.get("format") != FORMAT:
         raise WeightsError(p, f"not a LaneNet weights file (expected format {FORMAT!r})")
     try:

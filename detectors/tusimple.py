@@ -6,11 +6,17 @@ LaneEval: a predicted point matches a labelled one on the same row when
 |x_pred - x_gt| < 20 px / cos(angle), angle the slant of the labelled lane (a line x(y) fitted
 to its points); a labelled lane scores the share of its points matched by its best predicted
 lane; a frame scores the sum over labelled lanes / max(min(4, n_labelled), 1).
+
+A detector that sees every boundary (LaneNet) reports them all (`boundary_lanes`), each
+extended over the visible road, as TuSimple labels are: from the bottom of the image up to near
+the horizon.
 """
 
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
+from typing import Protocol
 
 import numpy as np
 
@@ -71,6 +77,58 @@ def estimate_lanes(
             if any(x != ABSENT for x in xs):
                 lanes.append(xs)
     return lanes
+
+
+class DrawableBoundary(Protocol):
+    """A fitted boundary that can say its image x on given rows (detectors.lanenet_decode)."""
+
+    name: str
+    score: float
+
+    def x_at_rows(self, rows_px: np.ndarray, camera: CameraModel | None = None,
+                  extend_rows: tuple[float, float] | None = None) -> np.ndarray: ...
+
+
+@dataclass(frozen=True)
+class NamedLane:
+    """One reported boundary: its slot name, x per h_sample (-2 = absent), its confidence."""
+
+    name: str
+    xs: list[int]
+    score: float
+
+
+# Rows this share of the image height below the horizon are the top of the "visible range":
+# nearer the horizon a row spans tens of metres of road, and the extended curve's x there is
+# a guess (TuSimple's labels also stop a little below it).
+HORIZON_MARGIN = 0.03
+
+
+def boundary_lanes(
+    boundaries: list[DrawableBoundary], camera: CameraModel | None, h_samples: list[int],
+    size: tuple[int, int], horizon_row: float,
+) -> list[NamedLane]:
+    """Every boundary as a TuSimple lane: x at each h_sample from the image's bottom row up to
+    HORIZON_MARGIN below the horizon, ordered left to right by where each meets the bottom
+    row (extrapolated: a boundary leaving through the side still sorts by its position).
+    Boundaries with no sample in the image are left out. `size` is the image's (width,
+    height), `horizon_row` its horizon."""
+    width, height = size
+    rows = np.asarray(h_samples, dtype=float)
+    bottom = float(height - 1)
+    top = horizon_row + HORIZON_MARGIN * height
+    keyed = []
+    for b in boundaries:
+        x = b.x_at_rows(rows, camera, extend_rows=(top, bottom))
+        ok = np.isfinite(x) & (x >= 0) & (x <= width - 1)
+        if not ok.any():
+            continue
+        xs = [int(round(v)) if good else ABSENT for v, good in zip(x, ok, strict=True)]
+        at_bottom = b.x_at_rows(np.array([bottom]), camera, extend_rows=(top, bottom))[0]
+        if not np.isfinite(at_bottom):  # the lowest sample it has instead
+            at_bottom = float(x[np.flatnonzero(np.isfinite(x))[-1]])
+        keyed.append((float(at_bottom), NamedLane(b.name, xs, float(b.score))))
+    return [lane for _, lane in sorted(keyed, key=lambda k: k[0])]
 
 
 def record(raw_file: str, lanes: list[list[int]], h_samples: list[int], run_time_ms: float

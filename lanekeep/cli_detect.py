@@ -1,4 +1,4 @@
-"""`lanekeep detect` (classical detectors on real photos) and `lanekeep calibrate`.
+"""`lanekeep detect` (lane detectors on real photos) and `lanekeep calibrate`.
 
 Thin: argument parsing and output; the work is in detectors/ and lanekeep/calibration.py.
 Images are read by lanekeep/image_io.py, which rejects missing, empty, truncated and corrupt
@@ -6,7 +6,13 @@ files. `detect` checks every input (and the overlay folder) before it runs anyth
 and nothing is detected or written.
 Exit codes: 0 success, 1 a failure while running (an overlay that could not be written),
 2 bad input (a missing, empty, truncated, corrupt or wrongly sized image, an output folder that
-cannot be written, too few chessboards); each bad input is one "lanekeep CMD: error:" line.
+cannot be written, a weights file that is missing, empty, corrupt or of another architecture, too
+few chessboards); each bad input is one "lanekeep CMD: error:" line.
+
+A detector that sees every boundary (LaneNet: `detector.last.boundaries`) reports them all: in
+TuSimple output as lanes ordered left to right, in JSON as "boundaries" with their slot names,
+in overlays each in its own colour with its slot name; the classical detectors report their ego
+pair.
 """
 
 from __future__ import annotations
@@ -29,15 +35,40 @@ def _error(command: str, message: str) -> int:
     return EXIT_BAD_INPUT
 
 
-def _overlay(image, camera, estimate, lanes, h_samples, horizon: float):
+# Overlay colours (BGR): the ego pair green / red, the next boundaries orange / magenta, the
+# "other" ones (up to three) cyan, blue and pink; unnamed lanes (classical) alternate as before.
+SLOT_COLOURS = {"ego-left": (0, 255, 0), "ego-right": (0, 0, 255), "next-left": (0, 165, 255),
+                "next-right": (255, 0, 255)}
+OTHER_COLOURS = [(255, 255, 0), (255, 128, 0), (180, 130, 255)]
+UNNAMED_COLOURS = [(0, 255, 0), (255, 0, 0)]
+
+
+def _lane_colour(name: str | None, k: int, n_other: int) -> tuple[int, int, int]:
+    if name is None:
+        return UNNAMED_COLOURS[k % 2]
+    return SLOT_COLOURS.get(name, OTHER_COLOURS[n_other % len(OTHER_COLOURS)])
+
+
+def _overlay(image, estimate, lanes: list[tuple[str | None, list[int]]], h_samples,
+             horizon: float):
+    """The image with each lane (name or None, x per h_sample) drawn, named at its bottom."""
     import cv2
 
     out = image[..., ::-1].copy()
-    colours = [(0, 255, 0), (255, 0, 0)]
-    for k, xs in enumerate(lanes):
+    n_other, labels = 0, []
+    for k, (name, xs) in enumerate(lanes):
+        colour = _lane_colour(name, k, n_other)
+        n_other += name is not None and name not in SLOT_COLOURS
         pts = [(x, v) for x, v in zip(xs, h_samples, strict=True) if x >= 0]
         for a, b in zip(pts, pts[1:], strict=False):
-            cv2.line(out, a, b, colours[k % 2], 3)
+            cv2.line(out, a, b, colour, 3)
+        if name is not None and pts:
+            x, v = pts[-1]  # the lowest row it reaches
+            x, v = min(max(x - 40, 5), out.shape[1] - 140), max(v - 12, 20)
+            while any(abs(x - lx) < 130 and abs(v - lv) < 26 for lx, lv in labels):
+                v -= 26  # above a neighbour's name rather than over it
+            labels.append((x, v))
+            cv2.putText(out, name, (x, v), cv2.FONT_HERSHEY_SIMPLEX, 0.8, colour, 2)
     cv2.line(out, (0, int(horizon)), (out.shape[1] - 1, int(horizon)), (0, 255, 255), 1)
     text = (f"offset {estimate.offset_m:+.2f} m at x={estimate.x_m:.1f} m" if estimate.valid
             else f"no lane: {estimate.reason}")
@@ -140,12 +171,25 @@ def _input_problems(args: argparse.Namespace, camera_file) -> list[str]:
     return problems
 
 
+def _weights_problem(args: argparse.Namespace, config) -> str | None:
+    """Why the weights file the detector would load (--weights, else its own) is unusable."""
+    from detectors.registry import check_detectors_weights
+
+    try:
+        check_detectors_weights([args.detector], config, args.weights)
+    except ValueError as err:  # WeightsError: "PATH: why"
+        if getattr(args, "debug", False):
+            raise
+        return str(err)
+    return None
+
+
 def cmd_detect(args: argparse.Namespace) -> int:
     import cv2
 
     from detectors.config import load_config
     from detectors.registry import make_detector
-    from detectors.tusimple import estimate_lanes, h_samples_for, record
+    from detectors.tusimple import boundary_lanes, estimate_lanes, h_samples_for, record
     from lanekeep.camera_file import camera_for_image, read_camera_file
     from lanekeep.image_io import read_image
 
@@ -161,6 +205,8 @@ def cmd_detect(args: argparse.Namespace) -> int:
     dash = config.dashcam
     # All inputs first: a bad one stops the command before any detection or output.
     problems = _input_problems(args, camera_file)
+    weights_problem = _weights_problem(args, config)
+    problems += [weights_problem] if weights_problem else []
     if not problems and args.overlay:
         problem = _make_output_dir(args.overlay)
         problems += [problem] if problem else []
@@ -178,14 +224,27 @@ def cmd_detect(args: argparse.Namespace) -> int:
             image, camera_file, dash.hfov_deg, dash.height_m, dash.horizon_fraction,
             dash.min_horizon_fraction, dash.max_horizon_fraction)
         distortion = None if camera_file is None else cam_file.distortion
-        detector = make_detector(args.detector, camera, config, distortion)
+        try:  # a new detector per photo: a learned one's memory of another photo would mislead
+            detector = make_detector(args.detector, camera, config, distortion, args.weights)
+        except ValueError as err:  # the weights file changed since it was checked
+            if getattr(args, "debug", False):
+                raise
+            return _error("detect", str(err))
         start = time.perf_counter()
         estimate = detector.detect(image)
         ms = (time.perf_counter() - start) * 1000.0
         h_samples = h_samples_for(h)
-        window = detector.window
-        x_range = (float(camera.position_m[0]) + 1.0, window.x_far_m * 1.3)
-        lanes = estimate_lanes(estimate, camera, h_samples, x_range)
+        # Detectors that see every boundary keep them with the frame's other outputs.
+        boundaries = getattr(getattr(detector, "last", None), "boundaries", None)
+        if boundaries is not None:
+            named = boundary_lanes(boundaries, camera, h_samples, (w, h), horizon)
+            lanes = [lane.xs for lane in named]
+            drawn = [(lane.name, lane.xs) for lane in named]
+        else:
+            window = detector.window
+            x_range = (float(camera.position_m[0]) + 1.0, window.x_far_m * 1.3)
+            lanes = estimate_lanes(estimate, camera, h_samples, x_range)
+            drawn = [(None, xs) for xs in lanes]
         if args.format == "tusimple":
             line = record(str(path), lanes, h_samples, ms)
         else:
@@ -197,11 +256,15 @@ def cmd_detect(args: argparse.Namespace) -> int:
                 "confidence": estimate.confidence, "reason": estimate.reason,
                 "horizon_row": horizon, "run_time_ms": round(ms, 2),
             }
+            if boundaries is not None:
+                line["h_samples"] = list(h_samples)
+                line["boundaries"] = [{"slot": lane.name, "xs": lane.xs,
+                                       "score": round(lane.score, 4)} for lane in named]
         print(json.dumps(line), flush=True)
         if args.overlay:
             png = _overlay_path(args.overlay, path)
             ok, encoded = cv2.imencode(
-                ".png", _overlay(image, camera, estimate, lanes, h_samples, horizon))
+                ".png", _overlay(image, estimate, drawn, h_samples, horizon))
             try:
                 if not ok:
                     raise OSError("OpenCV cannot encode the overlay")
@@ -269,13 +332,14 @@ def register(subparsers) -> None:
     from detectors.registry import known_detectors
 
     p = subparsers.add_parser(
-        "detect", help="run a classical lane detector on real road photos",
+        "detect", help="run a lane detector on real road photos",
         description="Without --camera the camera is an unknown 1.5 m high dashcam with a "
                     "60 deg horizontal field of view whose pitch is taken from each image's "
                     "vanishing point (detectors.toml [dashcam]). All images are checked before "
                     "any is processed: if one is missing, empty, truncated, corrupt, not an "
                     "image, too small or (with --camera) not the camera file's size, or the "
-                    "--overlay folder cannot be written, each problem is one error line, "
+                    "--overlay folder cannot be written, or the weights file cannot be loaded, "
+                    "each problem is one error line, "
                     "nothing is detected or written, and the exit code is 2.")
     p.add_argument("images", nargs="+",
                    help="image files (PNG, JPEG; truncated or corrupt ones are rejected)")
@@ -283,7 +347,12 @@ def register(subparsers) -> None:
     p.add_argument("--camera", help="camera TOML (intrinsics, distortion, height_m, pitch_deg); "
                                      "every image must have its width x height")
     p.add_argument("--config", help="detectors TOML (default: the shipped, tuned one)")
-    p.add_argument("--format", choices=("json", "tusimple"), default="json")
+    p.add_argument("--weights", metavar="FILE",
+                   help="weights of a learned detector (lanenet; default: the shipped "
+                        "detectors/weights/lanenet.pt); checked before anything runs")
+    p.add_argument("--format", choices=("json", "tusimple"), default="json",
+                   help="tusimple: one {lanes, h_samples, raw_file, run_time} line per image "
+                        "(lanenet: every boundary it found, left to right)")
     p.add_argument("--overlay", help="folder for PNGs with the detected lanes drawn")
     p.set_defaults(func=cmd_detect)
 

@@ -1,4 +1,9 @@
-"""`lanekeep run`, `lanekeep bench` and `lanekeep perf`: closed-loop episodes from the CLI."""
+"""`lanekeep run`, `lanekeep bench` and `lanekeep perf`: closed-loop episodes from the CLI.
+
+`--weights FILE` gives every learned detector (LaneNet) of the episodes that file; it is loaded
+once before anything runs or is written (as is the shipped file when a scenario uses LaneNet
+without --weights), and a bad one is one line "lanekeep CMD: error: FILE: why", exit 2.
+"""
 
 from __future__ import annotations
 
@@ -70,17 +75,49 @@ def check_options(args: argparse.Namespace) -> None:
             raise ConfigError("", option, f"{rule}, got {value}")
 
 
+def check_weights_option(scenarios: list[Scenario], weights: str | None) -> list[str]:
+    """Load the weights file each learned detector of `scenarios` would use (`weights`, else
+    its shipped one); a `weights` file is checked even if no scenario uses such a detector.
+    Unknown detector names are left to `check_scenario`. Returns the files checked.
+
+    Raises:
+      ValueError: the first bad file's error, "FILE: why" (detectors.lanenet.WeightsError).
+    """
+    from detectors.registry import check_detectors_weights, known_detectors
+
+    names = [name for sc in scenarios
+             for name in (*sc.estimation.front_detectors, sc.estimation.reference_detector)
+             if name in known_detectors()]
+    return check_detectors_weights(names, None, weights)
+
+
+def weights_error(command: str, args: argparse.Namespace, scenarios: list[Scenario]
+                   ) -> int | None:
+    """Exit code 2 after one error line if the weights are bad, else None."""
+    try:
+        check_weights_option(scenarios, args.weights)
+    except ValueError as err:
+        if getattr(args, "debug", False):
+            raise
+        print(f"lanekeep {command}: error: {' '.join(str(err).split())}", file=sys.stderr)
+        return 2
+    return None
+
+
 def run_episode(scenario_name: str, seed: int | None = None, seconds: float | None = None,
                 plots_dir: str | None = None, record_path: str | None = None,
                 record_every: int = 1, jpeg_quality: int = 75,
                 progress: bool = False, mode: str | None = None,
-                front_detectors: tuple[str, ...] | None = None) -> EpisodeReport:
+                front_detectors: tuple[str, ...] | None = None,
+                weights: str | None = None) -> EpisodeReport:
     """Run one scenario to the end and return its report (optionally plots and a recording).
 
     `mode` ("default" | "paper") and `front_detectors` (e.g. ("hough",) for a model-only
-    loop) override the scenario file's; None keeps them.
+    loop) override the scenario file's; None keeps them. `weights` is the file of every
+    learned detector in the episode (None: their shipped one).
     """
     import lanekeep  # noqa: F401 - EGL before mujoco
+    from detectors.registry import detector_weights
     from lanekeep.episode import Episode
     from lanekeep.paper_mode import with_mode
     from lanekeep.plots import EpisodeTrace, write_plots
@@ -99,7 +136,7 @@ def run_episode(scenario_name: str, seed: int | None = None, seconds: float | No
 
         recorder = RerunRecorder(Path(record_path), scenario, every=record_every,
                                  jpeg_quality=jpeg_quality)
-    with Episode(scenario, recorder=recorder) as episode:
+    with detector_weights(weights), Episode(scenario, recorder=recorder) as episode:
         trace = EpisodeTrace(list(episode.front))
 
         def on_step(result, total: int) -> None:
@@ -130,9 +167,12 @@ def _cmd_run(args: argparse.Namespace) -> int:
 
     check_options(args)
     scenario = load_scenario(args.scenario)
+    code = weights_error("run", args, [scenario])
+    if code is not None:
+        return code
     report = run_episode(args.scenario, args.seed, args.seconds, args.plots, args.record,
                          args.record_every, args.jpeg_quality, progress=sys.stderr.isatty(),
-                         mode=args.mode)
+                         mode=args.mode, weights=args.weights)
     print(f"scenario {report.scenario} (seed {report.seed}): {report.duration_s:.1f} s simulated "
           f"in {report.wall_s:.1f} s")
     print(report.table())
@@ -144,7 +184,7 @@ def _cmd_run(args: argparse.Namespace) -> int:
 
 
 def _bench_one(job: BenchJob, seconds: float | None, plots: str | None,
-               record_dir: str | None) -> dict | None:
+               record_dir: str | None, weights: str | None = None) -> dict | None:
     label = job.label
     record = str(Path(record_dir) / f"{label}.rrd") if record_dir else None
     plots_dir = str(Path(plots) / label) if plots else None
@@ -152,7 +192,7 @@ def _bench_one(job: BenchJob, seconds: float | None, plots: str | None,
         if _STOP is not None and _STOP.is_set():  # queued before the bench was stopped
             return None
         return run_episode(job.scenario, job.seed, seconds, plots_dir, record, mode=job.mode,
-                           front_detectors=job.front_detectors).to_dict()
+                           front_detectors=job.front_detectors, weights=weights).to_dict()
 
 
 def _report_from_dict(d: dict) -> EpisodeReport:
@@ -230,8 +270,10 @@ class BenchInterrupted(KeyboardInterrupt):
 
 def run_bench(jobs: list[BenchJob], workers: int, seconds: float | None = None,
               plots: str | None = None, record_dir: str | None = None,
-              on_done=None) -> tuple[list[EpisodeReport], float]:
+              on_done=None, weights: str | None = None) -> tuple[list[EpisodeReport], float]:
     """Episodes in `workers` processes, longest first: (reports in the jobs' order, wall s).
+
+    `weights`: the file of every learned detector (None: their shipped one).
 
     `on_done(done, total)` is called as each episode finishes. On KeyboardInterrupt (Ctrl-C,
     or SIGTERM under `lanekeep.cli.main`) the waiting episodes are cancelled, the running ones
@@ -246,7 +288,7 @@ def run_bench(jobs: list[BenchJob], workers: int, seconds: float | None = None,
                                initargs=(worker_threads(workers), stop))
     futures = {}
     try:
-        futures = {pool.submit(_bench_one, jobs[i], seconds, plots, record_dir): i
+        futures = {pool.submit(_bench_one, jobs[i], seconds, plots, record_dir, weights): i
                    for i in longest_first(jobs, seconds)}
         for done, future in enumerate(as_completed(futures), start=1):
             reports[futures[future]] = _report_from_dict(future.result())
@@ -291,6 +333,9 @@ def _cmd_bench(args: argparse.Namespace) -> int:
         if args.seed is not None:  # (shadow casters stand where the seed puts them)
             scenario = dataclasses.replace(scenario, seed=args.seed)
         check_scenario(with_mode(scenario, args.mode), args.seconds)
+    code = weights_error("bench", args, list(scenarios.values()))
+    if code is not None:
+        return code
     if args.record_dir:
         Path(args.record_dir).mkdir(parents=True, exist_ok=True)
     jobs = [BenchJob(name, args.seed, args.mode) for name in names]
@@ -300,7 +345,7 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     try:
         done_reports, wall = run_bench(
             jobs, args.workers, args.seconds, args.plots, args.record_dir,
-            on_done=lambda done, total: _progress(done, total, "bench"))
+            on_done=lambda done, total: _progress(done, total, "bench"), weights=args.weights)
     except BenchInterrupted as stop:
         return _bench_interrupted(args, jobs, scenarios, stop)
     reports = {job.label: report for job, report in zip(jobs, done_reports, strict=True)}
@@ -406,6 +451,7 @@ def register(sub) -> None:
     p.add_argument("--mode", choices=ESTIMATION_MODES, default=None,
                    help="estimation mode: 'default' (ours) or 'paper' (paper 001's own loop, "
                         "lanekeep/paper_mode.py); default: the scenario file's")
+    add_weights_option(p)
     p.set_defaults(func=_cmd_run)
 
     p = sub.add_parser("bench", help="run many scenarios in parallel; paper-style tables")
@@ -423,4 +469,12 @@ def register(sub) -> None:
                    help="also drive each scenario closed loop with each front model alone "
                         "and print the car's lateral RMS / max and departures beside the "
                         "MMAE loop's; in --json these episodes are keyed 'SCENARIO@MODEL'")
+    add_weights_option(p)
     p.set_defaults(func=_cmd_bench)
+
+
+def add_weights_option(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--weights", metavar="FILE", default=None,
+                   help="weights of the learned detector (lanenet) wherever a scenario uses it "
+                        "(default: the shipped detectors/weights/lanenet.pt); loaded before "
+                        "anything runs, a bad file is one error line and exit 2")

@@ -30,6 +30,12 @@ JSON keys (stable; times are wall-clock on this machine; strict JSON, null for n
                                workers_2: {...}, speedup}: the perf scenario with seeds
                                0..episodes-1, each `seconds_each` long, via `lanekeep bench`'s
                                runner (process start and world build included)
+  lanenet                      null with --lanenet-frames 0, else {weights, frame, frames,
+                               ms_median, ms_p90, unavailable}: ms of LaneNet's `detect`
+                               (resize, network, decoding) per 1280x720 frame, over `frames`
+                               calls on the scenario's first front frame after 2 warm-up
+                               calls; with a weights file that does not load, the ms are null
+                               and `unavailable` says why (the issue's target: <= 15 ms)
 """
 
 from __future__ import annotations
@@ -71,7 +77,42 @@ def _physics_steps_per_s(scenario, n: int = 2000) -> float:
     return n / (time.perf_counter() - start)
 
 
-def _bench_throughput(scenario_name: str, episodes: int, seconds: float) -> dict:
+def lanenet_inference(scenario, weights: str | None = None, frames: int = 30,
+                      size: tuple[int, int] = (1280, 720)) -> dict:
+    """LaneNet's ms per frame (see `lanenet` in the module docstring). The frame is the bare
+    render of the scenario's start: the figure is the detector's cost, whatever the picture."""
+    import numpy as np
+
+    from detectors.registry import check_weights, make_detector
+    from lanekeep.cameras import CameraRig, RenderSettings
+    from lanekeep.world import build
+
+    out: dict = {"weights": weights, "frame": f"{size[0]}x{size[1]}", "frames": frames,
+                 "ms_median": None, "ms_p90": None, "unavailable": None}
+    try:
+        out["weights"] = check_weights("lanenet", None, weights)
+    except ValueError as err:  # WeightsError: "FILE: why"
+        out["unavailable"] = " ".join(str(err).split())
+        return out
+    world = build(scenario)
+    with CameraRig(world.model, RenderSettings.of(scenario, *size)) as rig:
+        frame = rig.render_rgb(world.data, "front")
+        camera = rig.cameras["front"]
+    detector = make_detector("lanenet", camera, weights=out["weights"])
+    for _ in range(2):  # warm-up: the first calls allocate torch's buffers
+        detector.detect(frame)
+    ms = []
+    for _ in range(frames):
+        start = time.perf_counter()
+        detector.detect(frame)
+        ms.append(1000.0 * (time.perf_counter() - start))
+    out["ms_median"] = float(np.median(ms))
+    out["ms_p90"] = float(np.percentile(ms, 90))
+    return out
+
+
+def _bench_throughput(scenario_name: str, episodes: int, seconds: float,
+                      weights: str | None = None) -> dict:
     """Throughput of `lanekeep bench`'s runner with 1 and 2 workers: the scenario with seeds
     0..episodes-1 (process start-up and world builds included, as in a real bench)."""
     from lanekeep.cli_episode import BenchJob, run_bench
@@ -79,7 +120,7 @@ def _bench_throughput(scenario_name: str, episodes: int, seconds: float) -> dict
     jobs = [BenchJob(scenario_name, seed) for seed in range(episodes)]
     out: dict = {"episodes": episodes, "seconds_each": seconds}
     for workers in (1, 2):
-        reports, wall = run_bench(jobs, workers, seconds=seconds)
+        reports, wall = run_bench(jobs, workers, seconds=seconds, weights=weights)
         simulated = sum(r.duration_s for r in reports)
         out[f"workers_{workers}"] = {"wall_s": wall, "episodes_per_s": episodes / wall,
                                      "simulated_s_per_s": simulated / wall}
@@ -88,9 +129,12 @@ def _bench_throughput(scenario_name: str, episodes: int, seconds: float) -> dict
 
 
 def measure(scenario_name: str = "clear_curve", seconds: float = 10.0, repeats: int = 3,
-            bench_episodes: int = 4, bench_seconds: float = 10.0) -> dict:
-    """Every figure of the JSON described in the module docstring."""
+            bench_episodes: int = 4, bench_seconds: float = 10.0, weights: str | None = None,
+            lanenet_frames: int = 30) -> dict:
+    """Every figure of the JSON described in the module docstring (`weights`: the file of
+    every learned detector, None = the shipped one)."""
     import lanekeep
+    from detectors.registry import detector_weights
     from lanekeep.record import RerunRecorder
     from lanekeep.scenario import load_scenario
 
@@ -111,10 +155,11 @@ def measure(scenario_name: str = "clear_curve", seconds: float = 10.0, repeats: 
     # shared machine slows one run by 10-20%, which would swamp a 10% recording cost.
     off, on = [], []
     for _ in range(repeats):
-        off.append(_timed_loop(scenario, seconds))
-        with tempfile.TemporaryDirectory() as tmp:
-            on.append(_timed_loop(scenario, seconds,
-                                  RerunRecorder(Path(tmp) / "perf.rrd", scenario)))
+        with detector_weights(weights):
+            off.append(_timed_loop(scenario, seconds))
+            with tempfile.TemporaryDirectory() as tmp:
+                on.append(_timed_loop(scenario, seconds,
+                                      RerunRecorder(Path(tmp) / "perf.rrd", scenario)))
     step_ms, stages = min(off, key=lambda r: r[0])
     step_ms_rec, stages_rec = min(on, key=lambda r: r[0])
     results["repeats"] = repeats
@@ -127,8 +172,10 @@ def measure(scenario_name: str = "clear_curve", seconds: float = 10.0, repeats: 
     results["real_time_factor_recording"] = dt_ms / step_ms_rec
     results["recording_cost_pct"] = 100.0 * (1.0 - step_ms / step_ms_rec)
     results["physics_steps_per_s"] = _physics_steps_per_s(scenario)
-    results["bench"] = (_bench_throughput(scenario_name, bench_episodes, bench_seconds)
+    results["bench"] = (_bench_throughput(scenario_name, bench_episodes, bench_seconds, weights)
                         if bench_episodes > 0 else None)
+    results["lanenet"] = (lanenet_inference(scenario, weights, lanenet_frames)
+                          if lanenet_frames > 0 else None)
     return results
 
 
@@ -147,6 +194,11 @@ def register(sub) -> None:
                    help="episodes per bench-throughput run; 0 skips it (default 4)")
     p.add_argument("--bench-seconds", type=float, default=10.0,
                    help="simulated seconds of each bench episode (default 10)")
+    p.add_argument("--lanenet-frames", type=int, default=30,
+                   help="frames of the LaneNet inference timing; 0 skips it (default 30)")
+    p.add_argument("--weights", metavar="FILE", default=None,
+                   help="LaneNet weights for the inference timing and any loop that uses it "
+                        "(default: the shipped file; if that is missing the timing says so)")
     p.add_argument("--json", default=None, help="also write the figures to this JSON file")
     p.set_defaults(func=_cmd_perf)
 
@@ -155,16 +207,20 @@ def _cmd_perf(args) -> int:
     for option, value, ok in (("--seconds", args.seconds, args.seconds > 0),
                               ("--bench-seconds", args.bench_seconds, args.bench_seconds > 0),
                               ("--repeats", args.repeats, args.repeats >= 1),
-                              ("--bench-episodes", args.bench_episodes, args.bench_episodes >= 0)):
+                              ("--bench-episodes", args.bench_episodes, args.bench_episodes >= 0),
+                              ("--lanenet-frames", args.lanenet_frames, args.lanenet_frames >= 0)):
         if not ok:
             raise ConfigError("", option, f"out of range: {value}")
-    from lanekeep.cli_episode import check_scenario
+    from lanekeep.cli_episode import check_scenario, weights_error
     from lanekeep.scenario import load_scenario
 
     scenario = load_scenario(args.scenario)
     check_scenario(scenario)  # a bad scenario: one line, before any loop
+    code = weights_error("perf", args, [scenario])  # a given or needed file that is bad
+    if code is not None:
+        return code
     results = measure(args.scenario, args.seconds, args.repeats, args.bench_episodes,
-                      args.bench_seconds)
+                      args.bench_seconds, args.weights, args.lanenet_frames)
     print(format_results(results))
     if args.json:
         from lanekeep.report_json import with_metadata, write_json
@@ -198,5 +254,17 @@ def format_results(r: dict) -> str:
                          f"{b['seconds_each']:.0f} s in {x['wall_s']:.1f} s = "
                          f"{x['simulated_s_per_s']:.2f} simulated s per s")
         lines.append(f"bench speed-up with 2 workers: {b['speedup']:.2f}x")
+    lines += format_lanenet(r.get("lanenet"))
     return "\n".join(lines)
+
+
+def format_lanenet(n: dict | None) -> list[str]:
+    """The LaneNet timing's line (none when it was skipped)."""
+    if n is None:
+        return []
+    if n["unavailable"]:
+        return [f"LaneNet inference: unavailable ({n['unavailable']})"]
+    return [f"LaneNet inference ({n['weights']}): {n['ms_median']:.1f} ms median, "
+            f"{n['ms_p90']:.1f} ms p90 per {n['frame']} frame over {n['frames']} frames "
+            f"(target <= 15 ms)"]
 
