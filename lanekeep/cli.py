@@ -74,11 +74,12 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def _optional_command_modules() -> list:
-    """Subcommands that live in their own modules (detect, calibrate, run, bench, perf)."""
+    """Subcommands that live in their own modules (detect, calibrate, run, bench, perf, eval)."""
     import importlib
 
     modules = []
-    for name in ("lanekeep.cli_detect", "lanekeep.cli_episode", "lanekeep.perf"):
+    for name in ("lanekeep.cli_detect", "lanekeep.cli_episode", "lanekeep.perf",
+                 "lanekeep.cli_eval"):
         try:
             modules.append(importlib.import_module(name))
         except ModuleNotFoundError as err:

@@ -1,6 +1,10 @@
-"""Score the classical detectors on labelled real frames (TuSimple rule), for tuning.
+"""Score the detectors on labelled real frames (TuSimple rule), for tuning and validation.
 
     .venv/bin/python tools/tune_real.py ../shared/real/tusimple_dev [--detector sliding_window]
+    .venv/bin/python tools/tune_real.py ../shared/real/tusimple_dev --detector lanenet
+
+A detector that sees every boundary (LaneNet) is scored on all of them, as `lanekeep detect
+--format tusimple` reports them; the classical ones on their ego pair.
 
 The folder holds N.jpg and labels/N.txt (one labelled lane a line: "x y x y ..."). Prints per
 frame and mean accuracy over all labelled lanes, and the ego accuracy: the same rule on the two
@@ -19,7 +23,7 @@ import numpy as np
 import lanekeep  # noqa: F401
 from detectors.config import load_config
 from detectors.registry import known_detectors, make_detector
-from detectors.tusimple import estimate_lanes, h_samples_for, score_frame
+from detectors.tusimple import boundary_lanes, estimate_lanes, h_samples_for, score_frame
 from lanekeep.calibration import read_image
 from lanekeep.camera_file import camera_for_image
 
@@ -53,6 +57,7 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("folder")
     parser.add_argument("--detector", action="append", choices=known_detectors())
+    parser.add_argument("--weights", default=None, help="LaneNet weights (default: shipped)")
     args = parser.parse_args()
     folder = Path(args.folder)
     config = load_config()
@@ -68,10 +73,16 @@ def main() -> int:
             camera, _, horizon = camera_for_image(
                 image, None, dash.hfov_deg, dash.height_m, dash.horizon_fraction,
                 dash.min_horizon_fraction, dash.max_horizon_fraction)
-            detector = make_detector(name, camera, config)
+            detector = make_detector(name, camera, config, weights=args.weights)
             estimate = detector.detect(image)
-            x_range = (float(camera.position_m[0]) + 1.0, detector.window.x_far_m * 1.3)
-            pred = estimate_lanes(estimate, camera, h_samples, x_range)
+            boundaries = getattr(getattr(detector, "last", None), "boundaries", None)
+            if boundaries is not None:
+                named = boundary_lanes(boundaries, camera, h_samples,
+                                       (image.shape[1], image.shape[0]), horizon)
+                pred = [lane.xs for lane in named]
+            else:
+                x_range = (float(camera.position_m[0]) + 1.0, detector.window.x_far_m * 1.3)
+                pred = estimate_lanes(estimate, camera, h_samples, x_range)
             gt = read_labels(label, h_samples)
             acc, _ = score_frame(pred, gt, h_samples)
             ego_gt = ego_lanes(gt, h_samples, image.shape[1] / 2.0)
@@ -80,7 +91,7 @@ def main() -> int:
             overall.append(acc)
             ego.append(ego_acc)
             print(f"{name:15s} {img_path.name:8s} horizon {horizon:5.0f} "
-                  f"valid {estimate.valid!s:5s} "
+                  f"valid {estimate.valid!s:5s} lanes {len(pred)} "
                   f"acc {acc:5.1%} ego {ego_acc:5.1%} {estimate.reason}")
         print(f"{name}: mean accuracy {np.mean(overall):.1%}, ego {np.mean(ego):.1%} "
               f"over {len(overall)} frames")
