@@ -64,6 +64,10 @@ class DatasetRecipe:
     render_height: int = 360
     label_range_m: float = 80.0
     lane_change_share: float = 0.2
+    # Stored frame size: the network's working size for training data; `lanekeep eval` keeps
+    # 640x360, which the classical detectors shrink to anyway (2x2 pixels per working pixel).
+    store_width: int = LaneNetConfig.width
+    store_height: int = LaneNetConfig.height
 
     def __post_init__(self):
         if self.frames < 1 or self.sequences_per_world < 1:
@@ -174,11 +178,11 @@ def render_world(scenario: Scenario, recipe: DatasetRecipe, rng: np.random.Gener
     """All sequences of one world, as arrays (see the module docstring for what they hold)."""
     world = build(scenario)
     road = world.road
-    config = LaneNetConfig()
+    width, height = recipe.store_width, recipe.store_height
     n, t = recipe.sequences_per_world * len(CAMERAS), recipe.frames
     out = {
-        "frames": np.zeros((n, t, config.height, config.width, 3), np.uint8),
-        "paint": np.zeros((n, t, config.height, config.width), np.uint8),
+        "frames": np.zeros((n, t, height, width, 3), np.uint8),
+        "paint": np.zeros((n, t, height, width), np.uint8),
         "xs": np.full((n, t, MAX_BOUNDARIES, len(LABEL_ROWS)), np.nan, np.float32),
         "slots": np.full((n, t, MAX_BOUNDARIES), -1, np.int8),
         "ground_y": np.full((n, t, MAX_BOUNDARIES, len(ADE_POINTS_M)), np.nan, np.float32),
@@ -214,14 +218,13 @@ def render_world(scenario: Scenario, recipe: DatasetRecipe, rng: np.random.Gener
                 for ci, cam in enumerate(CAMERAS):
                     i = q * len(CAMERAS) + ci
                     rgb = camera_frame(rig, world, cam, effects[cam], rng, speed)
-                    out["frames"][i, k] = cv2.resize(rgb, (config.width, config.height),
-                                                     interpolation=cv2.INTER_AREA)
+                    out["frames"][i, k] = rgb if rgb.shape[:2] == (height, width) else \
+                        cv2.resize(rgb, (width, height), interpolation=cv2.INTER_AREA)
                     seg = rig.render_segmentation(world.data, cam)
                     ids = (np.append(world.marking_boundary, -1)[seg] + 1).astype(np.uint8)
                     labels = boundary_labels(world, (float(x), float(y), yaw), s_car,
                                              label_cams[cam], reach)
-                    out["paint"][i, k] = _shrink_ids(ids, config.width, config.height,
-                                                     labels, label_cams[cam])
+                    out["paint"][i, k] = _shrink_ids(ids, width, height, labels)
                     out["xs"][i, k] = labels["xs"]
                     out["slots"][i, k] = labels["slots"]
                     out["ground_y"][i, k] = labels["ground_y"]
@@ -230,8 +233,7 @@ def render_world(scenario: Scenario, recipe: DatasetRecipe, rng: np.random.Gener
     return out
 
 
-def _shrink_ids(ids: np.ndarray, width: int, height: int, labels: dict,
-                camera: CameraModel) -> np.ndarray:
+def _shrink_ids(ids: np.ndarray, width: int, height: int, labels: dict) -> np.ndarray:
     """Boundary ids at the stored size (a pixel keeps any paint it covered), only rows where
     the boundary is labelled (so paint beyond the label range is not taught either)."""
     h, w = ids.shape

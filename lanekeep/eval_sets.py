@@ -75,7 +75,8 @@ class EvalRecipe:
     def dataset_recipe(self) -> DatasetRecipe:
         return DatasetRecipe(seed=EVAL_NAMESPACE, sequences_per_world=self.sequences,
                              frames=self.frames, render_width=self.render_width,
-                             render_height=self.render_height)
+                             render_height=self.render_height, store_width=self.render_width,
+                             store_height=self.render_height)
 
 
 def occlusion_share(condition: str) -> float:
@@ -221,7 +222,8 @@ def set_key(condition: str, recipe: EvalRecipe) -> str:
     changing the world builder or the renderer)."""
     seeds = [condition_seed(condition, i) for i in range(recipe.worlds)]
     blob = json.dumps({"format": FORMAT, "dataset": DATASET_FORMAT, "condition": condition,
-                       "recipe": asdict(recipe), "seeds": seeds, "ns": EVAL_NAMESPACE},
+                       "recipe": asdict(recipe), "rendered": asdict(recipe.dataset_recipe()),
+                       "seeds": seeds, "ns": EVAL_NAMESPACE},
                       sort_keys=True)
     return hashlib.sha256(blob.encode()).hexdigest()
 
