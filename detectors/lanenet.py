@@ -138,6 +138,7 @@ class LaneNetDetector:
         self._decode = self.settings.decode()
         self._state: LaneNetState | None = None
         self._thumb: np.ndarray | None = None
+        self._frame_size = (camera.height, camera.width)
         self.last: Decoded | None = None
 
     @property
@@ -165,6 +166,7 @@ class LaneNetDetector:
 
     def infer(self, frame: np.ndarray) -> Decoded:
         """Run the network on one frame (keeping state) and decode every boundary."""
+        self._frame_size = frame.shape[:2]
         image = prepare_frame(frame, self.model.config)
         changed = self._scene_changed(image)
         if changed:
@@ -184,6 +186,24 @@ class LaneNetDetector:
         boundaries = fit_boundaries(fit_props, grid, self._decode, camera)
         self.last = Decoded(props, boundaries, changed)
         return self.last
+
+    def boundaries_in_image(self) -> list[Boundary]:
+        """The last frame's boundaries fitted in the image (u = A + B d + C / d, d = rows below
+        a horizon found from the boundaries themselves) instead of on the ground: for a photo
+        whose camera is a guess (no camera file), where a wrong pitch or height would bend the
+        ground fit. On 10 TuSimple frames this fit scored better than the ground fit through
+        the guessed dashcam camera (tools/tune_real.py)."""
+        if self.last is None:
+            return []
+        props = self.last.proposals
+        rows, cols = self.model.config.grid
+        frame_h, frame_w = self._frame_size
+        if self.distortion is not None and len(props.points_px):
+            camera = self._camera_for(frame_w, frame_h)
+            pts = cv2.undistortPoints(props.points_px.reshape(-1, 1, 2).astype(np.float64),
+                                      camera.K, self.distortion, P=camera.K).reshape(-1, 2)
+            props = replace(props, points_px=pts)
+        return fit_boundaries(props, CellGrid(frame_w, frame_h, rows, cols), self._decode, None)
 
     def detect(self, frame: np.ndarray) -> LaneEstimate:
         decoded = self.infer(frame)

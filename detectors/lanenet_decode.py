@@ -86,6 +86,16 @@ class Boundary:
             d = rows - float(self.horizon_row)
             with np.errstate(divide="ignore", invalid="ignore"):
                 x = self.coeffs[0] + self.coeffs[1] * d + self.coeffs[2] / d
+            # u = A + B d + C / d turns back where d^2 = C / B: a boundary seen on one side
+            # of that row does not continue beyond it (an extension would fold over the road).
+            b_, c_ = float(self.coeffs[1]), float(self.coeffs[2])
+            if b_ != 0.0 and c_ / b_ > 0.0:
+                fold = float(np.sqrt(c_ / b_))
+                seen = self.points_px[:, 1] - float(self.horizon_row)
+                if np.median(seen) > fold:
+                    lo = max(lo, float(self.horizon_row) + fold)
+                else:
+                    hi = min(hi, float(self.horizon_row) + fold)
         else:
             if camera is None:
                 raise ValueError("a ground-plane boundary needs the camera to be drawn")
@@ -186,9 +196,16 @@ def fit_boundaries(props: Proposals, grid: CellGrid, settings: DecodeSettings,
     horizon = None
     if camera is None:
         horizon = estimate_horizon_row([props.points_px[i] for i in groups.values()], grid)
+    # "Other" boundaries lie beyond both neighbour lanes: fit each side on its own, so that
+    # RANSAC never draws one curve through points of the far left and the far right.
+    other = groups.pop(OTHER)
+    left_side = props.points_px[other, 0] < grid.frame_width / 2.0
+    pools = [(slot, idx, 1) for slot, idx in groups.items()]
+    pools += [(OTHER, other[left_side], settings.max_other),
+              (OTHER, other[~left_side], settings.max_other)]
     out = []
-    for slot, idx in groups.items():
-        for _ in range(settings.max_other if slot == OTHER else 1):
+    for slot, idx, tries in pools:
+        for _ in range(tries):
             if len(idx) < settings.min_points:
                 break
             b = _fit_one(props, idx, slot, settings, rng, camera, horizon)

@@ -131,6 +131,23 @@ def boundary_lanes(
     return [lane for _, lane in sorted(keyed, key=lambda k: k[0])]
 
 
+def every_lane(detector, camera: CameraModel, camera_known: bool, h_samples: list[int],
+               size: tuple[int, int], horizon_row: float) -> list[NamedLane] | None:
+    """All boundaries of a detector that sees them (its `last.boundaries`), as TuSimple lanes;
+    None for a detector that reports only its ego pair. Without a known camera (a photo with no
+    camera file) a detector that can refit in the image (`boundaries_in_image`) does, with the
+    horizon its boundaries meet at, rather than project through a guessed camera."""
+    boundaries = getattr(getattr(detector, "last", None), "boundaries", None)
+    if boundaries is None:
+        return None
+    if not camera_known and hasattr(detector, "boundaries_in_image"):
+        boundaries = detector.boundaries_in_image()
+        horizons = [b.horizon_row for b in boundaries if b.horizon_row is not None]
+        return boundary_lanes(boundaries, None, h_samples, size,
+                              horizons[0] if horizons else horizon_row)
+    return boundary_lanes(boundaries, camera, h_samples, size, horizon_row)
+
+
 def record(raw_file: str, lanes: list[list[int]], h_samples: list[int], run_time_ms: float
            ) -> dict:
     return {"lanes": lanes, "h_samples": list(h_samples), "raw_file": raw_file,

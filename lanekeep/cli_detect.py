@@ -189,7 +189,7 @@ def cmd_detect(args: argparse.Namespace) -> int:
 
     from detectors.config import load_config
     from detectors.registry import make_detector
-    from detectors.tusimple import boundary_lanes, estimate_lanes, h_samples_for, record
+    from detectors.tusimple import estimate_lanes, every_lane, h_samples_for, record
     from lanekeep.camera_file import camera_for_image, read_camera_file
     from lanekeep.image_io import read_image
 
@@ -235,9 +235,8 @@ def cmd_detect(args: argparse.Namespace) -> int:
         ms = (time.perf_counter() - start) * 1000.0
         h_samples = h_samples_for(h)
         # Detectors that see every boundary keep them with the frame's other outputs.
-        boundaries = getattr(getattr(detector, "last", None), "boundaries", None)
-        if boundaries is not None:
-            named = boundary_lanes(boundaries, camera, h_samples, (w, h), horizon)
+        named = every_lane(detector, camera, camera_file is not None, h_samples, (w, h), horizon)
+        if named is not None:
             lanes = [lane.xs for lane in named]
             drawn = [(lane.name, lane.xs) for lane in named]
         else:
@@ -256,7 +255,7 @@ def cmd_detect(args: argparse.Namespace) -> int:
                 "confidence": estimate.confidence, "reason": estimate.reason,
                 "horizon_row": horizon, "run_time_ms": round(ms, 2),
             }
-            if boundaries is not None:
+            if named is not None:
                 line["h_samples"] = list(h_samples)
                 line["boundaries"] = [{"slot": lane.name, "xs": lane.xs,
                                        "score": round(lane.score, 4)} for lane in named]

@@ -23,7 +23,7 @@ import numpy as np
 import lanekeep  # noqa: F401
 from detectors.config import load_config
 from detectors.registry import known_detectors, make_detector
-from detectors.tusimple import boundary_lanes, estimate_lanes, h_samples_for, score_frame
+from detectors.tusimple import estimate_lanes, every_lane, h_samples_for, score_frame
 from lanekeep.calibration import read_image
 from lanekeep.camera_file import camera_for_image
 
@@ -75,10 +75,9 @@ def main() -> int:
                 dash.min_horizon_fraction, dash.max_horizon_fraction)
             detector = make_detector(name, camera, config, weights=args.weights)
             estimate = detector.detect(image)
-            boundaries = getattr(getattr(detector, "last", None), "boundaries", None)
-            if boundaries is not None:
-                named = boundary_lanes(boundaries, camera, h_samples,
-                                       (image.shape[1], image.shape[0]), horizon)
+            named = every_lane(detector, camera, False, h_samples,
+                               (image.shape[1], image.shape[0]), horizon)
+            if named is not None:
                 pred = [lane.xs for lane in named]
             else:
                 x_range = (float(camera.position_m[0]) + 1.0, detector.window.x_far_m * 1.3)
