@@ -15,7 +15,7 @@ difference between consecutive thumbnails: what the GRU remembers of another roa
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, fields, replace
 from importlib import resources
 from pathlib import Path
 
@@ -39,6 +39,7 @@ from detectors.lanenet_targets import CellGrid
 from lanekeep.camera_model import CameraModel
 
 FORMAT = "lanekeep-lanenet/1"
+CANDIDATE_SCORE = 0.05  # the lowest objectness kept as a candidate proposal (for AP)
 DEFAULT_WEIGHTS = "weights/lanenet.pt"  # inside the detectors package
 
 
@@ -104,11 +105,14 @@ class LaneNetSettings:
 
 @dataclass(frozen=True)
 class Decoded:
-    """Everything one frame gave: its proposals (for AP) and every fitted boundary."""
+    """Everything one frame gave: its proposals (score above the threshold: what the
+    boundaries are fitted to), every fitted boundary, and the candidates down to
+    CANDIDATE_SCORE (for AP, which ranks proposals over all confidences)."""
 
     proposals: Proposals
     boundaries: list[Boundary]
     scene_change: bool
+    candidates: Proposals | None = None
 
 
 class LaneNetDetector:
@@ -175,8 +179,11 @@ class LaneNetDetector:
             out, self._state = self.model(torch.from_numpy(image)[None, None], self._state)
         rows, cols = self.model.config.grid
         grid = CellGrid(frame.shape[1], frame.shape[0], rows, cols)
-        props = proposals(out.objectness[0, 0].numpy(), out.x_offset[0, 0].numpy(),
-                          out.slot[0, 0].numpy(), grid, self._decode.score_threshold)
+        candidates = proposals(out.objectness[0, 0].numpy(), out.x_offset[0, 0].numpy(),
+                               out.slot[0, 0].numpy(), grid,
+                               min(CANDIDATE_SCORE, self._decode.score_threshold))
+        keep = candidates.scores > self._decode.score_threshold
+        props = Proposals(*(getattr(candidates, f.name)[keep] for f in fields(Proposals)))
         camera = self._camera_for(frame.shape[1], frame.shape[0])
         fit_props = props
         if self.distortion is not None and len(props.points_px):
@@ -184,7 +191,7 @@ class LaneNetDetector:
                                       camera.K, self.distortion, P=camera.K).reshape(-1, 2)
             fit_props = replace(props, points_px=pts)
         boundaries = fit_boundaries(fit_props, grid, self._decode, camera)
-        self.last = Decoded(props, boundaries, changed)
+        self.last = Decoded(props, boundaries, changed, candidates)
         return self.last
 
     def boundaries_in_image(self) -> list[Boundary]:

@@ -95,7 +95,7 @@ class Runner:
                                rules.width_tolerance_m)  # what detect() does with infer's output
             ms = 1000.0 * (time.perf_counter() - start)
             lanes = [b.x_at_rows(LABEL_ROWS, cam) for b in decoded.boundaries]
-            props = decoded.proposals
+            props = decoded.candidates  # all confidences: AP ranks them
             return FramePrediction(props.boxes_px, props.scores, lanes, est), ms
         start = time.perf_counter()
         est = det.detect(frame)

@@ -9,14 +9,16 @@ continuous through dash gaps, as TuSimple labels lanes) cut at the row bands of 
 grid laid over the frame (`CellGrid` with LaneNetConfig's rows x cols): one box per boundary per
 band it spans, one cell wide and one band tall, centred on the label's x at the band's centre
 row. A detector's proposals are boxes with a confidence. They are ranked by confidence over all
-frames; a proposal takes the unmatched ground-truth box of its frame that it overlaps most if that
-IoU is >= 0.5 (a true positive), else it is a false positive; AP is the area under the
-precision-recall curve made monotone (VOC's all-point interpolation). Equal boxes in one band
-overlap by IoU >= 0.5 when |dx| <= cell width / 3 (about 10.7 px). Classical detectors make no
-proposals, so theirs are made from their two fitted boundaries: each boundary projected into the
-image over the range `lanekeep detect` draws it (camera x + 1 m to 1.3x the far edge of its
-ground window), one cell-sized box per band it crosses, every box scored by the estimate's
-confidence. Ties in confidence keep frame order.
+frames; a proposal takes the unmatched ground-truth box of its frame that it overlaps most if
+that IoU is >= 0.5 (a true positive), else it is a false positive; AP is the area under the
+precision-recall curve made monotone (VOC's all-point interpolation). LaneNet's proposals are
+all its cells with objectness above 0.05 (`detectors.lanenet.CANDIDATE_SCORE`), as a detector's
+AP is taken over all its confidences; its boundaries are fitted to those above 0.5. Equal boxes
+in one band overlap by IoU >= 0.5 when |dx| <= cell width / 3 (about 10.7 px). Classical
+detectors make no proposals, so theirs are made from their two fitted boundaries: each boundary
+projected into the image over the range `lanekeep detect` draws it (camera x + 1 m to 1.3x the
+far edge of its ground window), one cell-sized box per band it crosses, every box scored by the
+estimate's confidence. Ties in confidence keep frame order.
 
 IoU / F1 (CULane's lane IoU). Each boundary, predicted or labelled, is drawn as a 30 px wide
 polyline through its x at the label rows (every 5 px) on a 1280x720 mask. Predicted and labelled

@@ -1,0 +1,32 @@
+"""LaneNet in the closed loop: a third front model beside the classical two and the rear
+reference, through the N-model MMAE, with its GRU state carried from step to step."""
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from lanekeep.episode import Episode
+from lanekeep.scenario import load_scenario
+
+
+@pytest.mark.slow
+def test_three_front_models_and_the_learned_reference_keep_the_lane():
+    base = load_scenario("clear_curve")
+    scenario = dataclasses.replace(
+        base, duration_s=6.0,
+        estimation=dataclasses.replace(base.estimation,
+                                       front_detectors=("hough", "sliding_window", "lanenet"),
+                                       reference_detector="lanenet"))
+    with Episode(scenario, render_size=(640, 360)) as episode:
+        steps = [episode.step() for _ in range(episode.total_steps)]
+        report = episode.report()
+    assert all(len(s.probabilities) == 3 for s in steps)
+    assert all(abs(sum(s.probabilities) - 1.0) < 1e-9 for s in steps)
+    assert report.lane_departures == 0
+    assert report.sources["lanenet"].valid_share > 0.9
+    assert report.sources["reference"].valid_share > 0.9
+    assert report.sources["reference"].rmse_cm < 10.0
+    # The learned model carried its state: it holds the GRU memory after the last step.
+    lanenet = episode.front["lanenet"]
+    assert lanenet._state is not None and np.isfinite(lanenet.model.alpha.item())
