@@ -287,10 +287,7 @@ class EstimationConfig:
     # model_lane and the front windows; "default" is our loop with its improvements.
     mode: str = "default"
     front_detectors: tuple[str, ...] = ("hough", "sliding_window")
-    # The rear reference is learned, as in paper 001 (CLRNet there, LaneNet here): it must be
-    # the most reliable model, and model #2 on the rear view failed where its front twin did
-    # (traffic: valid on 23% of highway_multilane's steps, LaneNet on 100%).
-    reference_detector: str = "lanenet"
+    reference_detector: str = "sliding_window"
     reference_camera: str = "rear"
     residual_mode: str = "distance_aligned"
     output: str = "select"
