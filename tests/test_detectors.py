@@ -120,7 +120,7 @@ def test_hard_frames_are_invalid_never_nan(rendered, name):
 
 
 def test_unknown_detector_names_the_known_ones(rendered):
-    with pytest.raises(ValueError, match="hough, sliding_window"):
+    with pytest.raises(ValueError, match="hough, lanenet, sliding_window"):
         make_detector("lanenet3000", rendered["clear_straight"][2]["front"])
 
 
