@@ -185,12 +185,7 @@ class LaneNetDetector:
         keep = candidates.scores > self._decode.score_threshold
         props = Proposals(*(getattr(candidates, f.name)[keep] for f in fields(Proposals)))
         camera = self._camera_for(frame.shape[1], frame.shape[0])
-        fit_props = props
-        if self.distortion is not None and len(props.points_px):
-            pts = cv2.undistortPoints(props.points_px.reshape(-1, 1, 2).astype(np.float64),
-                                      camera.K, self.distortion, P=camera.K).reshape(-1, 2)
-            fit_props = replace(props, points_px=pts)
-        boundaries = fit_boundaries(fit_props, grid, self._decode, camera)
+        boundaries = fit_boundaries(self._undistorted(props, camera), grid, self._decode, camera)
         self.last = Decoded(props, boundaries, changed, candidates)
         return self.last
 
@@ -202,15 +197,19 @@ class LaneNetDetector:
         the guessed dashcam camera (tools/tune_real.py)."""
         if self.last is None:
             return []
-        props = self.last.proposals
         rows, cols = self.model.config.grid
         frame_h, frame_w = self._frame_size
-        if self.distortion is not None and len(props.points_px):
-            camera = self._camera_for(frame_w, frame_h)
-            pts = cv2.undistortPoints(props.points_px.reshape(-1, 1, 2).astype(np.float64),
-                                      camera.K, self.distortion, P=camera.K).reshape(-1, 2)
-            props = replace(props, points_px=pts)
+        props = self._undistorted(self.last.proposals, self._camera_for(frame_w, frame_h))
         return fit_boundaries(props, CellGrid(frame_w, frame_h, rows, cols), self._decode, None)
+
+    def _undistorted(self, props: Proposals, camera: CameraModel) -> Proposals:
+        """The proposals with their points moved to the pinhole image (no-op without a lens
+        distortion), where the fits' flat-road models hold."""
+        if self.distortion is None or not len(props.points_px):
+            return props
+        pts = cv2.undistortPoints(props.points_px.reshape(-1, 1, 2).astype(np.float64),
+                                  camera.K, self.distortion, P=camera.K).reshape(-1, 2)
+        return replace(props, points_px=pts)
 
     def detect(self, frame: np.ndarray) -> LaneEstimate:
         decoded = self.infer(frame)

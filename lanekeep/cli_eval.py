@@ -82,18 +82,15 @@ class Runner:
 
     def predict(self, frame):
         """(FramePrediction, ms) of one 1280x720 frame."""
-        from detectors.lanenet_decode import ego_estimate
         from lanekeep.dataset import LABEL_ROWS
         from lanekeep.lane_eval import FramePrediction, estimate_prediction, eval_grid
 
         det, cam = self.det, self.camera
         if self.name == "lanenet":
             start = time.perf_counter()
-            decoded = det.infer(frame)
-            rules = det.config.lane
-            est = ego_estimate(decoded.boundaries, cam, det.x_ref, rules.lane_width_m,
-                               rules.width_tolerance_m)  # what detect() does with infer's output
+            est = det.detect(frame)
             ms = 1000.0 * (time.perf_counter() - start)
+            decoded = det.last  # the proposals and boundaries `detect` made the estimate from
             lanes = [b.x_at_rows(LABEL_ROWS, cam) for b in decoded.boundaries]
             props = decoded.candidates  # all confidences: AP ranks them
             return FramePrediction(props.boxes_px, props.scores, lanes, est), ms
