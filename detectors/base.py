@@ -15,7 +15,7 @@ from typing import Protocol, runtime_checkable
 
 import numpy as np
 
-from detectors.config import GroundWindow
+from lanekeep.detectors.config import GroundWindow
 
 
 def poly_eval(coeffs: np.ndarray, x: np.ndarray | float) -> np.ndarray | float:

@@ -216,7 +216,7 @@ class DetectorsConfig:
 def load_config(path: str | Path | None = None) -> DetectorsConfig:
     """Read a detectors TOML file; None reads the shipped, tuned detectors/detectors.toml."""
     if path is None:
-        text = resources.files("detectors").joinpath("detectors.toml").read_text()
+        text = resources.files("lanekeep.detectors").joinpath("detectors.toml").read_text()
         source = "detectors.toml"
     else:
         text = Path(path).read_text()

@@ -17,9 +17,9 @@ import math
 import cv2
 import numpy as np
 
-from detectors.base import poly_eval
-from detectors.boundaries import Boundary, fit_boundary, parallel
-from detectors.classical import ClassicalDetector
+from lanekeep.detectors.base import poly_eval
+from lanekeep.detectors.boundaries import Boundary, fit_boundary, parallel
+from lanekeep.detectors.classical import ClassicalDetector
 
 
 class HoughDetector(ClassicalDetector):

@@ -23,10 +23,11 @@ import cv2
 import numpy as np
 import torch
 
-from detectors.base import LaneEstimate
-from detectors.birds_eye import detector_view
-from detectors.config import DetectorsConfig, GroundWindow, load_config
-from detectors.lanenet_decode import (
+from lanekeep.camera_model import CameraModel
+from lanekeep.detectors.base import LaneEstimate
+from lanekeep.detectors.birds_eye import detector_view
+from lanekeep.detectors.config import DetectorsConfig, GroundWindow, load_config
+from lanekeep.detectors.lanenet_decode import (
     Boundary,
     DecodeSettings,
     Proposals,
@@ -34,9 +35,8 @@ from detectors.lanenet_decode import (
     fit_boundaries,
     proposals,
 )
-from detectors.lanenet_model import LaneNet, LaneNetConfig, LaneNetState, prepare_frame
-from detectors.lanenet_targets import CellGrid
-from lanekeep.camera_model import CameraModel
+from lanekeep.detectors.lanenet_model import LaneNet, LaneNetConfig, LaneNetState, prepare_frame
+from lanekeep.detectors.lanenet_targets import CellGrid
 
 FORMAT = "lanekeep-lanenet/1"
 CANDIDATE_SCORE = 0.05  # the lowest objectness kept as a candidate proposal (for AP)
@@ -131,7 +131,7 @@ class LaneNetDetector:
         self.camera = camera
         self.config = config or load_config()
         self.settings = settings or LaneNetSettings()
-        path = weights or self.settings.weights or resources.files("detectors").joinpath(
+        path = weights or self.settings.weights or resources.files("lanekeep.detectors").joinpath(
             DEFAULT_WEIGHTS)
         self.model = load_weights(path)
         self.weights_path = str(path)

@@ -24,9 +24,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from detectors.base import LaneEstimate
-from detectors.lanenet_targets import OTHER, SLOTS, CellGrid
 from lanekeep.camera_model import CameraModel
+from lanekeep.detectors.base import LaneEstimate
+from lanekeep.detectors.lanenet_targets import OTHER, SLOTS, CellGrid
 
 
 @dataclass(frozen=True)

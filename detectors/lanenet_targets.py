@@ -29,7 +29,7 @@ import numpy as np
 import torch
 from torch.nn import functional as F  # noqa: N812 - the usual torch alias
 
-from detectors.lanenet_model import LaneNetOutput
+from lanekeep.detectors.lanenet_model import LaneNetOutput
 
 SLOTS = ("ego-left", "ego-right", "next-left", "next-right", "other")
 OTHER = SLOTS.index("other")

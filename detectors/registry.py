@@ -14,7 +14,8 @@ strictly as the rest (an unknown key names itself), and reach the detector as `s
 A detector whose module is costly to import (LaneNet imports torch, ~1 s) is registered by
 module and attribute names instead, and imported the first time it is made:
 
-    register_lazy_detector("lanenet", "detectors.lanenet", "LaneNetDetector", "LaneNetSettings")
+    register_lazy_detector("lanenet", "lanekeep.detectors.lanenet", "LaneNetDetector",
+                           "LaneNetSettings")
 
 A learned detector takes `weights=` (a file); `make_detector(..., weights=FILE)` passes it on to
 those that accept it, and `detector_weights(FILE)` scopes the same override around code that
@@ -33,12 +34,12 @@ from importlib import resources
 
 import numpy as np
 
-from detectors.base import Detector
-from detectors.config import DetectorsConfig, load_config, register_table
-from detectors.hough import HoughDetector
-from detectors.sliding_window import SlidingWindowDetector
 from lanekeep.camera_model import CameraModel
 from lanekeep.config_io import from_dict
+from lanekeep.detectors.base import Detector
+from lanekeep.detectors.config import DetectorsConfig, load_config, register_table
+from lanekeep.detectors.hough import HoughDetector
+from lanekeep.detectors.sliding_window import SlidingWindowDetector
 
 Factory = Callable[..., Detector]
 
@@ -180,7 +181,7 @@ def check_weights(name: str, config: DetectorsConfig | None = None,
     weights = weights if weights is not None else _WEIGHTS.get()
     if weights is None:
         weights = (getattr(detector_settings(name, config), "weights", "")
-                   or str(resources.files("detectors").joinpath(module.DEFAULT_WEIGHTS)))
+                   or str(resources.files("lanekeep.detectors").joinpath(module.DEFAULT_WEIGHTS)))
     module.load_weights(weights)
     return str(weights)
 
@@ -202,4 +203,5 @@ def check_detectors_weights(names: list[str], config: DetectorsConfig | None = N
 
 # LaneNet (paper 000) imports torch: registered lazily so that classical-only commands start
 # in ~0.2 s instead of ~1.2 s.
-register_lazy_detector("lanenet", "detectors.lanenet", "LaneNetDetector", "LaneNetSettings")
+register_lazy_detector("lanenet", "lanekeep.detectors.lanenet", "LaneNetDetector",
+                       "LaneNetSettings")

@@ -17,9 +17,9 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from detectors.base import LaneEstimate, poly_eval
-from detectors.boundaries import Boundary, fit_boundary, parallel
-from detectors.classical import ClassicalDetector
+from lanekeep.detectors.base import LaneEstimate, poly_eval
+from lanekeep.detectors.boundaries import Boundary, fit_boundary, parallel
+from lanekeep.detectors.classical import ClassicalDetector
 
 
 class SlidingWindowDetector(ClassicalDetector):

@@ -28,7 +28,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from detectors.birds_eye import BirdsEye
+from lanekeep.detectors.birds_eye import BirdsEye
 
 
 def roi_px_per_m(view: BirdsEye, roi_rows: int) -> np.ndarray:

@@ -23,13 +23,13 @@ from importlib import resources
 
 import numpy as np
 
-from detectors.base import LaneEstimate, poly_eval
-from estimators.alignment import OdometryAlignedHistory
-from estimators.consensus import corroborated
-from estimators.kalman import LaneTracker, TrackerConfig, UpdateStatus
-from estimators.mmae import MMAE, MMAEConfig, MMAEOutput
-from estimators.odometry import EgoMotion
 from lanekeep.config_io import ConfigError, from_dict
+from lanekeep.detectors.base import LaneEstimate, poly_eval
+from lanekeep.estimators.alignment import OdometryAlignedHistory
+from lanekeep.estimators.consensus import corroborated
+from lanekeep.estimators.kalman import LaneTracker, TrackerConfig, UpdateStatus
+from lanekeep.estimators.mmae import MMAE, MMAEConfig, MMAEOutput
+from lanekeep.estimators.odometry import EgoMotion
 
 ACCEPTED = (UpdateStatus.UPDATED.value, UpdateStatus.INITIALIZED.value,
             UpdateStatus.RESTARTED.value)
@@ -42,7 +42,7 @@ def closed_loop_tracker(text: str | None = None) -> TrackerConfig:
     its [tracker] table, with R = r_scale x the measured coefficient covariance."""
     source = TRACKER_TOML
     if text is None:
-        text = resources.files("estimators").joinpath(TRACKER_TOML).read_text()
+        text = resources.files("lanekeep.estimators").joinpath(TRACKER_TOML).read_text()
     data = tomllib.loads(text)
     try:
         covariance = np.asarray(data.pop("measured_coefficient_covariance"), dtype=float)

@@ -37,7 +37,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from estimators.reference import ReferenceRepair
+from lanekeep.estimators.reference import ReferenceRepair
 
 RESIDUAL_MODES = ("one_step_delay", "distance_aligned", "same_step")
 LOG_2PI = float(np.log(2.0 * np.pi))

@@ -15,7 +15,7 @@ import numpy as np
 
 from lanekeep.camera_model import CameraModel
 from lanekeep.cameras import CameraRig, RenderSettings
-from mjcf import SCENE_XML
+from lanekeep.mjcf import SCENE_XML
 
 
 @dataclass(frozen=True)

@@ -173,7 +173,7 @@ def _input_problems(args: argparse.Namespace, camera_file) -> list[str]:
 
 def _weights_problem(args: argparse.Namespace, config) -> str | None:
     """Why the weights file the detector would load (--weights, else its own) is unusable."""
-    from detectors.registry import check_detectors_weights
+    from lanekeep.detectors.registry import check_detectors_weights
 
     try:
         check_detectors_weights([args.detector], config, args.weights)
@@ -187,10 +187,10 @@ def _weights_problem(args: argparse.Namespace, config) -> str | None:
 def cmd_detect(args: argparse.Namespace) -> int:
     import cv2
 
-    from detectors.config import load_config
-    from detectors.registry import make_detector
-    from detectors.tusimple import estimate_lanes, every_lane, h_samples_for, record
     from lanekeep.camera_file import camera_for_image, read_camera_file
+    from lanekeep.detectors.config import load_config
+    from lanekeep.detectors.registry import make_detector
+    from lanekeep.detectors.tusimple import estimate_lanes, every_lane, h_samples_for, record
     from lanekeep.image_io import read_image
 
     try:
@@ -328,7 +328,7 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
 
 def register(subparsers) -> None:
     """Add the `detect` and `calibrate` subcommands (each sets func(args) -> exit code)."""
-    from detectors.registry import known_detectors
+    from lanekeep.detectors.registry import known_detectors
 
     p = subparsers.add_parser(
         "detect", help="run a lane detector on real road photos",

@@ -41,7 +41,7 @@ def check_scenario(scenario: Scenario, seconds: float | None = None) -> None:
       ScenarioError: naming the scenario's file and key.
       ConfigError: `seconds` makes no control step (key "--seconds").
     """
-    from detectors.registry import known_detectors
+    from lanekeep.detectors.registry import known_detectors
     from lanekeep.world import check_scenario as check_world
 
     source = scenario.source or scenario.name
@@ -83,7 +83,7 @@ def check_weights_option(scenarios: list[Scenario], weights: str | None) -> list
     Raises:
       ValueError: the first bad file's error, "FILE: why" (detectors.lanenet.WeightsError).
     """
-    from detectors.registry import check_detectors_weights, known_detectors
+    from lanekeep.detectors.registry import check_detectors_weights, known_detectors
 
     names = [name for sc in scenarios
              for name in (*sc.estimation.front_detectors, sc.estimation.reference_detector)
@@ -117,7 +117,7 @@ def run_episode(scenario_name: str, seed: int | None = None, seconds: float | No
     learned detector in the episode (None: their shipped one).
     """
     import lanekeep  # noqa: F401 - EGL before mujoco
-    from detectors.registry import detector_weights
+    from lanekeep.detectors.registry import detector_weights
     from lanekeep.episode import Episode
     from lanekeep.paper_mode import with_mode
     from lanekeep.plots import EpisodeTrace, write_plots

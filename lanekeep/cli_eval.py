@@ -63,8 +63,8 @@ class Runner:
         self.warm = False
 
     def _detector(self, camera):
-        from detectors.lanenet import LaneNetDetector
-        from detectors.registry import make_detector
+        from lanekeep.detectors.lanenet import LaneNetDetector
+        from lanekeep.detectors.registry import make_detector
 
         key = camera.K.tobytes() + camera.position_m.tobytes() + camera.rotation.tobytes()
         if key not in self._made:
@@ -159,7 +159,7 @@ def table(results: dict) -> str:
 
 
 def cmd_eval(args: argparse.Namespace) -> int:
-    from detectors.registry import known_detectors
+    from lanekeep.detectors.registry import known_detectors
     from lanekeep.eval_sets import CONDITIONS, EvalRecipe
     from lanekeep.report_json import SCHEMA_VERSION, lanekeep_version, write_json
 
@@ -197,9 +197,9 @@ def _check_weights(weights: str | None, detectors: list[str]) -> str | None:
         return None
     from importlib import resources
 
-    from detectors.lanenet import DEFAULT_WEIGHTS, WeightsError, load_weights
+    from lanekeep.detectors.lanenet import DEFAULT_WEIGHTS, WeightsError, load_weights
 
-    path = weights or str(resources.files("detectors").joinpath(DEFAULT_WEIGHTS))
+    path = weights or str(resources.files("lanekeep.detectors").joinpath(DEFAULT_WEIGHTS))
     try:
         load_weights(path)
     except WeightsError as err:

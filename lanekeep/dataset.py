@@ -33,11 +33,11 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from detectors.lanenet_model import LaneNetConfig
-from detectors.lanenet_targets import BoundaryLabel, FrameLabel, slots_from_lateral
 from lanekeep.camera_model import CameraModel
 from lanekeep.cameras import CameraRig, RenderSettings, camera_from_model
 from lanekeep.dataset_world import ROAD_LENGTH_M, random_scenario
+from lanekeep.detectors.lanenet_model import LaneNetConfig
+from lanekeep.detectors.lanenet_targets import BoundaryLabel, FrameLabel, slots_from_lateral
 from lanekeep.metrics import ADE_POINTS_M
 from lanekeep.render import camera_frame, make_effects
 from lanekeep.scenario import Scenario

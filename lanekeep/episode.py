@@ -21,12 +21,12 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from detectors.base import Detector, LaneEstimate, poly_eval
-from detectors.registry import make_detector
-from estimators.lane_estimator import CLOSED_LOOP_TRACKER, EstimatorOutput, LaneEstimator
-from estimators.odometry import DeadReckoning
 from lanekeep.cameras import CameraRig, RenderSettings
 from lanekeep.control import PaperGains, SpeedController, SteeringPID
+from lanekeep.detectors.base import Detector, LaneEstimate, poly_eval
+from lanekeep.detectors.registry import make_detector
+from lanekeep.estimators.lane_estimator import CLOSED_LOOP_TRACKER, EstimatorOutput, LaneEstimator
+from lanekeep.estimators.odometry import DeadReckoning
 from lanekeep.ground_truth import lane_centre_at, lane_centre_fit, lane_offsets
 from lanekeep.interrupts import stop_point, stop_requested
 from lanekeep.metrics import EpisodeReport, Metrics

@@ -51,11 +51,11 @@ import cv2
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
-from detectors.base import LaneEstimate, poly_eval
-from detectors.lanenet_model import LaneNetConfig
-from detectors.lanenet_targets import CellGrid, boundary_crossings
 from lanekeep.camera_model import CameraModel
 from lanekeep.dataset import LABEL_HEIGHT, LABEL_ROWS, LABEL_WIDTH
+from lanekeep.detectors.base import LaneEstimate, poly_eval
+from lanekeep.detectors.lanenet_model import LaneNetConfig
+from lanekeep.detectors.lanenet_targets import CellGrid, boundary_crossings
 from lanekeep.metrics import ADE_POINTS_M
 
 BOX_IOU = 0.5  # a proposal is a true positive at this box IoU

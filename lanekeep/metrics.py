@@ -32,7 +32,7 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
-from detectors.base import poly_eval
+from lanekeep.detectors.base import poly_eval
 
 # Look-ahead points (m) of ADE / FDE: the front detectors' window, 4-20 m, every 2 m.
 ADE_POINTS_M = (4.0, 6.0, 8.0, 10.0, 12.0, 14.0, 16.0, 18.0, 20.0)

@@ -24,8 +24,8 @@ from __future__ import annotations
 
 from dataclasses import replace
 
-from detectors.config import DetectorsConfig, load_config
-from estimators.lane_estimator import EstimatorSettings
+from lanekeep.detectors.config import DetectorsConfig, load_config
+from lanekeep.estimators.lane_estimator import EstimatorSettings
 from lanekeep.scenario import EstimationConfig, Scenario
 
 # Front ground windows (x_near_m, x_far_m, y_half_m) of the paper's two models. Model #2's

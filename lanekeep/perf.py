@@ -83,8 +83,8 @@ def lanenet_inference(scenario, weights: str | None = None, frames: int = 30,
     render of the scenario's start: the figure is the detector's cost, whatever the picture."""
     import numpy as np
 
-    from detectors.registry import check_weights, make_detector
     from lanekeep.cameras import CameraRig, RenderSettings
+    from lanekeep.detectors.registry import check_weights, make_detector
     from lanekeep.world import build
 
     out: dict = {"weights": weights, "frame": f"{size[0]}x{size[1]}", "frames": frames,
@@ -134,7 +134,7 @@ def measure(scenario_name: str = "clear_curve", seconds: float = 10.0, repeats: 
     """Every figure of the JSON described in the module docstring (`weights`: the file of
     every learned detector, None = the shipped one)."""
     import lanekeep
-    from detectors.registry import detector_weights
+    from lanekeep.detectors.registry import detector_weights
     from lanekeep.record import RerunRecorder
     from lanekeep.scenario import load_scenario
 

@@ -48,8 +48,8 @@ from typing import Any, Protocol
 import cv2
 import numpy as np
 
-from detectors.base import poly_eval
 from lanekeep.cameras import RENDERER_IDLE
+from lanekeep.detectors.base import poly_eval
 from lanekeep.ground_truth import LanePolylines, lane_offsets
 from lanekeep.interrupts import stop_signals_held
 

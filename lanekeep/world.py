@@ -25,6 +25,7 @@ from lanekeep import pavement, textures
 from lanekeep.camera_mount import apply_camera_mount
 from lanekeep.cameras import GROUP_MARKING, GROUP_WORLD
 from lanekeep.markings import MarkingPiece
+from lanekeep.mjcf import CAR_XML
 from lanekeep.pavement import LANE_U, SLAB_M
 from lanekeep.road import Road
 from lanekeep.road_mesh import Ribbon, ribbon
@@ -42,7 +43,6 @@ from lanekeep.world_parts import (
     add_texture,
 )
 from lanekeep.world_traffic import update_dynamic
-from mjcf import CAR_XML
 
 PAVEMENT_SEED = 0x9A5E  # the pavement texture's own generator: [scenario seed, this]
 PAINT_SEED = 0x9A17  # the worn paint texture's

@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from estimators.alignment import OdometryAlignedHistory
+from lanekeep.estimators.alignment import OdometryAlignedHistory
 
 
 def _drive(history: OdometryAlignedHistory, heading: float, centre_y: float, steps: int,

@@ -10,10 +10,10 @@ import pytest
 
 from lanekeep.cameras import CameraRig, RenderSettings, camera_from_model
 from lanekeep.chessboard import Board, find_corners, render_chessboards
+from lanekeep.mjcf import SCENE_XML
 from lanekeep.render import place_on_road
 from lanekeep.scenario import load_scenario
 from lanekeep.world import MARKING_Z_M, build
-from mjcf import SCENE_XML
 
 
 def test_calibrate_camera_on_rendered_chessboards_recovers_k():

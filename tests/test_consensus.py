@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from estimators.consensus import corroborated
-from estimators.kalman import LaneTracker, TrackerConfig, UpdateStatus
+from lanekeep.estimators.consensus import corroborated
+from lanekeep.estimators.kalman import LaneTracker, TrackerConfig, UpdateStatus
 
 R = np.diag(np.square([0.05, 0.01, 4e-4]))
 

@@ -12,10 +12,10 @@ import numpy as np
 import pytest
 
 import lanekeep  # noqa: F401 - MUJOCO_GL before mujoco
-from detectors.base import LaneEstimate, poly_eval
-from detectors.registry import make_detector
-from detectors.tusimple import estimate_lanes, h_samples_for, record, score_frame
 from lanekeep.cameras import CameraRig
+from lanekeep.detectors.base import LaneEstimate, poly_eval
+from lanekeep.detectors.registry import make_detector
+from lanekeep.detectors.tusimple import estimate_lanes, h_samples_for, record, score_frame
 from lanekeep.ground_truth import lane_truth
 
 OFFSETS_M = (-0.8, -0.4, 0.0, 0.4, 0.8)
@@ -150,7 +150,7 @@ def test_tusimple_output_round_trips_through_the_scorer(rendered):
 
 def test_config_defaults_are_the_tuned_values():
     """`DetectorsConfig()` (and any key a user's TOML leaves out) is the shipped tuning."""
-    from detectors.config import DetectorsConfig, load_config
+    from lanekeep.detectors.config import DetectorsConfig, load_config
 
     assert DetectorsConfig() == load_config()
 
@@ -178,7 +178,7 @@ VAN_SCENARIO = "tools/tuning/tune_traffic_lead_van_three_lanes.toml"  # unscored
 
 
 def test_runs_wider_than_paint_are_dropped_and_paint_is_kept():
-    from detectors.vehicle_mask import drop_wide_runs
+    from lanekeep.detectors.vehicle_mask import drop_wide_runs
 
     bev = np.zeros((3, 40), np.uint8)
     bev[:, 5:8] = 255  # 3 columns: paint
@@ -188,7 +188,7 @@ def test_runs_wider_than_paint_are_dropped_and_paint_is_kept():
 
 
 def test_the_dark_band_of_a_vehicle_hides_the_road_above_it_and_shade_does_not():
-    from detectors.vehicle_mask import hidden_by_vehicles, vehicle_dark
+    from lanekeep.detectors.vehicle_mask import hidden_by_vehicles, vehicle_dark
 
     grey = np.full((60, 200), 100, np.uint8)
     grey[40:44, 80:120] = 10  # underside: 40 px at 20 px/m = 2 m wide
@@ -208,8 +208,8 @@ def test_the_dark_band_of_a_vehicle_hides_the_road_above_it_and_shade_does_not()
     ([1.8, 0.0, 0.0], 1.5, "partner", True),  # ... fine beside a partner (parallel refits it)
 ])
 def test_plausible_boundaries(coeffs, span, other, ok):
-    from detectors.boundaries import Boundary, plausible
-    from detectors.config import LaneRules
+    from lanekeep.detectors.boundaries import Boundary, plausible
+    from lanekeep.detectors.config import LaneRules
 
     xs = np.linspace(12.0, 12.0 + span, 20)
     b = Boundary(np.array(coeffs), 20, span, np.stack([xs, np.full(20, 1.8)], 1))
@@ -239,7 +239,7 @@ def van_ahead():
 def test_vehicles_ahead_and_behind_are_not_taken_for_paint(van_ahead, camera, name):
     """No binary pixel where the van ahead (or the car behind) stands or what it hides, and the
     estimate is either honest about seeing no lane or within 30 cm."""
-    from detectors.image_stage import binary_bird_eye
+    from lanekeep.detectors.image_stage import binary_bird_eye
 
     world, frames, models = van_ahead
     detector = make_detector(name, models[camera])
@@ -275,9 +275,9 @@ def test_a_pair_two_lanes_apart_keeps_the_line_the_car_is_beside(car_y_m, kept):
     """A dashed line in its gap between two solid ones: the pair found is two lanes wide.
     Keeping the better-supported side put the centre a lane off when that side was the far
     line; the car's own lane lies against the nearer line."""
-    from detectors.boundaries import Boundary, assemble
-    from detectors.config import load_config
     from lanekeep.camera_model import CameraModel
+    from lanekeep.detectors.boundaries import Boundary, assemble
+    from lanekeep.detectors.config import load_config
 
     rules = load_config().lane
     width = rules.lane_width_m

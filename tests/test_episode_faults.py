@@ -10,7 +10,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from detectors.base import LaneEstimate
+from lanekeep.detectors.base import LaneEstimate
 from lanekeep.episode import Episode
 from lanekeep.scenario import load_scenario
 from lanekeep.world import SimulationError

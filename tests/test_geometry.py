@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 
 import lanekeep  # noqa: F401 - MUJOCO_GL before mujoco
-from detectors.birds_eye import BirdsEye, ground_homography, visible_window
-from detectors.config import GroundWindow, Preprocess
-from detectors.image_stage import open_along_rows, remove_streaks, streak_pixels
 from lanekeep.camera_model import CameraModel
+from lanekeep.detectors.birds_eye import BirdsEye, ground_homography, visible_window
+from lanekeep.detectors.config import GroundWindow, Preprocess
+from lanekeep.detectors.image_stage import open_along_rows, remove_streaks, streak_pixels
 
 K = np.array([[369.29, 0.0, 639.5], [0.0, 369.29, 359.5], [0.0, 0.0, 1.0]])
 FRONT = CameraModel.from_mounting("front", K, 1280, 720, 1.5, math.radians(10.0), x_m=1.0)

@@ -11,6 +11,8 @@ PACKAGES = ("lanekeep", "detectors", "estimators", "mjcf")
 
 def _module_name(path: Path) -> str:
     parts = path.relative_to(ROOT).with_suffix("").parts
+    if parts[0] != "lanekeep":  # detectors/, estimators/, mjcf/ install as lanekeep.<folder>
+        parts = ("lanekeep", *parts)
     return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
 
 

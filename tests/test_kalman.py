@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from scipy.stats import chi2
 
-from estimators.kalman import (
+from lanekeep.estimators.kalman import (
     LaneTracker,
     TrackerConfig,
     UpdateStatus,

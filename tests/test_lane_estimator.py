@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from detectors.base import LaneEstimate
-from estimators.lane_estimator import EgoMotion, EstimatorSettings, LaneEstimator
+from lanekeep.detectors.base import LaneEstimate
+from lanekeep.estimators.lane_estimator import EgoMotion, EstimatorSettings, LaneEstimator
 
 WIDTH = 3.7
 NAMES = ["hough", "sliding_window"]
@@ -94,10 +94,10 @@ def test_the_tracker_tuning_file_is_read_strictly():
 
     import pytest
 
-    from estimators.lane_estimator import TRACKER_TOML, closed_loop_tracker
     from lanekeep.config_io import ConfigError
+    from lanekeep.estimators.lane_estimator import TRACKER_TOML, closed_loop_tracker
 
-    text = resources.files("estimators").joinpath(TRACKER_TOML).read_text()
+    text = resources.files("lanekeep.estimators").joinpath(TRACKER_TOML).read_text()
     config = closed_loop_tracker(text)
     assert config.coast_with_rates is False
     data = tomllib.loads(text)

@@ -8,10 +8,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from detectors.base import LaneEstimate
 from lanekeep.camera_model import CameraModel
 from lanekeep.cli import main
 from lanekeep.dataset import LABEL_ROWS, DatasetRecipe, world_seed
+from lanekeep.detectors.base import LaneEstimate
 from lanekeep.eval_sets import (
     CONDITIONS,
     OVERSHOOT,
@@ -255,8 +255,8 @@ def test_eval_quick_every_condition_with_hough(tmp_path):
 @pytest.mark.slow
 def test_eval_runs_lanenet_from_a_weights_file(tmp_path):
     torch = pytest.importorskip("torch")
-    from detectors.lanenet import save_weights
-    from detectors.lanenet_model import LaneNet, LaneNetConfig
+    from lanekeep.detectors.lanenet import save_weights
+    from lanekeep.detectors.lanenet_model import LaneNet, LaneNetConfig
 
     torch.manual_seed(0)
     weights = tmp_path / "lanenet.pt"  # untrained but valid: the plumbing, not the accuracy

@@ -8,16 +8,17 @@ import numpy as np
 import pytest
 import torch
 
-from detectors.lanenet import LaneNetDetector, WeightsError, load_weights, save_weights
-from detectors.lanenet_decode import (
+from lanekeep.camera_model import CameraModel
+from lanekeep.detectors.lanenet import LaneNetDetector, WeightsError, load_weights, save_weights
+from lanekeep.detectors.lanenet_decode import (
     DecodeSettings,
     ego_estimate,
     fit_boundaries,
     proposals,
     ransac_fit,
 )
-from detectors.lanenet_model import LaneNet, LaneNetConfig, prepare_frame
-from detectors.lanenet_targets import (
+from lanekeep.detectors.lanenet_model import LaneNet, LaneNetConfig, prepare_frame
+from lanekeep.detectors.lanenet_targets import (
     BoundaryLabel,
     CellGrid,
     FrameLabel,
@@ -26,7 +27,6 @@ from detectors.lanenet_targets import (
     lanenet_loss,
     slots_from_lateral,
 )
-from lanekeep.camera_model import CameraModel
 
 W, H = 1280, 720
 SMALL = LaneNetConfig(width=160, height=88, channels=(8, 16, 16), hidden=8, head=16)

@@ -19,18 +19,18 @@ import numpy as np
 import pytest
 import torch
 
-from detectors.lanenet import LaneNetDetector, WeightsError, save_weights
-from detectors.lanenet_decode import Boundary
-from detectors.lanenet_model import LaneNet, LaneNetConfig
-from detectors.registry import (
+from lanekeep.camera_model import CameraModel
+from lanekeep.cli import main
+from lanekeep.detectors.lanenet import LaneNetDetector, WeightsError, save_weights
+from lanekeep.detectors.lanenet_decode import Boundary
+from lanekeep.detectors.lanenet_model import LaneNet, LaneNetConfig
+from lanekeep.detectors.registry import (
     check_detectors_weights,
     detector_weights,
     known_detectors,
     make_detector,
 )
-from detectors.tusimple import ABSENT, boundary_lanes, h_samples_for
-from lanekeep.camera_model import CameraModel
-from lanekeep.cli import main
+from lanekeep.detectors.tusimple import ABSENT, boundary_lanes, h_samples_for
 
 W, H = 1280, 720
 SMALL = LaneNetConfig(width=160, height=88, channels=(8, 16, 16), hidden=8, head=16)
@@ -114,7 +114,7 @@ def test_registry_makes_lanenet_from_a_weights_file(weights):
 
 
 def test_without_weights_lanenet_loads_its_configured_file_or_names_it(tmp_path):
-    from detectors.config import load_config
+    from lanekeep.detectors.config import load_config
 
     missing = tmp_path / "nowhere" / "lanenet.pt"
     config_file = tmp_path / "detectors.toml"
@@ -223,8 +223,8 @@ def test_detect_lanenet_tusimple_and_json_report_every_boundary(tmp_path, capsys
 
 
 def test_overlay_draws_each_boundary_in_its_colour():
-    from detectors.base import LaneEstimate
     from lanekeep.cli_detect import SLOT_COLOURS, _overlay
+    from lanekeep.detectors.base import LaneEstimate
 
     rows = h_samples_for(H)
     lanes = [("ego-left", [300] * len(rows)), ("ego-right", [900] * len(rows)),

@@ -5,9 +5,9 @@ deterministically, from one frame or a sequence."""
 import numpy as np
 import pytest
 
-from detectors.base import poly_eval
-from detectors.lanenet import LaneNetDetector
 from lanekeep.cameras import CameraRig, RenderSettings
+from lanekeep.detectors.base import poly_eval
+from lanekeep.detectors.lanenet import LaneNetDetector
 from lanekeep.ground_truth import lane_centre_at
 from lanekeep.render import place_on_road
 from lanekeep.scenario import load_scenario

@@ -6,7 +6,7 @@ import math
 import numpy as np
 import pytest
 
-from detectors.config import load_config
+from lanekeep.detectors.config import load_config
 from lanekeep.ground_truth import FIT_STEP_M, lane_centre_at
 from lanekeep.metrics import ADE_POINTS_M, EpisodeReport, Metrics, SourceReport
 from lanekeep.scenario import load_scenario

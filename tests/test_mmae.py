@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from estimators import MMAE, MMAEConfig, ReferenceRepair, apply_probability_floor
+from lanekeep.estimators import MMAE, MMAEConfig, ReferenceRepair, apply_probability_floor
 
 DT_S = 0.1
 

@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 
 from lanekeep.control import SpeedController
+from lanekeep.mjcf import CAR_XML, SCENE_XML
 from lanekeep.scenario import load_scenario, shipped_scenarios
 from lanekeep.vehicle import Car, kinematic_turn_radius
 from lanekeep.world import build, physics_steps_per_control
-from mjcf import CAR_XML, SCENE_XML
 
 
 def _step_seconds(model, data, seconds, each_step=None):

@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from estimators.odometry import DeadReckoning
+from lanekeep.estimators.odometry import DeadReckoning
 
 
 def test_a_constant_turn_dead_reckons_onto_its_circle():

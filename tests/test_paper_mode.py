@@ -12,8 +12,8 @@ from dataclasses import dataclass, field
 import numpy as np
 import pytest
 
-from detectors.config import load_config
 from lanekeep.control import PaperGains
+from lanekeep.detectors.config import load_config
 from lanekeep.episode import Episode
 from lanekeep.ground_truth import lane_offsets
 from lanekeep.paper_mode import PAPER_WINDOWS, front_detector_config, with_mode

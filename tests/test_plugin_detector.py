@@ -11,18 +11,18 @@ import numpy as np
 import plugins.straight_ahead  # noqa: F401 - registers "straight_ahead" (tests/ is on sys.path)
 import pytest
 
-from detectors.base import Detector
-from detectors.config import load_config
-from detectors.registry import known_detectors, make_detector
 from lanekeep.camera_model import CameraModel
 from lanekeep.config_io import ConfigError
+from lanekeep.detectors.base import Detector
+from lanekeep.detectors.config import load_config
+from lanekeep.detectors.registry import known_detectors, make_detector
 
 K = np.array([[369.29, 0.0, 639.5], [0.0, 369.29, 359.5], [0.0, 0.0, 1.0]])
 FRONT = CameraModel.from_mounting("front", K, 1280, 720, 1.5, math.radians(10.0), x_m=1.0)
 
 
 def _config_file(tmp_path, table: str):
-    shipped = resources.files("detectors").joinpath("detectors.toml").read_text()
+    shipped = resources.files("lanekeep.detectors").joinpath("detectors.toml").read_text()
     path = tmp_path / "detectors.toml"
     path.write_text(shipped + "\n[straight_ahead]\n" + table)
     return path

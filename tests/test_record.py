@@ -15,8 +15,8 @@ import numpy as np
 import pytest
 
 import lanekeep  # noqa: F401 - EGL before mujoco
-from detectors.base import LaneEstimate
 from lanekeep.cameras import CameraRig, RenderSettings
+from lanekeep.detectors.base import LaneEstimate
 from lanekeep.record import EpisodeInfo, RerunRecorder
 from lanekeep.scenario import load_scenario
 from lanekeep.sensors import VehicleSignals

@@ -35,8 +35,8 @@ def _variant_frame(variant: str, rgb: np.ndarray) -> np.ndarray:
 def measure(name: str, seed_offset: int, every: int, seconds: float | None) -> dict:
     """{variant: {detector: (rmse_cm, valid_share)}, 'render_ms': {variant: ms}} of one run."""
     import lanekeep  # noqa: F401 - EGL before mujoco
-    from detectors.registry import make_detector
     from lanekeep.cameras import CameraRig, RenderSettings
+    from lanekeep.detectors.registry import make_detector
     from lanekeep.episode import Episode
     from lanekeep.ground_truth import lane_truth
     from lanekeep.render import make_effects

@@ -38,7 +38,7 @@ def tuning_scenarios() -> list[Path]:
 
 def front_window() -> tuple[float, float]:
     """(near, far) of the front detectors' ground window, where they fit their lines."""
-    from detectors.config import load_config
+    from lanekeep.detectors.config import load_config
 
     front = load_config().profiles.front
     return tuple(sorted((float(front.x_near_m), float(front.x_far_m))))

@@ -31,10 +31,10 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from detectors.lanenet import save_weights
-from detectors.lanenet_model import LaneNet, LaneNetConfig, architecture_summary
-from detectors.lanenet_targets import CellGrid, LossWeights, Targets, encode, lanenet_loss
 from lanekeep.dataset import LABEL_HEIGHT, LABEL_WIDTH, frame_label, load_split, read_recipe
+from lanekeep.detectors.lanenet import save_weights
+from lanekeep.detectors.lanenet_model import LaneNet, LaneNetConfig, architecture_summary
+from lanekeep.detectors.lanenet_targets import CellGrid, LossWeights, Targets, encode, lanenet_loss
 
 FLIP_SLOTS = np.array([1, 0, 3, 2, 4], np.int64)  # ego-left <-> ego-right, next-left <-> next-right
 

@@ -79,15 +79,15 @@ def _truth_action(episode, pose, index: int) -> tuple[float, float]:
 
 def _x_refs(cameras) -> dict[str, float]:
     """Look-ahead of each job's detector, keyed 'detector@camera'."""
-    from detectors.registry import make_detector
+    from lanekeep.detectors.registry import make_detector
 
     return {f"{d}@{c}": float(make_detector(d, cameras[c]).x_ref) for d, c in JOBS}
 
 
 def score(folder: Path) -> dict[str, dict[str, float]]:
     """Per-detector error statistics over a recording (see the module docstring)."""
-    from detectors.registry import make_detector
     from lanekeep.cameras import CameraRig, RenderSettings
+    from lanekeep.detectors.registry import make_detector
     from lanekeep.scenario import load_scenario
     from lanekeep.world import build
 
