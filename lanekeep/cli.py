@@ -74,12 +74,13 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def _optional_command_modules() -> list:
-    """Subcommands that live in their own modules (detect, calibrate, run, bench, perf, eval)."""
+    """Subcommands that live in their own modules (detect, calibrate, run, bench, perf, eval,
+    view, sweep)."""
     import importlib
 
     modules = []
     for name in ("lanekeep.cli_detect", "lanekeep.cli_episode", "lanekeep.perf",
-                 "lanekeep.cli_eval"):
+                 "lanekeep.cli_eval", "lanekeep.cli_view", "lanekeep.cli_sweep"):
         try:
             modules.append(importlib.import_module(name))
         except ModuleNotFoundError as err:
