@@ -10,6 +10,7 @@ An error is one line on stderr, "lanekeep: error: ...", naming the file and key 
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from collections.abc import Sequence
 from pathlib import Path
@@ -101,6 +102,11 @@ def main(argv: Sequence[str] | None = None) -> int:
             raise
         print("lanekeep: interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED
+    except BrokenPipeError:
+        # The reader went away (`lanekeep scenarios | head`): stop quietly, as Unix tools do;
+        # stdout goes to /dev/null so that flushing it at exit raises nothing more.
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return EXIT_OK
     except (ConfigError, FileNotFoundError, RuntimeError) as err:
         if args.debug:
             raise

@@ -174,3 +174,12 @@ def test_a_renderer_that_cannot_start_is_one_line_naming_mujoco_gl(tmp_path, env
     (line,) = [ln for ln in result.stderr.splitlines() if ln.startswith("lanekeep: error: ")]
     assert f"MUJOCO_GL={env['MUJOCO_GL']}" in line and "MUJOCO_GL=egl" in line
     assert not out.exists() or not any(out.iterdir())
+
+
+def test_a_closed_pipe_ends_the_listing_quietly():
+    """`lanekeep scenarios | head -1` prints one line and no BrokenPipeError traceback (the
+    listing loads each scenario, so head has closed the pipe long before it ends)."""
+    proc = subprocess.run(f"'{sys.executable}' -m lanekeep.cli scenarios | head -1", shell=True,
+                          capture_output=True, text=True)
+    assert proc.stdout.count("\n") == 1
+    assert "Traceback" not in proc.stderr and "BrokenPipe" not in proc.stderr

@@ -1,0 +1,44 @@
+"""The install puts one package at the top of site-packages: `lanekeep`. The repository's
+detectors/, estimators/ and mjcf/ folders install inside it (pyproject's package-dir), so they
+cannot clash with another distribution's generic `detectors` or `mjcf`."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import PurePosixPath
+
+import lanekeep.detectors
+import lanekeep.estimators
+import lanekeep.mjcf
+
+# What an install may add at the top of site-packages besides the package itself: its
+# metadata, and in an editable install the finder that maps lanekeep.detectors to detectors/.
+ALLOWED_PREFIXES = ("lanekeep", "__editable__", "__pycache__", "..")
+
+
+def _pip_show_files() -> list[PurePosixPath]:
+    out = subprocess.run([sys.executable, "-m", "pip", "show", "-f", "lanekeep"],
+                         capture_output=True, text=True, check=True).stdout
+    listing = out.split("Files:", 1)[1]
+    return [PurePosixPath(line.strip()) for line in listing.splitlines() if line.strip()]
+
+
+def test_pip_show_lists_no_generic_top_level_package():
+    files = _pip_show_files()
+    assert files, "pip show -f listed no files"
+    tops = {path.parts[0] for path in files}
+    stray = sorted(t for t in tops if not t.startswith(ALLOWED_PREFIXES))
+    assert not stray, f"top-level entries besides lanekeep: {stray}"
+    assert not tops & {"detectors", "estimators", "mjcf"}
+
+
+def test_the_folders_are_subpackages_of_lanekeep_with_their_data():
+    from importlib import resources
+
+    assert resources.files("lanekeep.detectors").joinpath("detectors.toml").is_file()
+    assert resources.files("lanekeep.estimators").joinpath("closed_loop_tracker.toml").is_file()
+    assert resources.files("lanekeep.detectors.weights").joinpath("lanenet.pt").is_file()
+    assert lanekeep.mjcf.CAR_XML.is_file()
+    assert lanekeep.detectors.__name__ == "lanekeep.detectors"
+    assert lanekeep.estimators.__name__ == "lanekeep.estimators"
