@@ -188,8 +188,13 @@ class CameraRig:
         return ids
 
     def close(self) -> None:
+        """Free the renderers. `mujoco.Renderer.close()` frees its GL objects in whatever
+        context is current, which may be another open rig's (their ids coincide): that rig
+        then renders with deleted textures. Each renderer's own context is made current first."""
         if not self._closed:
             for renderer in self._renderers.values():
+                if renderer._gl_context is not None:
+                    renderer._gl_context.make_current()
                 renderer.close()
             self._closed = True
 

@@ -118,3 +118,21 @@ def test_same_scenario_and_seed_give_identical_images():
 def test_render_size_beyond_offscreen_buffer_is_a_clear_error(straight_world):
     with pytest.raises(ValueError, match="offscreen buffer"):
         CameraRig(straight_world.model, RenderSettings(4000, 3000))
+
+
+def test_closing_one_rig_leaves_another_open_rig_rendering_the_same():
+    """mujoco.Renderer.close() frees GL objects in the current context, which can be another
+    rig's: two episodes (or environments) open in one process must not spoil each other."""
+    scenario = load_scenario("clear_straight")
+    world = build(scenario)
+
+    def rig() -> CameraRig:
+        return CameraRig(world.model, RenderSettings.of(scenario, 320, 180))
+
+    with rig() as fresh:
+        expected = {c: fresh.render_rgb(world.data, c) for c in CameraRig.CAMERA_NAMES}
+    first, second = rig(), rig()
+    first.close()
+    with second:
+        for camera in CameraRig.CAMERA_NAMES:
+            np.testing.assert_array_equal(second.render_rgb(world.data, camera), expected[camera])
