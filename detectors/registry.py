@@ -20,6 +20,19 @@ module and attribute names instead, and imported the first time it is made:
 A learned detector takes `weights=` (a file); `make_detector(..., weights=FILE)` passes it on to
 those that accept it, and `detector_weights(FILE)` scopes the same override around code that
 builds its detectors itself (an `Episode`).
+
+A detector outside this package needs no registration: every name taken here may also be an
+import path `package.module:Class`, or a name an installed distribution registers in the
+entry-point group `lanekeep.detectors` (lanekeep/plugins.py). Its constructor contract is the
+built-ins' one:
+
+    Class(camera, config=DetectorsConfig | None, distortion=np.ndarray | None
+          [, weights=str | None])  # weights only if it takes them (learned detectors)
+
+where `camera` is the CameraModel it looks through (intrinsics, mounting, its name "front" or
+"rear"), `config` the shared detectors TOML and `distortion` the lens's OpenCV coefficients.
+The instance must meet `Detector` (detectors/base.py): `name`, `x_ref`, `window`,
+`detect(frame)` and `reset()`; anything else is a ConfigError naming it.
 """
 
 from __future__ import annotations
@@ -34,8 +47,9 @@ from importlib import resources
 
 import numpy as np
 
+from lanekeep import plugins
 from lanekeep.camera_model import CameraModel
-from lanekeep.config_io import from_dict
+from lanekeep.config_io import ConfigError, from_dict
 from lanekeep.detectors.base import Detector
 from lanekeep.detectors.config import DetectorsConfig, load_config, register_table
 from lanekeep.detectors.hough import HoughDetector
@@ -91,23 +105,29 @@ def register_lazy_detector(name: str, module: str, factory: str,
         register_table(name)
 
 
-def _resolve(name: str) -> Factory:
-    """The factory of `name`, importing a lazy detector's module (once) if needed."""
+def _resolve(name: str, key: str = "") -> Factory:
+    """The factory of `name`, importing a lazy detector's module (once) if needed; else an
+    entry point's or an import path's (lanekeep/plugins.py).
+
+    Raises:
+      ConfigError: an unknown name or a bad import path, naming it (and `key`).
+    """
     if name in LAZY and name not in DETECTORS:
         factory, settings = LAZY[name].load()
         DETECTORS[name] = factory
         if settings is not None:
             SETTINGS[name] = settings
-    try:
-        return DETECTORS[name]
-    except KeyError:
-        raise ValueError(
-            f"unknown detector {name!r}; known: {', '.join(known_detectors())}"
-        ) from None
+    return plugins.resolve(name, plugins.DETECTORS, DETECTORS, key, known_detectors)
+
+
+def check_detector(name: str, key: str = "") -> None:
+    """Fail now, not mid-run, on a name that makes no detector (ConfigError naming it)."""
+    _resolve(name, key)
 
 
 def known_detectors() -> list[str]:
-    return sorted(set(DETECTORS) | set(LAZY))
+    """Built-in names and those installed distributions register as entry points."""
+    return sorted(set(DETECTORS) | set(LAZY) | set(plugins.entry_point_names(plugins.DETECTORS)))
 
 
 def takes_weights(name: str) -> bool:
@@ -135,7 +155,8 @@ def make_detector(
     weights: str | None = None,
 ) -> Detector:
     """A detector `name` on `camera` (its ground window is picked by the camera's name:
-    "front", "rear", anything else = a real dashcam). Unknown names raise ValueError.
+    "front", "rear", anything else = a real dashcam). Unknown names, bad import paths and
+    objects that are no Detector raise ConfigError (a ValueError).
 
     `weights` (else the `detector_weights` scope's file) goes only to detectors that take one;
     a learned detector without either loads its own default file. A file that cannot be
@@ -146,11 +167,21 @@ def make_detector(
     weights = weights if weights is not None else _WEIGHTS.get()
     if weights is not None and takes_weights(name):
         extra["weights"] = weights
-    if name not in SETTINGS:
-        return factory(camera, config=config, distortion=distortion, **extra)
-    config = config or load_config()
-    return factory(camera, config=config, distortion=distortion,
-                   settings=detector_settings(name, config), **extra)
+    if name not in DETECTORS:  # a plugin (import path, entry point): its errors name it
+        detector = plugins.build(name, plugins.DETECTORS, factory, camera, config=config,
+                                 distortion=distortion, **extra)
+    elif name not in SETTINGS:
+        detector = factory(camera, config=config, distortion=distortion, **extra)
+    else:
+        config = config or load_config()
+        detector = factory(camera, config=config, distortion=distortion,
+                           settings=detector_settings(name, config), **extra)
+    if not isinstance(detector, Detector):  # a plugin's mistake, named before it runs
+        missing = [a for a in ("name", "x_ref", "window", "detect", "reset")
+                   if not hasattr(detector, a)]
+        raise ConfigError("", "", f"detector {name!r} made a {type(detector).__name__}, not a "
+                                  f"Detector (missing: {', '.join(missing)})")
+    return detector
 
 
 def detector_settings(name: str, config: DetectorsConfig | None = None):
@@ -178,6 +209,8 @@ def check_weights(name: str, config: DetectorsConfig | None = None,
     if not takes_weights(name):
         return None
     module = importlib.import_module(_resolve(name).__module__)
+    if not hasattr(module, "load_weights"):  # a plugin that loads its weights its own way
+        return None
     weights = weights if weights is not None else _WEIGHTS.get()
     if weights is None:
         weights = (getattr(detector_settings(name, config), "weights", "")

@@ -73,8 +73,8 @@ def _truth_action(episode, pose, index: int) -> tuple[float, float]:
     wander = WANDER_M * np.sin(2.0 * np.pi * index * episode.dt_s / WANDER_PERIOD_S)
     offset = -float(centre[0] + centre[1] * x_ctrl) - wander
     speed = episode.world.car.speed_mps()
-    steer = episode.steering(offset, speed, curvature_1pm=float(2.0 * centre[2]))
-    return steer, episode.speed(speed)
+    steer = episode.controller.steering(offset, speed, curvature_1pm=float(2.0 * centre[2]))
+    return steer, episode.controller.speed(speed)
 
 
 def _x_refs(cameras) -> dict[str, float]:
