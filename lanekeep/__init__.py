@@ -9,3 +9,8 @@ import os
 os.environ.setdefault("MUJOCO_GL", "egl")
 
 __version__ = "0.1.0"
+
+# gymnasium.make("lanekeep/LaneKeep-v0") after `import lanekeep`, gymnasium not imported here.
+from lanekeep import gym_registration as _gym_registration  # noqa: E402
+
+_gym_registration.install()
