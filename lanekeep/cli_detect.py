@@ -50,7 +50,7 @@ def _lane_colour(name: str | None, k: int, n_other: int) -> tuple[int, int, int]
 
 
 def _overlay(image, estimate, lanes: list[tuple[str | None, list[int]]], h_samples,
-             horizon: float):
+             horizon: float, verdict=None):
     """The image with each lane (name or None, x per h_sample) drawn, named at its bottom."""
     import cv2
 
@@ -73,7 +73,24 @@ def _overlay(image, estimate, lanes: list[tuple[str | None, list[int]]], h_sampl
     text = (f"offset {estimate.offset_m:+.2f} m at x={estimate.x_m:.1f} m" if estimate.valid
             else f"no lane: {estimate.reason}")
     cv2.putText(out, text, (20, 40), cv2.FONT_HERSHEY_SIMPLEX, 1.0, (255, 255, 255), 2)
+    if verdict is not None and estimate.valid:  # the geometry's word on it (plausibility)
+        words = "plausible" if verdict.valid else "implausible"
+        note = f"{words}, confidence {verdict.confidence:.2f}"
+        for k, line in enumerate([note, *verdict.reasons[:3]]):
+            cv2.putText(out, line, (20, 80 + 34 * k), cv2.FONT_HERSHEY_SIMPLEX, 0.8,
+                        (0, 255, 255) if verdict.valid else (0, 0, 255), 2)
     return out
+
+
+def _plausibility(estimate, detector, image, camera, config):
+    """Whether the detection looks like a lane (detectors/plausibility.py): reporting only,
+    the detection itself is unchanged."""
+    from lanekeep.detectors.plausibility import check, support_share, vehicle_cover
+
+    window = detector.window
+    covered = vehicle_cover(image, camera, config.preprocess) if estimate.valid else None
+    return check(estimate, (window.x_near_m, window.x_far_m),
+                 support_share(estimate, covered))
 
 
 def _output_dir_problem(folder: str) -> str | None:
@@ -233,6 +250,7 @@ def cmd_detect(args: argparse.Namespace) -> int:
         start = time.perf_counter()
         estimate = detector.detect(image)
         ms = (time.perf_counter() - start) * 1000.0
+        verdict = _plausibility(estimate, detector, image, camera, config)
         h_samples = h_samples_for(h)
         # Detectors that see every boundary keep them with the frame's other outputs.
         named = every_lane(detector, camera, camera_file is not None, h_samples, (w, h), horizon)
@@ -248,11 +266,12 @@ def cmd_detect(args: argparse.Namespace) -> int:
             line = record(str(path), lanes, h_samples, ms)
         else:
             line = {
-                "raw_file": str(path), "valid": estimate.valid,
+                "raw_file": str(path), **verdict.to_dict(),
+                "detector_valid": estimate.valid, "detector_confidence": estimate.confidence,
                 "offset_m": estimate.offset_m, "x_m": estimate.x_m,
                 "left": None if estimate.left is None else [float(c) for c in estimate.left],
                 "right": None if estimate.right is None else [float(c) for c in estimate.right],
-                "confidence": estimate.confidence, "reason": estimate.reason,
+                "reason": estimate.reason,
                 "horizon_row": horizon, "run_time_ms": round(ms, 2),
             }
             if named is not None:
@@ -263,7 +282,7 @@ def cmd_detect(args: argparse.Namespace) -> int:
         if args.overlay:
             png = _overlay_path(args.overlay, path)
             ok, encoded = cv2.imencode(
-                ".png", _overlay(image, estimate, drawn, h_samples, horizon))
+                ".png", _overlay(image, estimate, drawn, h_samples, horizon, verdict))
             try:
                 if not ok:
                     raise OSError("OpenCV cannot encode the overlay")
@@ -342,7 +361,9 @@ def register(subparsers) -> None:
                     "nothing is detected or written, and the exit code is 2.")
     p.add_argument("images", nargs="+",
                    help="image files (PNG, JPEG; truncated or corrupt ones are rejected)")
-    p.add_argument("--detector", choices=known_detectors(), default="sliding_window")
+    p.add_argument("--detector", default="sliding_window", metavar="NAME",
+                   help=f"{', '.join(known_detectors())}, or an import path "
+                        f"package.module:Class (default: sliding_window)")
     p.add_argument("--camera", help="camera TOML (intrinsics, distortion, height_m, pitch_deg); "
                                      "every image must have its width x height")
     p.add_argument("--config", help="detectors TOML (default: the shipped, tuned one)")

@@ -17,15 +17,18 @@ y left are drawn in world coordinates):
     cameras/{cam}/lanes/{model}/points    pixels each detector fitted (LaneEstimate.image_points)
     cameras/{cam}/lanes/{model}/boundaries  its left/right polynomials projected by the camera
     cameras/{cam}/lanes/truth             the true ego-lane boundaries projected (green)
-    cameras/front/lanes/output/centre     centre of the lane the controller follows (white)
+    cameras/front/lanes/output/centre     centre of the lane the controller follows (red)
     world/road/boundaries                 static: every lane boundary
+    map/road, map/lane                    static: the whole road to scale (2D, x east, y flipped
+                                          so that north is up), the ego lane in green
+    map/car, map/car/marker, map/path     the car's footprint, a marker, the driven path
     world/car, world/car/body             pose (Transform3D) and a box the car's size
     world/path                            the driven path so far
     world/lanes/{model}, world/lanes/output  lane estimates in world coordinates
     plots/offset/{truth,model...,reference,fused}  lateral offsets at each look-ahead (m)
     plots/error/{model...,reference,fused}  estimate - truth at the estimate's look-ahead (m)
     plots/probability/{model}             MMAE probabilities
-    plots/car/{offset_m,speed_mps,steer,throttle}
+    plots/car/{offset_m,steer,throttle}, plots/speed/speed_mps   (split by unit)
     events                                text: model switches, reference repairs, gated
                                           measurements, lanes lost/found, detector failures,
                                           lane departures
@@ -55,16 +58,20 @@ from lanekeep.interrupts import stop_signals_held
 
 APPLICATION_ID = "lanekeep"
 REFERENCE, TRUTH, OUTPUT = "reference", "truth", "output"
+FUSED = "fused"  # the MMAE output: one name in the table, the JSON, the plots and here
+# Mid-tone colours, each readable on the viewer's light and dark themes (no white, no black);
+# the fused output gets the strongest one.
 COLOURS = {
-    TRUTH: (40, 220, 40),
-    OUTPUT: (255, 255, 255),
-    REFERENCE: (255, 220, 0),
-    "fused": (255, 255, 255),
+    TRUTH: (30, 170, 30),
+    OUTPUT: (220, 20, 20),
+    FUSED: (220, 20, 20),
+    REFERENCE: (120, 90, 230),
     "hough": (255, 140, 0),
-    "sliding_window": (0, 170, 255),
-    "lanenet": (230, 60, 230),
+    "sliding_window": (0, 140, 230),
+    "lanenet": (190, 50, 190),
 }
-_SPARE_COLOURS = ((255, 90, 90), (140, 110, 255), (0, 220, 200), (200, 200, 120))
+_SPARE_COLOURS = ((200, 150, 0), (0, 160, 150), (150, 110, 60), (230, 90, 140))
+ROAD_COLOUR, PATH_COLOUR, CAR_COLOUR = (128, 128, 128), (140, 80, 30), (60, 60, 200)
 LANE_RANGE_M = (3.0, 30.0)  # |x| of the lane polylines drawn from each camera
 TRUTH_BEHIND_M, TRUTH_AHEAD_M, TRUTH_STEP_M = 25.0, 45.0, 0.5
 ROAD_STEP_M = 1.0
@@ -163,30 +170,97 @@ def _poly_points(coeffs, x_range: tuple[float, float], n: int = 28) -> np.ndarra
     return np.column_stack([xs, poly_eval(coeffs, xs)])
 
 
-def _to_pixels(camera, ground_xy: np.ndarray) -> np.ndarray:
-    """Project ground points; keep those in front of the camera and near the image."""
-    if len(ground_xy) == 0:
-        return np.zeros((0, 2))
+def _clip_segment(p: np.ndarray, q: np.ndarray, w: float, h: float):
+    """Liang-Barsky: the part of segment p-q inside [0, w] x [0, h], or None."""
+    d = q - p
+    t0, t1 = 0.0, 1.0
+    for num, den in ((p[0], -d[0]), (w - p[0], d[0]), (p[1], -d[1]), (h - p[1], d[1])):
+        if den == 0:
+            if num < 0:
+                return None
+            continue
+        t = num / den
+        if den < 0:
+            t0 = max(t0, t)
+        else:
+            t1 = min(t1, t)
+    return None if t0 > t1 else (p + t0 * d, p + t1 * d)
+
+
+def clip_polyline(uv: np.ndarray, w: float, h: float) -> list[np.ndarray]:
+    """A pixel polyline cut to the image: the runs of it inside [0, w] x [0, h], so that an
+    overlay never draws outside its camera image."""
+    runs: list[list[np.ndarray]] = []
+    current: list[np.ndarray] = []
+    for p, q in zip(uv[:-1], uv[1:], strict=True):
+        part = _clip_segment(np.asarray(p, float), np.asarray(q, float), w, h)
+        if part is None:
+            if current:
+                runs.append(current)
+            current = []
+            continue
+        a, b = part
+        if current and np.allclose(current[-1], a):
+            current.append(b)
+        else:
+            if current:
+                runs.append(current)
+            current = [a, b]
+    if current:
+        runs.append(current)
+    return [np.asarray(r) for r in runs if len(r) >= 2]
+
+
+def _pixel_strips(camera, ground_xy: np.ndarray) -> list[np.ndarray]:
+    """A ground polyline projected into the camera and clipped to its image (points behind the
+    camera dropped first)."""
+    if len(ground_xy) < 2:
+        return []
     uv, in_front = camera.project_ground(ground_xy)
-    margin_w, margin_h = camera.width, camera.height
-    keep = in_front & (uv[:, 0] > -margin_w) & (uv[:, 0] < camera.width + margin_w)
-    keep &= (uv[:, 1] > -margin_h) & (uv[:, 1] < camera.height + margin_h)
-    return uv[keep]
+    strips: list[np.ndarray] = []
+    start = 0
+    for i in range(len(uv) + 1):  # split where the line passes behind the camera
+        if i == len(uv) or not in_front[i]:
+            if i - start >= 2:
+                strips += clip_polyline(uv[start:i], camera.width, camera.height)
+            start = i + 1
+    return strips
+
+
+def _map_xy(xy: np.ndarray) -> np.ndarray:
+    """World XY to the 2D map's coordinates (image axes: y down, so flip y: north up)."""
+    xy = np.asarray(xy, dtype=np.float32)
+    return np.column_stack([xy[..., 0], -xy[..., 1]])
+
+
+def car_footprint(pose: tuple[float, float, float], length: float, width: float) -> np.ndarray:
+    """Closed polygon (5, 2) of the car's outline at `pose`, world XY (centred on the pose's
+    point, the recording's convention for `world/car/body`)."""
+    corners = np.array([[length / 2, width / 2], [length / 2, -width / 2],
+                        [-length / 2, -width / 2], [-length / 2, width / 2],
+                        [length / 2, width / 2]])
+    return vehicle_to_world(corners, pose)
 
 
 # -- the blueprint ------------------------------------------------------------------------------
 def blueprint(scenario):
-    """Cameras side by side; offsets and probabilities; the top view; errors, car, events."""
+    """Cameras side by side; then offsets and errors | the road map and the 3D follow view |
+    probabilities, car (offset, steer) and speed, each unit in its own plot; events below."""
     import rerun.blueprint as rrb
 
     x, y, yaw = scenario.start_pose()
     eye = [x - 25.0 * math.cos(yaw), y - 25.0 * math.sin(yaw), 45.0]
     top = rrb.Spatial3DView(
-        origin="world", name="top view",
+        origin="world", name="follow view (3D)",
         eye_controls=rrb.EyeControls3D(kind=rrb.Eye3DKind.Orbital, position=eye,
                                        look_target=[x, y, 0.0], eye_up=[0.0, 0.0, 1.0],
                                        tracking_entity="world/car"),
     )
+    legend = rrb.PlotLegend(corner=rrb.Corner2D.LeftTop)
+    # Each model's own Kalman track is recorded too ("hough:track"), but left out of the default
+    # offsets / errors plots: it shares its model's colour and would double their legends (the
+    # selection panel adds it back).
+    hidden = [f"- $origin/{m}:track" for m in scenario.estimation.front_detectors]
     return rrb.Blueprint(
         rrb.Vertical(
             rrb.Horizontal(
@@ -195,22 +269,32 @@ def blueprint(scenario):
             ),
             rrb.Horizontal(
                 rrb.Vertical(
-                    rrb.TimeSeriesView(origin="plots/offset", name="offsets (m)"),
-                    rrb.TimeSeriesView(origin="plots/probability", name="MMAE probabilities",
-                                       axis_y=rrb.ScalarAxis(range=(0.0, 1.0))),
+                    rrb.TimeSeriesView(origin="plots/offset", name="offsets (m, + = car left)",
+                                       contents=["+ $origin/**", *hidden], plot_legend=legend),
+                    rrb.TimeSeriesView(origin="plots/error", name="errors (m, estimate - truth)",
+                                       contents=["+ $origin/**", *hidden], plot_legend=legend),
                 ),
-                top,
                 rrb.Vertical(
-                    rrb.TimeSeriesView(origin="plots/error", name="errors (m)"),
-                    rrb.TimeSeriesView(origin="plots/car", name="car"),
-                    rrb.TextLogView(origin="events", name="events"),
+                    rrb.Spatial2DView(origin="map", name="road map (to scale, north up)"),
+                    top,
+                ),
+                rrb.Vertical(
+                    rrb.TimeSeriesView(origin="plots/probability", name="MMAE probabilities",
+                                       axis_y=rrb.ScalarAxis(range=(0.0, 1.0)),
+                                       plot_legend=legend),
+                    rrb.TimeSeriesView(origin="plots/car", name="car: offset (m), steer",
+                                       plot_legend=legend),
+                    rrb.TimeSeriesView(origin="plots/speed", name="car: speed (m/s)",
+                                       plot_legend=legend),
                 ),
                 column_shares=[2, 2, 2],
             ),
-            row_shares=[2, 3],
+            rrb.TextLogView(origin="events", name="events"),
+            row_shares=[4, 7, 1.8],
         ),
         rrb.BlueprintPanel(state="collapsed"),
         rrb.SelectionPanel(state="collapsed"),
+        rrb.TimePanel(state="collapsed"),
     )
 
 
@@ -390,24 +474,39 @@ class RerunRecorder:
         strips = [_lifted(road.position(s, road.boundary_r(i))) for i in range(road.n_lanes + 1)]
         rec.log("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
         rec.log("world/road/boundaries",
-                rr.LineStrips3D(strips, colors=[(200, 200, 200)], radii=0.06), static=True)
+                rr.LineStrips3D(strips, colors=[ROAD_COLOUR], radii=0.08), static=True)
         length, width = view.car_size_m
         rec.log("world/car/body", rr.Boxes3D(centers=[[0.0, 0.0, 0.75]],
                                              half_sizes=[[length / 2, width / 2, 0.75]],
-                                             colors=[(90, 90, 200)]), static=True)
+                                             colors=[CAR_COLOUR]), static=True)
+        lane = self.scenario.road.ego_lane
+        rec.log("map/road", rr.LineStrips2D([_map_xy(b[:, :2]) for b in strips],
+                                            colors=[ROAD_COLOUR], radii=0.4), static=True)
+        rec.log("map/lane", rr.LineStrips2D([_map_xy(strips[lane][:, :2]),
+                                             _map_xy(strips[lane + 1][:, :2])],
+                                            colors=[COLOURS[TRUTH]], radii=0.3), static=True)
         rec.log("cameras", rr.AnnotationContext([(0, "road", (0, 0, 0, 0)),
                                                  (1, "marking", (255, 0, 255, 160))]),
                 static=True)
         series = {f"plots/offset/{TRUTH}": TRUTH, f"plots/offset/{REFERENCE}": REFERENCE,
-                  "plots/offset/fused": "fused", f"plots/error/{REFERENCE}": REFERENCE,
-                  "plots/error/fused": "fused"}
+                  f"plots/offset/{FUSED}": FUSED, f"plots/error/{REFERENCE}": REFERENCE,
+                  f"plots/error/{FUSED}": FUSED}
         for name in view.models:
             for group in ("offset", "error", "probability"):
                 series[f"plots/{group}/{name}"] = name
             for group in ("offset", "error"):  # the model's own Kalman track
                 series[f"plots/{group}/{name}:track"] = name
         for path, name in series.items():
-            rec.log(path, rr.SeriesLines(colors=[self._colour(name)], names=[name]), static=True)
+            label = path.rsplit("/", 1)[-1]  # "hough:track" keeps its suffix in the legend
+            width = 3.0 if name == FUSED else 1.5
+            rec.log(path, rr.SeriesLines(colors=[self._colour(name)], names=[label],
+                                         widths=[width]), static=True)
+        car_series = {"plots/car/offset_m": ("offset (m)", (0, 140, 230)),
+                      "plots/car/steer": ("steer", (220, 20, 20)),
+                      "plots/car/throttle": ("throttle", (30, 170, 30)),
+                      "plots/speed/speed_mps": ("speed (m/s)", (190, 50, 190))}
+        for path, (label, rgb) in car_series.items():
+            rec.log(path, rr.SeriesLines(colors=[rgb], names=[label], widths=[1.5]), static=True)
 
     def _log_scalars(self, step, truth: _Truth) -> None:
         rr, rec = self._rr, self._rec
@@ -426,13 +525,13 @@ class RerunRecorder:
                 rec.log(f"plots/offset/{name}:track", rr.Scalars(value))
                 rec.log(f"plots/error/{name}:track", rr.Scalars(value - truth.offset_m(x_out)))
         if step.output_offset_m is not None:
-            rec.log("plots/offset/fused", rr.Scalars(step.output_offset_m))
-            rec.log("plots/error/fused", rr.Scalars(
+            rec.log(f"plots/offset/{FUSED}", rr.Scalars(step.output_offset_m))
+            rec.log(f"plots/error/{FUSED}", rr.Scalars(
                 step.output_offset_m - truth.offset_m(x_out)))
         for name, p in zip(self._view.models, np.asarray(step.probabilities), strict=False):
             rec.log(f"plots/probability/{name}", rr.Scalars(float(p)))
         rec.log("plots/car/offset_m", rr.Scalars(truth.offset_m(0.0)))
-        rec.log("plots/car/speed_mps", rr.Scalars(float(step.speed_mps)))
+        rec.log("plots/speed/speed_mps", rr.Scalars(float(step.speed_mps)))
         rec.log("plots/car/steer", rr.Scalars(float(step.steer)))
         signals = step.signals  # what the car's sensors told the estimator
         rec.log("plots/sensors/speed_mps", rr.Scalars(float(signals.speed_mps)))
@@ -484,8 +583,8 @@ class RerunRecorder:
             RENDERER_IDLE.wait()
             rec.log(f"cameras/{cam_name}/image", self._jpeg(frame))
             x_range = _camera_x_range(cameras[cam_name])
-            strips = [_to_pixels(cameras[cam_name], b)
-                      for b in truth.lines.boundaries(*x_range)]
+            strips = [strip for b in truth.lines.boundaries(*x_range)
+                      for strip in _pixel_strips(cameras[cam_name], b)]
             rec.log(f"cameras/{cam_name}/lanes/{TRUTH}",
                     rr.LineStrips2D(strips, colors=[colour(TRUTH)], radii=1.5))
         for name, cam_name, lines in self._lanes(step):
@@ -495,12 +594,15 @@ class RerunRecorder:
                 continue
             camera, rgb = cameras[cam_name], self._colour(name)
             rec.log(f"{base}/{'centre' if name == OUTPUT else 'boundaries'}",
-                    rr.LineStrips2D([_to_pixels(camera, line) for line in lines], colors=[rgb],
+                    rr.LineStrips2D([s for line in lines for s in _pixel_strips(camera, line)],
+                                    colors=[rgb],
                                     radii=1.5 if name == OUTPUT else 2.0))
             estimate = step.estimates.get(name)
             points = [np.asarray(p, dtype=float).reshape(-1, 2)
                       for p in (estimate.image_points.values() if estimate else ())]
             points = [p[:: max(1, len(p) // MAX_POINTS_PER_SIDE)] for p in points]
+            points = [p[(p[:, 0] >= 0) & (p[:, 0] <= camera.width) & (p[:, 1] >= 0)
+                        & (p[:, 1] <= camera.height)] for p in points]
             if points:
                 rec.log(f"{base}/points", rr.Points2D(np.concatenate(points), colors=[rgb],
                                                       radii=2.0))
@@ -522,8 +624,15 @@ class RerunRecorder:
                                             rotation=rr.RotationAxisAngle(axis=[0, 0, 1],
                                                                           radians=yaw)))
         path = np.asarray(self._path, dtype=np.float32)
-        rec.log("world/path", rr.LineStrips3D([_lifted(path)], colors=[(255, 80, 80)],
-                                              radii=0.1))
+        rec.log("world/path", rr.LineStrips3D([_lifted(path)], colors=[PATH_COLOUR],
+                                              radii=0.12))
+        length, width = self._view.car_size_m
+        rec.log("map/path", rr.LineStrips2D([_map_xy(path)], colors=[PATH_COLOUR],
+                                            radii=rr.Radius.ui_points(1.5)))
+        rec.log("map/car", rr.LineStrips2D([_map_xy(car_footprint(pose, length, width))],
+                                           colors=[CAR_COLOUR], radii=0.25))
+        rec.log("map/car/marker", rr.Points2D(_map_xy(np.array([[x, y]])), colors=[CAR_COLOUR],
+                                              radii=rr.Radius.ui_points(5.0)))
         for name, _, lines in self._lanes(step):
             if lines is None:
                 rec.log(f"world/lanes/{name}", rr.Clear(recursive=False))

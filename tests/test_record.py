@@ -138,7 +138,7 @@ def test_recording_verifies_and_holds_one_image_per_camera_per_recorded_step(fak
     assert len(data["/cameras/front/lanes/hough/points"]["Points2D:positions"]) == 3
     assert len(data["/cameras/rear/lanes/reference/boundaries"]["LineStrips2D:strips"]) == 3
     for entity in ("/plots/offset/truth", "/plots/offset/fused", "/plots/error/hough",
-                   "/plots/car/speed_mps"):
+                   "/plots/speed/speed_mps"):
         assert steps_of(data, entity, "Scalars:scalars") == list(range(7))
     assert steps_of(data, "/world/car", "Transform3D:translation") == [0, 3, 6]
     assert len(value_at(data, "/world/path", "LineStrips3D:strips", 6)[0]) == 7
@@ -182,9 +182,14 @@ def test_blueprint_is_stored_with_the_recording(fake, tmp_path):
                                                         row["ViewBlueprint:space_origin"])
     assert views["front camera"] == ("2D", "cameras/front")
     assert views["rear camera"] == ("2D", "cameras/rear")
-    assert views["offsets (m)"] == ("TimeSeries", "plots/offset")
+    assert views["offsets (m, + = car left)"] == ("TimeSeries", "plots/offset")
+    assert views["errors (m, estimate - truth)"] == ("TimeSeries", "plots/error")
     assert views["MMAE probabilities"] == ("TimeSeries", "plots/probability")
-    assert views["top view"] == ("3D", "world")
+    assert views["follow view (3D)"] == ("3D", "world")
+    assert views["road map (to scale, north up)"] == ("2D", "map")
+    # one unit per plot: speed (m/s) apart from the car's offset (m) and steer
+    assert views["car: offset (m), steer"] == ("TimeSeries", "plots/car")
+    assert views["car: speed (m/s)"] == ("TimeSeries", "plots/speed")
     assert views["events"] == ("TextLog", "events")
 
 
@@ -322,3 +327,60 @@ print("ok")
                             timeout=300)
     assert result.returncode == 0, result.stderr
     assert result.stdout.strip() == "ok"
+
+
+def test_overlays_are_clipped_to_the_image():
+    from lanekeep.record import clip_polyline
+
+    line = np.array([[-50.0, 50.0], [50.0, 50.0], [150.0, 50.0], [150.0, 300.0]])
+    (run,) = clip_polyline(line, 100.0, 100.0)
+    assert run.min() >= 0.0 and run[:, 0].max() <= 100.0 and run[:, 1].max() <= 100.0
+    assert run[0] == pytest.approx([0.0, 50.0]) and run[-1] == pytest.approx([100.0, 50.0])
+    assert clip_polyline(np.array([[-5.0, -5.0], [-1.0, 200.0]]), 100.0, 100.0) == []
+    # out, in, out, in: two separate runs, none bridging the gap outside
+    zigzag = np.array([[-10.0, 10.0], [10.0, 10.0], [10.0, 200.0], [20.0, 20.0]])
+    assert len(clip_polyline(zigzag, 100.0, 100.0)) == 2
+
+
+def test_colours_are_readable_on_light_and_dark_themes():
+    """No series may be near-white or near-black (invisible on one of the viewer's themes)."""
+    from lanekeep.record import _SPARE_COLOURS, COLOURS, FUSED
+
+    for rgb in [*COLOURS.values(), *_SPARE_COLOURS]:
+        luma = 0.299 * rgb[0] + 0.587 * rgb[1] + 0.114 * rgb[2]
+        assert 40 < luma < 200, rgb
+    assert len({COLOURS[name] for name in ("hough", "sliding_window", "lanenet", FUSED,
+                                           "reference", "truth")}) == 6
+
+
+def test_map_shows_the_road_the_lane_the_car_and_its_path(fake, tmp_path):
+    steps = [make_step(fake, i) for i in range(4)]
+    data = read_back(record(fake, tmp_path / "x.rrd", steps, every=3))
+    road = value_at(data, "/map/road", "LineStrips2D:strips", None)
+    assert len(road) == fake.scenario.road.n_lanes + 1
+    assert len(value_at(data, "/map/lane", "LineStrips2D:strips", None)) == 2
+    (outline,) = value_at(data, "/map/car", "LineStrips2D:strips", 3)
+    assert len(outline) == 5 and np.allclose(outline[0], outline[-1])
+    (path,) = value_at(data, "/map/path", "LineStrips2D:strips", 3)
+    assert len(path) == 4
+    x, y, _ = steps[3].sensed_pose
+    assert np.asarray(outline)[:4].mean(axis=0) == pytest.approx([x, -y], abs=1e-3)
+
+
+@pytest.mark.parametrize("content", [None, b"", b"not a recording"])
+def test_view_rejects_a_missing_or_garbage_file_in_one_line(tmp_path, capsys, content):
+    from lanekeep.cli import main
+
+    path = tmp_path / "x.rrd"
+    if content is not None:
+        path.write_bytes(content)
+    assert main(["view", str(path), "--web"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and str(path) in err[0] and "Traceback" not in err[0]
+
+
+def test_view_url_is_bound_to_localhost():
+    from lanekeep.cli_view import web_url
+
+    assert web_url(9090, 9876) == ("http://127.0.0.1:9090/?url=rerun%2Bhttp%3A%2F%2F"
+                                   "127.0.0.1%3A9876%2Fproxy")
