@@ -15,7 +15,7 @@ import sys
 from collections.abc import Sequence
 from pathlib import Path
 
-import lanekeep  # noqa: F401 - sets MUJOCO_GL before mujoco is imported
+import lanekeep  # sets MUJOCO_GL before mujoco is imported; --version
 from lanekeep.config_io import ConfigError
 from lanekeep.gl_backend import require_mujoco
 from lanekeep.interrupts import stop_signals_interrupt
@@ -52,6 +52,8 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--debug", action="store_true",
                         help="on an error, raise the exception (with its traceback) instead of "
                              "printing one line")
+    parser.add_argument("--version", action="version",
+                        version=f"%(prog)s {lanekeep.__version__}")
     sub = parser.add_subparsers(dest="command", required=True)
 
     p = sub.add_parser("scenarios", help="list the shipped scenarios")

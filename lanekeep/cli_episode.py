@@ -14,9 +14,12 @@ import multiprocessing
 import os
 import sys
 import time
-from concurrent.futures import ProcessPoolExecutor, as_completed, wait
+from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from pathlib import Path
 
+from lanekeep import criteria as criteria_mod
+from lanekeep.cli_plugins import PluginOverrides, check_plugins
+from lanekeep.cli_plugins import add_options as add_plugin_options
 from lanekeep.config_io import ConfigError
 from lanekeep.interrupts import (
     end_children,
@@ -27,31 +30,23 @@ from lanekeep.interrupts import (
 )
 from lanekeep.metrics import EpisodeReport
 from lanekeep.report_json import report_document, report_from_dict, write_json
-from lanekeep.scenario import ESTIMATION_MODES, Scenario, ScenarioError
+from lanekeep.scenario import ESTIMATION_MODES, Scenario
 
 
 def check_scenario(scenario: Scenario, seconds: float | None = None) -> None:
     """Everything about a scenario that building its episode would reject, checked in 30-160 ms
     so that a bad scenario fails before anything runs or any file is written (`lanekeep
     bench` checks every scenario before a worker starts): the world's cross-field checks
-    (lanekeep.world.check_scenario), the detector names, and that `seconds` makes at least
-    one control step.
+    (lanekeep.world.check_scenario), the detector and controller names (imported), and that
+    `seconds` makes at least one control step.
 
     Raises:
       ScenarioError: naming the scenario's file and key.
       ConfigError: `seconds` makes no control step (key "--seconds").
     """
-    from lanekeep.detectors.registry import known_detectors
     from lanekeep.world import check_scenario as check_world
 
-    source = scenario.source or scenario.name
-    est = scenario.estimation
-    names = [(f"estimation.front_detectors[{i}]", name)
-             for i, name in enumerate(est.front_detectors)]
-    for key, name in [*names, ("estimation.reference_detector", est.reference_detector)]:
-        if name not in known_detectors():
-            raise ScenarioError(source, key, f"unknown detector {name!r} (known: "
-                                             f"{', '.join(known_detectors())})")
+    check_plugins(scenario)  # detector and controller names, import paths, entry points
     check_world(scenario)
     if seconds is not None and round(seconds / scenario.control_period_s) < 1:
         raise ConfigError("", "--seconds", f"{seconds:g} s is less than one control step "
@@ -109,26 +104,35 @@ def run_episode(scenario_name: str, seed: int | None = None, seconds: float | No
                 record_every: int = 1, jpeg_quality: int = 75,
                 progress: bool = False, mode: str | None = None,
                 front_detectors: tuple[str, ...] | None = None,
-                weights: str | None = None) -> EpisodeReport:
-    """Run one scenario to the end and return its report (optionally plots and a recording).
+                weights: str | None = None, criteria: dict | None = None,
+                on_step=None, plugins: PluginOverrides | None = None) -> EpisodeReport:
+    """Run one scenario to the end and return its report, judged by its criteria (optionally
+    plots and a recording).
 
     `mode` ("default" | "paper") and `front_detectors` (e.g. ("hough",) for a model-only
     loop) override the scenario file's; None keeps them. `weights` is the file of every
-    learned detector in the episode (None: their shipped one).
+    learned detector in the episode (None: their shipped one). `criteria`: the command line's
+    criteria (lanekeep/criteria.py), in place of the file's. `progress`: a step bar on stderr
+    (a terminal only); `on_step(done, total)` is called after every step. `plugins`: the
+    command line's detectors and controller (lanekeep/cli_plugins.py), before `front_detectors`.
     """
     import lanekeep  # noqa: F401 - EGL before mujoco
     from lanekeep.detectors.registry import detector_weights
     from lanekeep.episode import Episode
     from lanekeep.paper_mode import with_mode
-    from lanekeep.plots import EpisodeTrace, write_plots
+    from lanekeep.plots import EpisodeTrace, plot_title, write_plots
     from lanekeep.scenario import load_scenario
 
     scenario = with_mode(load_scenario(scenario_name), mode)
     if seed is not None:
         scenario = dataclasses.replace(scenario, seed=seed)
+    if plugins is not None:
+        scenario = plugins.apply(scenario)
     if front_detectors is not None:
         scenario = dataclasses.replace(scenario, estimation=dataclasses.replace(
             scenario.estimation, front_detectors=tuple(front_detectors)))
+    scenario = dataclasses.replace(scenario, criteria=criteria_mod.with_overrides(
+        scenario.criteria, criteria))  # off_road_distance_m ends the episode itself
     check_scenario(scenario, seconds)  # before the recording file is opened
     recorder = None
     if record_path:
@@ -136,63 +140,77 @@ def run_episode(scenario_name: str, seed: int | None = None, seconds: float | No
 
         recorder = RerunRecorder(Path(record_path), scenario, every=record_every,
                                  jpeg_quality=jpeg_quality)
+    from lanekeep.progress import step_bar
+
     with detector_weights(weights), Episode(scenario, recorder=recorder) as episode:
-        trace = EpisodeTrace(list(episode.front))
+        trace = EpisodeTrace(list(episode.front), episode.world.road,
+                             scenario.road.ego_lane)
+        total = episode.total_steps if seconds is None else int(round(seconds / episode.dt_s))
+        bar = step_bar(total, scenario.name, enabled=None if progress else False)
 
-        def on_step(result, total: int) -> None:
+        def each_step(result, total: int) -> None:
             trace.add(result)
-            if progress:
-                _progress(result.index + 1, total, scenario.name)
+            bar.update(1)
+            if on_step is not None:
+                on_step(result.index + 1, total)
 
-        report = episode.run(seconds, on_step=on_step)
-        if progress:
-            print(file=sys.stderr)
+        with bar:
+            report = episode.run(seconds, on_step=each_step)
+        report = criteria_mod.judge(report, scenario.criteria)
         if not report.completed:
             print(f"stopped ({report.stop_reason}): writing the partial report",
                   file=sys.stderr)
         if plots_dir:
-            write_plots(trace, episode.world.road, Path(plots_dir), scenario.name)
+            for written in write_plots(trace, episode.world.road, Path(plots_dir),
+                                       plot_title(scenario)):
+                print(f"wrote {written}", file=sys.stderr)
+    if record_path:  # finalised when the episode closed
+        print(f"wrote {record_path} (open it with `lanekeep view {record_path}`)",
+              file=sys.stderr)
     return report
-
-
-def _progress(done: int, total: int, label: str) -> None:
-    width = 30
-    filled = int(width * done / max(total, 1))
-    print(f"\r{label:<28} [{'#' * filled}{'.' * (width - filled)}] {done}/{total}",
-          end="", file=sys.stderr, flush=True)
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
     from lanekeep.scenario import load_scenario
 
     check_options(args)
-    scenario = load_scenario(args.scenario)
+    overrides = criteria_mod.overrides_from_args(args)
+    plugins = PluginOverrides.from_args(args)
+    scenario = plugins.apply(load_scenario(args.scenario))
     code = weights_error("run", args, [scenario])
     if code is not None:
         return code
     report = run_episode(args.scenario, args.seed, args.seconds, args.plots, args.record,
                          args.record_every, args.jpeg_quality, progress=sys.stderr.isatty(),
-                         mode=args.mode, weights=args.weights)
+                         mode=args.mode, weights=args.weights, criteria=overrides,
+                         plugins=plugins)
     print(f"scenario {report.scenario} (seed {report.seed}): {report.duration_s:.1f} s simulated "
           f"in {report.wall_s:.1f} s")
     print(report.table())
     if args.json:
         write_json(args.json, report_document(report, scenario))
-    if report.completed:
-        return 0
-    return 130 if report.stop_reason == "interrupted" else 1
+    if report.status == "interrupted":
+        return 130
+    return 0 if report.passed else 1  # a stopped episode fails its "status" criterion
 
 
 def _bench_one(job: BenchJob, seconds: float | None, plots: str | None,
-               record_dir: str | None, weights: str | None = None) -> dict | None:
+               record_dir: str | None, weights: str | None = None,
+               criteria: dict | None = None, index: int = 0) -> dict | None:
     label = job.label
     record = str(Path(record_dir) / f"{label}.rrd") if record_dir else None
     plots_dir = str(Path(plots) / label) if plots else None
+
+    def on_step(done: int, total: int) -> None:  # the parent's progress bar
+        if _STEPS is not None:
+            _STEPS.put((index, done))
+
     with stop_signals_interrupt():  # only while an episode runs (lanekeep/interrupts.py)
         if _STOP is not None and _STOP.is_set():  # queued before the bench was stopped
             return None
         return run_episode(job.scenario, job.seed, seconds, plots_dir, record, mode=job.mode,
-                           front_detectors=job.front_detectors, weights=weights).to_dict()
+                           front_detectors=job.front_detectors, weights=weights,
+                           criteria=criteria, on_step=on_step, plugins=job.plugins).to_dict()
 
 
 def _report_from_dict(d: dict) -> EpisodeReport:
@@ -210,14 +228,15 @@ def worker_threads(workers: int) -> int:
 
 
 _STOP = None  # in a bench worker: the parent's "stop" event (multiprocessing.Event)
+_STEPS = None  # in a bench worker: the parent's queue of (job index, steps done)
 
 
-def _init_worker(threads: int, stop) -> None:
+def _init_worker(threads: int, stop, steps=None) -> None:
     """Runs first in every bench worker: thread counts before EGL or OpenCV start; an idle
     worker ignores Ctrl-C and SIGTERM (one dying would break the pool for all) and starts no
-    episode once the parent has set `stop`."""
-    global _STOP
-    _STOP = stop
+    episode once the parent has set `stop`; `steps` carries its episodes' progress."""
+    global _STOP, _STEPS
+    _STOP, _STEPS = stop, steps
     ignore_stop_signals()
     os.environ["LP_NUM_THREADS"] = str(threads)  # Mesa llvmpipe, read when EGL starts
     import cv2
@@ -234,6 +253,7 @@ class BenchJob:
     seed: int | None = None
     mode: str | None = None
     front_detectors: tuple[str, ...] | None = None
+    plugins: PluginOverrides | None = None  # --front-detectors, --controller, ... (all jobs)
 
     @property
     def label(self) -> str:
@@ -247,13 +267,20 @@ class BenchJob:
 def longest_first(jobs: list[BenchJob], seconds: float | None) -> list[int]:
     """Indices of `jobs` in the order to start them: the longest episodes first, so that no
     worker starts a long one while the others are idle at the end (ties keep the order)."""
+    steps = job_steps(jobs, seconds)
+    return sorted(range(len(jobs)), key=lambda i: steps[i], reverse=True)
+
+
+def job_steps(jobs: list[BenchJob], seconds: float | None) -> list[int]:
+    """Control steps each job will make if it runs to its end (as Episode.run counts them)."""
     from lanekeep.scenario import load_scenario
 
-    def simulated_s(i: int) -> float:
-        duration = load_scenario(jobs[i].scenario).duration_s
-        return duration if seconds is None else min(duration, seconds)
-
-    return sorted(range(len(jobs)), key=simulated_s, reverse=True)
+    out = []
+    for job in jobs:
+        scenario = load_scenario(job.scenario)
+        simulated = scenario.duration_s if seconds is None else seconds
+        out.append(int(round(simulated / scenario.control_period_s)))
+    return out
 
 
 STOP_GRACE_S = 60.0  # how long stopped workers get to return their partial reports
@@ -270,12 +297,16 @@ class BenchInterrupted(KeyboardInterrupt):
 
 def run_bench(jobs: list[BenchJob], workers: int, seconds: float | None = None,
               plots: str | None = None, record_dir: str | None = None,
-              on_done=None, weights: str | None = None) -> tuple[list[EpisodeReport], float]:
+              on_done=None, weights: str | None = None, criteria: dict | None = None,
+              on_steps=None) -> tuple[list[EpisodeReport], float]:
     """Episodes in `workers` processes, longest first: (reports in the jobs' order, wall s).
 
-    `weights`: the file of every learned detector (None: their shipped one).
+    `weights`: the file of every learned detector (None: their shipped one). `criteria`: the
+    command line's criteria (lanekeep/criteria.py); each report comes back judged.
 
-    `on_done(done, total)` is called as each episode finishes. On KeyboardInterrupt (Ctrl-C,
+    `on_done(done, total)` is called as each episode finishes, `on_steps(done, total)` with
+    the control steps of all episodes as the workers report them (an episode that ends early,
+    off the road, takes its remaining steps off the total). On KeyboardInterrupt (Ctrl-C,
     or SIGTERM under `lanekeep.cli.main`) the waiting episodes are cancelled, the running ones
     are told to stop and return their partial reports (recordings finalised), any worker still
     alive after STOP_GRACE_S is killed, and BenchInterrupted carries the reports.
@@ -283,17 +314,27 @@ def run_bench(jobs: list[BenchJob], workers: int, seconds: float | None = None,
     start = time.perf_counter()
     reports: list[EpisodeReport | None] = [None] * len(jobs)
     context = multiprocessing.get_context("spawn")
-    stop = context.Event()
+    stop, steps = context.Event(), context.Queue()
     pool = ProcessPoolExecutor(max_workers=workers, mp_context=context, initializer=_init_worker,
-                               initargs=(worker_threads(workers), stop))
+                               initargs=(worker_threads(workers), stop, steps))
     futures = {}
+    expected = job_steps(jobs, seconds)
+    progress = _StepProgress(expected, steps, on_steps)
     try:
-        futures = {pool.submit(_bench_one, jobs[i], seconds, plots, record_dir, weights): i
+        futures = {pool.submit(_bench_one, jobs[i], seconds, plots, record_dir, weights,
+                               criteria, i): i
                    for i in longest_first(jobs, seconds)}
-        for done, future in enumerate(as_completed(futures), start=1):
-            reports[futures[future]] = _report_from_dict(future.result())
-            if on_done is not None:
-                on_done(done, len(jobs))
+        pending, done = set(futures), 0
+        while pending:
+            finished, pending = wait(pending, timeout=0.25, return_when=FIRST_COMPLETED)
+            progress.drain()
+            for future in finished:
+                i = futures[future]
+                reports[i] = _report_from_dict(future.result())
+                progress.finished(i, reports[i].steps)
+                done += 1
+                if on_done is not None:
+                    on_done(done, len(jobs))
     except KeyboardInterrupt:
         with stop_signals_held():
             stop.set()
@@ -305,6 +346,36 @@ def run_bench(jobs: list[BenchJob], workers: int, seconds: float | None = None,
         raise
     pool.shutdown(wait=True)
     return reports, time.perf_counter() - start
+
+
+class _StepProgress:
+    """The bench's step count from the workers' (job, steps done) messages, for `on_steps`."""
+
+    def __init__(self, expected: list[int], queue, on_steps) -> None:
+        self.expected, self.queue, self.on_steps = list(expected), queue, on_steps
+        self.done = [0] * len(expected)
+
+    def drain(self) -> None:
+        import queue
+
+        changed = False
+        while True:
+            try:
+                i, n = self.queue.get_nowait()
+            except queue.Empty:
+                break
+            self.done[i], changed = max(self.done[i], n), True
+        if changed:
+            self._report()
+
+    def finished(self, i: int, steps: int) -> None:
+        self.drain()
+        self.done[i] = self.expected[i] = steps
+        self._report()
+
+    def _report(self) -> None:
+        if self.on_steps is not None:
+            self.on_steps(sum(self.done), sum(self.expected))
 
 
 def _collect_partial(pool: ProcessPoolExecutor, futures: dict, reports: list) -> None:
@@ -327,8 +398,11 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     from lanekeep.scenario import load_scenario, shipped_scenarios
 
     check_options(args)
+    overrides = criteria_mod.overrides_from_args(args)
+    plugins = PluginOverrides.from_args(args)
     names = args.scenarios or shipped_scenarios()
-    scenarios = {name: load_scenario(name) for name in names}  # fail fast on a bad name
+    scenarios = {name: plugins.apply(load_scenario(name))  # fail fast on a bad name
+                 for name in names}
     for scenario in scenarios.values():  # and on a bad scenario, before any worker starts
         if args.seed is not None:  # (shadow casters stand where the seed puts them)
             scenario = dataclasses.replace(scenario, seed=args.seed)
@@ -338,14 +412,20 @@ def _cmd_bench(args: argparse.Namespace) -> int:
         return code
     if args.record_dir:
         Path(args.record_dir).mkdir(parents=True, exist_ok=True)
-    jobs = [BenchJob(name, args.seed, args.mode) for name in names]
+    jobs = [BenchJob(name, args.seed, args.mode, plugins=plugins) for name in names]
     if args.single_model:
-        jobs += [BenchJob(name, args.seed, args.mode, (model,)) for name in names
+        jobs += [BenchJob(name, args.seed, args.mode, (model,), plugins) for name in names
                  for model in scenarios[name].estimation.front_detectors]
+    from lanekeep.junit import write_junit
+    from lanekeep.progress import set_progress, step_bar
+
+    bar = step_bar(sum(job_steps(jobs, args.seconds)), f"bench ({len(jobs)} episodes)")
     try:
-        done_reports, wall = run_bench(
-            jobs, args.workers, args.seconds, args.plots, args.record_dir,
-            on_done=lambda done, total: _progress(done, total, "bench"), weights=args.weights)
+        with bar:
+            done_reports, wall = run_bench(
+                jobs, args.workers, args.seconds, args.plots, args.record_dir,
+                weights=args.weights, criteria=overrides,
+                on_steps=lambda done, total: set_progress(bar, done, total))
     except BenchInterrupted as stop:
         return _bench_interrupted(args, jobs, scenarios, stop)
     reports = {job.label: report for job, report in zip(jobs, done_reports, strict=True)}
@@ -353,8 +433,9 @@ def _cmd_bench(args: argparse.Namespace) -> int:
         write_json(args.json, {job.label: report_document(reports[job.label],
                                                           scenarios[job.scenario])
                                for job in jobs})
+    if args.junit:
+        write_junit(args.junit, reports, wall)
     main_labels = [job.label for job in jobs[: len(names)]]
-    print(file=sys.stderr)
     for label in main_labels:
         r = reports[label]
         print(f"\n== {label} (seed {r.seed}, {r.duration_s:.0f} s, wall {r.wall_s:.0f} s) ==")
@@ -364,7 +445,11 @@ def _cmd_bench(args: argparse.Namespace) -> int:
         print("\n" + single_model_table(jobs, reports))
     print(f"\nbench wall time: {wall:.1f} s for {len(jobs)} episodes "
           f"with {args.workers} workers")
-    return 0
+    failed = [label for label, r in reports.items() if not r.passed]
+    for label in failed:
+        print(f"FAILED {label}: {criteria_mod.failure_message(reports[label])}")
+    print(f"criteria: {len(reports) - len(failed)} of {len(reports)} episodes passed")
+    return 1 if failed else 0
 
 
 def _bench_interrupted(args: argparse.Namespace, jobs: list[BenchJob],
@@ -377,6 +462,11 @@ def _bench_interrupted(args: argparse.Namespace, jobs: list[BenchJob],
         if args.json:
             write_json(args.json, {label: report_document(r, scenarios[job.scenario])
                                    for label, (job, r) in kept.items()})
+        if args.junit:
+            from lanekeep.junit import write_junit
+
+            write_junit(args.junit, {job.label: kept.get(job.label, (job, None))[1]
+                                     for job in jobs}, stop.wall_s)
         print(file=sys.stderr)
         for label, (_, r) in kept.items():
             state = "complete" if r.completed else f"stopped: {r.stop_reason}"
@@ -398,23 +488,36 @@ def _best(sources: dict, names: list[str]) -> tuple[str, float]:
     return name, rmse[name]
 
 
+def _verdict(r: EpisodeReport) -> str:
+    """The summary's last column: "pass", "FAIL" or the status of an episode that stopped."""
+    if r.status != "completed":
+        return r.status.upper().replace("_", " ")
+    return ("pass" if r.passed else "FAIL") if r.criteria else "-"
+
+
 def summary_table(reports: list[EpisodeReport]) -> str:
     """One line per scenario: fused vs the best front model's own track (like for like: both
-    Kalman estimates at the same look-ahead) and its best raw detection; reference; safety."""
-    header = (f"{'scenario':<28}{'fused':>8}{'best track':>20}{'best raw':>20}"
-              f"{'reference':>11}{'car RMS':>9}{'depart':>8}{'switch':>8}")
-    lines = [header, "-" * len(header)]
+    Kalman estimates at the same look-ahead) and its best raw detection; reference; safety;
+    the criteria's verdict. Columns are as wide as their longest name: nothing is cut."""
+    rows = []
     for r in reports:
         tracks = [k for k in r.sources if k.endswith(":track")]
         raws = [k[: -len(":track")] for k in tracks]
-        track_name, track = _best(r.sources, tracks)
-        raw_name, raw = _best(r.sources, raws)
+        rows.append((r, _best(r.sources, tracks), _best(r.sources, raws)))
+    names = [n for _, (t, _), (w, _) in rows for n in (t.split(":")[0], w)] or [""]
+    name_w = max(len(n) for n in names)
+    scen_w = max([28, *(len(r.scenario) + 2 for r in reports)])
+    best_w = name_w + 11  # "%8.1f (name)"
+    header = (f"{'scenario':<{scen_w}}{'fused':>8}{'best track':>{best_w}}{'best raw':>{best_w}}"
+              f"{'reference':>11}{'car RMS':>9}{'depart':>8}{'switch':>8}  result")
+    lines = [header, "-" * len(header)]
+    for r, (track_name, track), (raw_name, raw) in rows:
         lines.append(
-            f"{r.scenario:<28}{r.sources['fused'].rmse_cm:>8.1f}"
-            f"{track:>8.1f} ({track_name.split(':')[0][:9]:>9})"
-            f"{raw:>8.1f} ({raw_name[:9]:>9})"
+            f"{r.scenario:<{scen_w}}{r.sources['fused'].rmse_cm:>8.1f}"
+            f"{track:>8.1f} ({track_name.split(':')[0]:>{name_w}})"
+            f"{raw:>8.1f} ({raw_name:>{name_w}})"
             f"{r.sources['reference'].rmse_cm:>11.1f}{r.car_rms_cm:>9.1f}"
-            f"{r.lane_departures:>8d}{r.mmae_switches:>8d}"
+            f"{r.lane_departures:>8d}{r.mmae_switches:>8d}  {_verdict(r)}"
         )
     lines.append("(offset RMSE in cm; track = a model's own Kalman track at the fused output's "
                  "look-ahead; raw = its detections, on the steps it had one; fused = the MMAE "
@@ -425,15 +528,21 @@ def summary_table(reports: list[EpisodeReport]) -> str:
 def single_model_table(jobs: list[BenchJob], reports: dict[str, EpisodeReport]) -> str:
     """The closed loop driven by the MMAE beside the same loop driven by each front model
     alone (the paper's "model-only system"): the car's own lateral error and departures."""
-    header = f"{'scenario':<28}{'loop':>22}{'car RMS':>9}{'car max':>9}{'depart':>8}"
+    def loop(job: BenchJob) -> str:
+        return "+".join(job.front_detectors) + " only" if job.front_detectors else "MMAE"
+
+    scen_w = max([28, *(len(j.label) + 2 for j in jobs if j.front_detectors is None)])
+    loop_w = max([22, *(len(loop(j)) + 2 for j in jobs)])
+    header = (f"{'scenario':<{scen_w}}{'loop':>{loop_w}}{'car RMS':>9}{'car max':>9}"
+              f"{'depart':>8}  result")
     lines = ["closed loop: MMAE vs each front model alone", header, "-" * len(header)]
     for main in (j for j in jobs if j.front_detectors is None):
         alone = [j for j in jobs if j.scenario == main.scenario and j.front_detectors]
         for job in [main, *alone]:
             r = reports[job.label]
-            loop = "MMAE" if job is main else "+".join(job.front_detectors) + " only"
-            lines.append(f"{main.label if job is main else '':<28}{loop:>22}"
-                         f"{r.car_rms_cm:>9.1f}{r.car_max_cm:>9.1f}{r.lane_departures:>8d}")
+            lines.append(f"{main.label if job is main else '':<{scen_w}}{loop(job):>{loop_w}}"
+                         f"{r.car_rms_cm:>9.1f}{r.car_max_cm:>9.1f}{r.lane_departures:>8d}"
+                         f"  {_verdict(r)}")
     lines.append("(car = its true lateral offset from the lane centre, cm)")
     return "\n".join(lines)
 
@@ -452,6 +561,8 @@ def register(sub) -> None:
                    help="estimation mode: 'default' (ours) or 'paper' (paper 001's own loop, "
                         "lanekeep/paper_mode.py); default: the scenario file's")
     add_weights_option(p)
+    criteria_mod.add_options(p)
+    add_plugin_options(p)
     p.set_defaults(func=_cmd_run)
 
     p = sub.add_parser("bench", help="run many scenarios in parallel; paper-style tables")
@@ -469,7 +580,12 @@ def register(sub) -> None:
                    help="also drive each scenario closed loop with each front model alone "
                         "and print the car's lateral RMS / max and departures beside the "
                         "MMAE loop's; in --json these episodes are keyed 'SCENARIO@MODEL'")
+    p.add_argument("--junit", metavar="FILE", default=None,
+                   help="write JUnit XML for CI: one test case per episode (and per "
+                        "single-model run), a <failure> naming each criterion not met")
     add_weights_option(p)
+    criteria_mod.add_options(p)
+    add_plugin_options(p)
     p.set_defaults(func=_cmd_bench)
 
 

@@ -2,8 +2,9 @@
 
 Each line of `Episode.step` is one call into one module (DESIGN.md's loop). The front
 detectors each feed a Kalman lane tracker; the rear detector is the MMAE's reference (the
-paper's "observer"); the MMAE selects (or fuses) the front models; the PID steers on the chosen
-lane's offset at the control look-ahead; the speed PI holds the target speed.
+paper's "observer"); the MMAE selects (or fuses) the front models; the scenario's controller
+(lanekeep/controllers.py; by default the PID on the chosen lane's offset at the control
+look-ahead, and the speed PI) steers and drives.
 
 What the car knows is what a car has: the camera frames and its sensor signals
 (lanekeep/sensors.py: wheel odometry, IMU yaw rate, accelerations, steering angle), dead-reckoned
@@ -22,7 +23,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from lanekeep.cameras import CameraRig, RenderSettings
-from lanekeep.control import PaperGains, SpeedController, SteeringPID
+from lanekeep.controllers import ControlContext, Controller, make_controller
 from lanekeep.detectors.base import Detector, LaneEstimate, poly_eval
 from lanekeep.detectors.registry import make_detector
 from lanekeep.estimators.lane_estimator import CLOSED_LOOP_TRACKER, EstimatorOutput, LaneEstimator
@@ -38,6 +39,7 @@ from lanekeep.scenario import Scenario
 from lanekeep.sensors import VehicleSensors, VehicleSignals
 from lanekeep.timing import StageClock
 from lanekeep.world import SimulationError, World, build
+from lanekeep.world_parts import WorldLayout
 
 FUSED, REFERENCE = "fused", "reference"
 TRACK_SUFFIX = ":track"  # a front model's own Kalman track, scored like the fused output
@@ -87,14 +89,24 @@ class StepResult:
     # Marking masks (uint8, 1 = paint) per camera rendered from the state after this step, the
     # state the next step's frames come from; only when the recorder asks (`wants_masks`).
     marking_masks_after: dict[str, np.ndarray] | None = None
+    # Why the car is off the road after this period ("" while on it): `run()` ends there.
+    off_road: str = ""
 
 
-def _curvature(centre: np.ndarray, x_m: float) -> float:
-    """Curvature of the lane polynomial at x: 2 c2 / (1 + y'^2)^1.5. A quadratic fitted to a
-    tight arc over 4-20 m inflates c2 (it absorbs the arc's x^4 term), and 2 c2 alone would
-    over-steer a 40 m radius turn by ~25%."""
-    slope = centre[1] + 2.0 * centre[2] * x_m
-    return float(2.0 * centre[2] / (1.0 + slope * slope) ** 1.5)
+@dataclass
+class Percept:
+    """What the car has at the start of a control period, before it acts: its camera frames,
+    its sensor signals, the detections and the estimator's output. `sensed_pose` (the true pose
+    the frames were taken from) is for scoring only."""
+
+    index: int
+    time_s: float
+    frames: dict[str, np.ndarray]
+    signals: VehicleSignals
+    estimates: dict[str, LaneEstimate]
+    estimate: EstimatorOutput
+    events: list[str]
+    sensed_pose: tuple[float, float, float]
 
 
 class Episode:
@@ -131,11 +143,10 @@ class Episode:
         self.sensors = VehicleSensors(scenario.sensors, self.dt_s, self.rng.spawn(1)[0])
         # The reference point is the middle of the wheelbase (lanekeep/vehicle.py).
         self.odometry = DeadReckoning(self.dt_s, geometry.wheelbase_m / 2.0)
-        self.paper_mode = est.mode == "paper"
-        self.steering = SteeringPID(self.dt_s, est.control_lookahead_m, geometry.wheelbase_m,
-                                    geometry.max_steer_rad,
-                                    paper_gains=PaperGains() if self.paper_mode else None)
-        self.speed = SpeedController(scenario.target_speed_mps, self.dt_s)
+        # [control] controller: "pid" (default), "stanley", an entry point or an import path
+        self.controller: Controller = make_controller(scenario.control.controller,
+                                                      ControlContext.of(scenario, geometry))
+        self.controller.reset()
         self.metrics = Metrics(source_names(list(self.front)))
         self.recorder: Recorder = recorder or NullRecorder()
         geometry = self.world.car.geometry
@@ -145,29 +156,47 @@ class Episode:
         for detector in [*self.front.values(), self.reference]:
             detector.reset()
         self.index = 0
+        self._percept: Percept | None = None  # sensed, not yet acted on
         self.detector_errors = 0
         self.clock = StageClock()  # wall time per stage (`lanekeep perf`)
         self._tyre_geoms = [self.world.model.geom(n).id for n in TYRES]
         self._wall_start = time.perf_counter()
 
     # -- the loop ------------------------------------------------------------------------------
-    def step(self, action: tuple[float, float] | None = None) -> StepResult:
-        """One control period. `action` = (steer, throttle) overrides the controllers."""
+    def observe(self) -> Percept:
+        """The start of a control period: frames, sensor signals, detections and the estimate.
+
+        An agent outside (the Gymnasium and dm_env faces) calls this, decides, then `act`s on
+        it, so it acts on the frames of the same period as the built-in controller does. The
+        percept is kept until `act` uses it: calling `observe` twice senses once.
+        """
+        if self._percept is None:
+            self.clock.start()
+            events: list[str] = []
+            sensed_pose = self._true_pose()  # scoring: where the frames are taken from
+            frames = self._sense()
+            signals = self.sensors.sample(self.world.car)
+            estimates = self._detect(frames, events)
+            estimate = self._estimate(estimates, signals)  # laps "track" and "mmae"
+            events.extend(estimate.events)
+            self._percept = Percept(index=self.index, time_s=float(self.world.data.time),
+                                    frames=frames, signals=signals, estimates=estimates,
+                                    estimate=estimate, events=events, sensed_pose=sensed_pose)
+        return self._percept
+
+    def act(self, action: tuple[float, float] | None = None) -> StepResult:
+        """The rest of the control period: steer and throttle (the controller's, or `action`
+        = (steer, throttle) from outside) on the latest percept, physics, scoring, recording."""
+        percept = self.observe()
+        self._percept = None
         clock = self.clock
-        clock.start()
-        events: list[str] = []
-        sensed_pose = self._true_pose()  # scoring: where the frames are taken from
-        frames = self._sense()
-        signals = self.sensors.sample(self.world.car)
-        estimates = self._detect(frames, events)
-        estimate = self._estimate(estimates, signals)  # laps "track" and "mmae"
-        events.extend(estimate.events)
+        estimate, signals = percept.estimate, percept.signals
         steer, throttle = self._control(estimate, signals) if action is None else action
         clock.lap("control")
         self.world.step(steer, throttle, self.dt_s)
         clock.lap("physics")
-        result = self._score(sensed_pose, frames, estimates, estimate, signals, steer, throttle,
-                             events)
+        result = self._score(percept.sensed_pose, percept.frames, percept.estimates, estimate,
+                             signals, steer, throttle, percept.events)
         clock.lap("score")
         if self.recorder.wants_masks(self.index):
             result = replace(result, marking_masks_after=self._marking_masks())
@@ -175,6 +204,11 @@ class Episode:
         clock.lap("record")
         self.index += 1
         return result
+
+    def step(self, action: tuple[float, float] | None = None) -> StepResult:
+        """One control period (`observe`, then `act`). `action` = (steer, throttle) overrides
+        the controller."""
+        return self.act(action)
 
     def _sense(self) -> dict[str, np.ndarray]:
         data = self.world.data
@@ -225,27 +259,9 @@ class Episode:
 
     def _control(self, estimate: EstimatorOutput, signals: VehicleSignals
                  ) -> tuple[float, float]:
-        centre, speed = estimate.centre, signals.speed_mps
-        if centre is None:
-            steer = self.steering(None, speed)
-        elif self.paper_mode:
-            # Eq. 9 on the output offset itself (the selected detection at its nearest row).
-            # The paper does not say how it tells a curvy road from a straight one; here the
-            # larger of the lane's curvature there and the car's own path curvature (gyro yaw
-            # rate / wheel speed) picks the gains: a short-range model fits straight lines,
-            # and once the car turns, the gyro knows.
-            lane_curvature = _curvature(centre, estimate.offset_x_m)
-            path_curvature = signals.yaw_rate_rps / max(abs(speed), 1.0)
-            curvature = max(lane_curvature, path_curvature, key=abs)
-            steer = self.steering(estimate.offset_m, speed, curvature_1pm=curvature)
-        else:
-            # Feedback on the lane's offset and heading projected x_ctrl ahead (the linear
-            # terms); its curvature goes to the controller's feed-forward, not counted twice.
-            x_ctrl = self.scenario.estimation.control_lookahead_m
-            control_offset = -float(centre[0] + centre[1] * x_ctrl)
-            curvature = _curvature(centre, x_ctrl)
-            steer = self.steering(control_offset, speed, curvature_1pm=curvature)
-        return steer, self.speed(speed)
+        """The scenario's controller (lanekeep/controllers.py): estimate and sensors only."""
+        steer, throttle = self.controller.control(estimate, signals)
+        return float(steer), float(throttle)
 
     def _true_pose(self) -> tuple[float, float, float]:
         """The car's true pose, for scoring only."""
@@ -297,6 +313,9 @@ class Episode:
         if centre is None:
             self.metrics.add_no_estimate()
         outside = self._wheels_outside_lane()
+        off_road = self._off_road(car_offset_m)
+        if off_road:
+            events.append(off_road)
         if outside:
             events.append("lane departure: a wheel crossed a lane boundary")
         self.metrics.add_car(car_offset_m, outside)
@@ -313,7 +332,7 @@ class Episode:
             truth_output_m=true_offset(x_out),
             truth_centre=true_centre, pose=(x, y, yaw), sensed_pose=sensed_pose,
             speed_mps=world.car.speed_mps(), signals=signals, events=events,
-            tracker_status=dict(estimate.tracker_status),
+            tracker_status=dict(estimate.tracker_status), off_road=off_road,
         )
 
     def _marking_masks(self) -> dict[str, np.ndarray]:
@@ -329,6 +348,29 @@ class Episode:
                 paint, bare, weather.range_m(depth), weather.extinction_per_m,
                 float(weather.airlight.mean()), fx.sensor.gain).astype(np.uint8)
         return masks
+
+    def _off_road(self, car_offset_m: float) -> str:
+        """Why the car has left the road ("" if it has not): all four wheels beyond the paved
+        surface (the lanes and the asphalt shoulders build() lays, or past the road's ends), or
+        its centre beyond [criteria] off_road_distance_m from the ego lane's. Truth, for
+        scoring and termination only: nothing of it reaches perception or control."""
+        road = self.world.road
+        s, r = road.local_coordinates(self.world.data.geom_xpos[self._tyre_geoms, :2])
+        s, r = np.asarray(s), np.asarray(r)
+        layout = WorldLayout()  # what build() laid (Episode builds with the default layout)
+        lo = road.boundary_r(0) - layout.shoulder_m
+        hi = road.boundary_r(road.n_lanes) + layout.shoulder_m
+        off = (r < lo) | (r > hi)
+        if not road.closed:
+            off |= (s < -layout.lead_m) | (s > road.length_m + layout.lead_m)
+        t = float(self.world.data.time)
+        if np.all(off):
+            return f"off road: all four wheels off the paved surface at t = {t:.1f} s"
+        limit = self.scenario.criteria.off_road_distance_m
+        if limit is not None and abs(car_offset_m) > limit:
+            return (f"off road: the car {abs(car_offset_m):.2f} m from the lane centre "
+                    f"(off_road_distance_m = {limit:g}) at t = {t:.1f} s")
+        return ""
 
     def _wheels_outside_lane(self) -> bool:
         world = self.world
@@ -347,31 +389,38 @@ class Episode:
         """Step to the end (or `seconds`); an interrupt still returns a partial report.
 
         `on_step(result, total_steps)` sees every step as it is made (a trace for plots, a
-        progress bar); the report says `completed = False` and why (`stop_reason`) after
-        Ctrl-C or when the physics went unstable (lanekeep.world.SimulationError).
+        progress bar); the report says `completed = False`, its `status` and why
+        (`stop_reason`) after Ctrl-C ("interrupted"), when the physics went unstable
+        (lanekeep.world.SimulationError: "unstable") or once the car left the road
+        ("off_road": the step on which it left is scored, since its frames were taken on the
+        road and its end pose is the failure the criteria must see; no later step is).
         """
         steps = self.total_steps if seconds is None else int(round(seconds / self.dt_s))
-        reason = ""
+        status, reason = "completed", ""
         try:
             with stop_point():  # under the CLI a stop signal ends the loop between steps
                 for _ in range(steps):
                     if stop_requested():
-                        reason = "interrupted"
+                        status = reason = "interrupted"
                         break
                     result = self.step()
                     if on_step is not None:
                         on_step(result, steps)
+                    if result.off_road:
+                        status, reason = "off_road", result.off_road
+                        break
         except KeyboardInterrupt:
-            reason = "interrupted"
+            status = reason = "interrupted"
         except SimulationError as err:  # the steps so far stand; the recording is kept
-            reason = str(err)
-        return self.report(not reason, reason)
+            status, reason = "unstable", str(err)
+        return self.report(status == "completed", reason, status=status)
 
-    def report(self, completed: bool = True, stop_reason: str = "") -> EpisodeReport:
+    def report(self, completed: bool = True, stop_reason: str = "",
+               status: str | None = None) -> EpisodeReport:
         return self.metrics.report(self.scenario.name, self.scenario.seed, self.dt_s,
                                    completed=completed,
                                    wall_s=time.perf_counter() - self._wall_start,
-                                   stop_reason=stop_reason)
+                                   stop_reason=stop_reason, status=status)
 
     def close(self) -> None:
         self.rig.close()

@@ -23,6 +23,11 @@ Definitions (all against ground truth from the road, never from images):
   - lane departures: times a wheel's contact point crosses an ego-lane boundary (counted on
     entry, not per step);
   - MMAE switches: changes of the selected model.
+
+An episode ends with a status (STATUSES): "completed" (all its steps), "off_road" (the car left
+the road: lanekeep/episode.py; the step on which it left is scored, the ones it never drove are
+not), "interrupted" (Ctrl-C, SIGTERM) or "unstable" (the physics blew up). `criteria` holds the
+pass/fail verdicts of lanekeep/criteria.py once a report has been judged.
 """
 
 from __future__ import annotations
@@ -36,6 +41,26 @@ from lanekeep.detectors.base import poly_eval
 
 # Look-ahead points (m) of ADE / FDE: the front detectors' window, 4-20 m, every 2 m.
 ADE_POINTS_M = (4.0, 6.0, 8.0, 10.0, 12.0, 14.0, 16.0, 18.0, 20.0)
+STATUSES = ("completed", "off_road", "interrupted", "unstable")
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """One pass/fail criterion of an episode: its limit, the episode's value and the outcome.
+    `value` is None where the episode has none (a fused RMSE with no valid estimate: fails)."""
+
+    name: str  # e.g. "lane_departures", "car_lateral_error_m", "status"
+    limit: float | int | str
+    value: float | int | str | None
+    passed: bool
+
+    def line(self) -> str:
+        """"lane_departures  2  (must be <= 0)  FAIL": one row of the report's table."""
+        value = "-" if self.value is None else (
+            f"{self.value:.3f}" if isinstance(self.value, float) else str(self.value))
+        limit = self.limit if isinstance(self.limit, str) else f"<= {self.limit:g}"
+        return (f"{self.name:<20}{value:>10}  (must be {limit})  "
+                f"{'ok' if self.passed else 'FAIL'}")
 
 
 @dataclass(frozen=True)
@@ -65,12 +90,31 @@ class EpisodeReport:
     completed: bool = True
     wall_s: float = 0.0
     stop_reason: str = ""  # why an incomplete episode stopped ("" when completed)
+    status: str = "completed"  # one of STATUSES; `completed` is status == "completed"
+    criteria: tuple[Verdict, ...] = ()  # pass/fail verdicts (lanekeep/criteria.py), if judged
     # (nearest, farthest) look-ahead (m) of ADE / FDE, for the table's footer.
     ade_range_m: tuple[float, float] = (ADE_POINTS_M[0], ADE_POINTS_M[-1])
 
     def __post_init__(self) -> None:
         # A report read back from JSON carries a list; keep reports equal after a round trip.
         object.__setattr__(self, "ade_range_m", tuple(float(v) for v in self.ade_range_m))
+        object.__setattr__(self, "criteria", tuple(
+            v if isinstance(v, Verdict) else Verdict(**v) for v in self.criteria))
+        if self.status == "completed" and not self.completed:  # a document from before `status`
+            object.__setattr__(self, "status", "interrupted" if self.stop_reason in
+                               ("", "interrupted") else "unstable")
+        if self.status not in STATUSES:
+            raise ValueError(f"status must be one of {STATUSES}, got {self.status!r}")
+        if self.completed != (self.status == "completed"):
+            raise ValueError(f"completed = {self.completed} contradicts status {self.status!r}")
+
+    @property
+    def passed(self) -> bool:
+        """Every criterion met (True for a report not judged: no criteria)."""
+        return all(v.passed for v in self.criteria)
+
+    def failed_criteria(self) -> list[Verdict]:
+        return [v for v in self.criteria if not v.passed]
 
     def to_dict(self) -> dict:
         return asdict(self)
@@ -93,12 +137,15 @@ class EpisodeReport:
             f"car: lateral RMS {self.car_rms_cm:.1f} cm, max {self.car_max_cm:.1f} cm; "
             f"lane departures {self.lane_departures}; MMAE switches {self.mmae_switches}; "
             f"reference repairs {self.reference_repairs}; no estimate {self.no_estimate_s:.1f} s"
-            + ("" if self.completed else
-               f"  [STOPPED: partial episode: {self.stop_reason or 'interrupted'}]")
+            + ("" if self.completed else f"  [STOPPED ({self.status.replace('_', ' ')}): "
+               f"partial episode: {self.stop_reason or self.status}]")
         )
         near, far = self.ade_range_m
         lines.append(f"ADE/FDE: lane centre vs exact road geometry at x = {near:g}-{far:g} m "
                      f"ahead; FDE at {far:g} m")
+        if self.criteria:
+            lines.append(f"criteria: {'PASS' if self.passed else 'FAIL'}")
+            lines.extend("  " + v.line() for v in self.criteria)
         return "\n".join(lines)
 
 
@@ -188,7 +235,9 @@ class Metrics:
         self._no_estimate_steps += 1
 
     def report(self, scenario: str, seed: int, dt_s: float, completed: bool = True,
-               wall_s: float = 0.0, stop_reason: str = "") -> EpisodeReport:
+               wall_s: float = 0.0, stop_reason: str = "", status: str | None = None
+               ) -> EpisodeReport:
+        """The report so far; `status` defaults to "completed" / "interrupted" by `completed`."""
         sources = {}
         for name, acc in self._sources.items():
             sources[name] = SourceReport(
@@ -214,5 +263,6 @@ class Metrics:
             completed=completed,
             wall_s=wall_s,
             stop_reason=stop_reason,
+            status=status or ("completed" if completed else "interrupted"),
             ade_range_m=(float(self.ade_points_m[0]), float(self.ade_points_m[-1])),
         )

@@ -104,8 +104,12 @@ def with_metadata(document: dict, scenario, seed: int | None = None) -> dict:
 
 def report_document(report: EpisodeReport, scenario) -> dict:
     """An episode's report as written to JSON: `report.to_dict()` led by the metadata, every
-    non-finite number as None (strict JSON)."""
-    return strict(with_metadata(report.to_dict(), scenario, seed=report.seed))
+    non-finite number as None (strict JSON). A judged report (lanekeep/criteria.py) also says
+    `passed`, beside its `criteria` verdicts (name, limit, value, passed) and `status`."""
+    document = report.to_dict()
+    if report.criteria:
+        document["passed"] = report.passed
+    return strict(with_metadata(document, scenario, seed=report.seed))
 
 
 def _floats_back(cls: type, data: dict) -> dict:

@@ -316,6 +316,41 @@ class EstimationConfig:
 
 
 @dataclass(frozen=True)
+class CriteriaConfig:
+    """Pass/fail limits of an episode (`[criteria]`, judged by lanekeep/criteria.py); None =
+    not checked. An episode that leaves the road or stops early fails whatever these say."""
+
+    max_lane_departures: int | None = None  # times a wheel crossed an ego-lane boundary
+    max_car_lateral_error_m: float | None = None  # the car's largest |true offset| from centre
+    max_fused_rmse_m: float | None = None  # offset RMSE of the MMAE output ("fused")
+    # Ends the episode as off road once the car's centre is this far (m) from the ego lane's
+    # centre; None: only when all four wheels are off the paved surface (always checked).
+    off_road_distance_m: float | None = None
+
+    def __post_init__(self):
+        if self.max_lane_departures is not None and not self.max_lane_departures >= 0:
+            raise InvalidValue("max_lane_departures",
+                               f"must be >= 0, got {self.max_lane_departures}")
+        for key in ("max_car_lateral_error_m", "max_fused_rmse_m", "off_road_distance_m"):
+            value = getattr(self, key)
+            if value is not None and not (math.isfinite(value) and value > 0):
+                raise InvalidValue(key, f"must be a number > 0 (m), got {value}")
+
+
+@dataclass(frozen=True)
+class ControlConfig:
+    """Which controller turns the estimated lane into steer and throttle (`[control]`)."""
+
+    # "pid" (the paper's eq. 9, default), "stanley", an entry point of the group
+    # lanekeep.controllers, or an import path "package.module:Class" (lanekeep/controllers.py)
+    controller: str = "pid"
+
+    def __post_init__(self):
+        if not self.controller.strip():
+            raise InvalidValue("controller", "must name a controller, got an empty string")
+
+
+@dataclass(frozen=True)
 class Scenario:
     name: str
     description: str
@@ -328,8 +363,10 @@ class Scenario:
     camera: CameraConfig = field(default_factory=CameraConfig)
     conditions: Conditions = field(default_factory=Conditions)
     estimation: EstimationConfig = field(default_factory=EstimationConfig)
+    control: ControlConfig = field(default_factory=ControlConfig)  # the controller, by name
     sensors: SensorsConfig = field(default_factory=SensorsConfig)
     roadside: Roadside = field(default_factory=Roadside)  # props: lanekeep/world_props.py
+    criteria: CriteriaConfig = field(default_factory=CriteriaConfig)  # pass/fail limits
     source: str = field(default="", metadata={"toml": False})  # file it was read from
 
     def __post_init__(self):
@@ -371,6 +408,12 @@ def parse_scenario(text: str, source: str = "<string>") -> Scenario:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as err:
         raise ScenarioError(source, "", f"invalid TOML: {err}") from None
+    return scenario_from_dict(data, source)
+
+
+def scenario_from_dict(data: dict, source: str = "<dict>") -> Scenario:
+    """A scenario from a parsed TOML table, with the checks of a file (`lanekeep sweep` builds
+    each cell's table in memory: a base scenario with its parameters set)."""
     try:
         scenario = from_dict(Scenario, data, source=source)
     except ConfigError as err:
