@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 
 from lanekeep.cli import main
-from lanekeep.cli_episode import BenchJob, single_model_table, summary_table
+from lanekeep.cli_episode import BenchJob, bench_verdict, single_model_table, summary_table
 from lanekeep.criteria import evaluate, failure_message, judge
 from lanekeep.metrics import EpisodeReport, SourceReport
 from lanekeep.report_json import report_document, report_from_dict
@@ -177,3 +177,17 @@ def test_a_bad_criteria_option_is_one_line_exit_2(tmp_path, capsys, command, opt
                  "--json", str(tmp_path / "o.json")])
     _one_line(capsys, code, option, value)
     assert not (tmp_path / "o.json").exists()
+
+
+def test_a_failing_model_only_loop_is_reported_but_not_counted_in_the_exit_code():
+    """`bench --single-model`: the scenario as configured decides the exit code; a detector
+    driving alone that fails its limits is named, not counted."""
+    good = judge(_report(), LIMITS)
+    bad = judge(_report(car_max_cm=96.0), LIMITS)
+    lines, code = bench_verdict({"s": good, "s@hough": bad}, ["s"])
+    assert code == 0
+    assert lines[0].startswith("FAILED s@hough: ")
+    assert "criteria: 1 of 1 scenarios passed" in lines
+    assert "model-only loops: 0 of 1 passed (not counted in the exit code)" in lines
+    lines, code = bench_verdict({"s": bad, "s@hough": good}, ["s"])
+    assert code == 1 and "criteria: 0 of 1 scenarios passed" in lines

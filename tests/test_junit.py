@@ -110,7 +110,7 @@ def test_bench_junit_has_one_case_per_scenario_and_exits_1_on_a_failure(
     assert case["turn"].find("failure").get("message").startswith("status off_road")
     captured = capsys.readouterr()
     assert "FAILED turn: status off_road" in captured.out
-    assert "criteria: 1 of 2 episodes passed" in captured.out
+    assert "criteria: 1 of 2 scenarios passed" in captured.out
     last = captured.err.replace("\r", "\n").strip().splitlines()[-1]
     done, total = last.split(" steps")[0].split()[-1].split("/")
     assert done == total and int(total) < 160  # 2 x 80 steps planned; the turn ended early
