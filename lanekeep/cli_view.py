@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import signal
 import socket
 import subprocess
 import sys
@@ -72,7 +73,8 @@ def serve_web(path: Path, web_port: int, grpc_port: int) -> int:
     proc = subprocess.Popen(
         _viewer_command("--web-viewer", "--bind", HOST, "--web-viewer-port", str(web_port),
                         "--port", str(grpc_port), str(path)),
-        stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+        stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
+        start_new_session=True)  # its own group: `python -m rerun` runs the viewer binary
     try:
         end = time.monotonic() + START_TIMEOUT_S
         while not (_listening(web_port) and _listening(grpc_port)):
@@ -89,12 +91,23 @@ def serve_web(path: Path, web_port: int, grpc_port: int) -> int:
         proc.stderr.close()  # rerun logs on; nobody reads it now
         return 0 if proc.wait() == 0 else 1
     finally:
-        if proc.poll() is None:
-            proc.terminate()
-            try:
-                proc.wait(timeout=5)
-            except subprocess.TimeoutExpired:
-                proc.kill()
+        _stop_group(proc)
+
+
+def _stop_group(proc: subprocess.Popen) -> None:
+    """Stop the viewer and the binary `python -m rerun` started under it: terminating the
+    wrapper alone left the web viewer serving (and spinning a core) after we exited."""
+    for sig, wait_s in ((signal.SIGTERM, 5.0), (signal.SIGKILL, 5.0)):
+        try:
+            os.killpg(proc.pid, sig)
+        except ProcessLookupError:
+            return  # the whole group is gone
+        try:
+            proc.wait(timeout=wait_s)
+        except subprocess.TimeoutExpired:
+            continue
+        if sig == signal.SIGTERM:
+            time.sleep(0.2)  # the binary ends after its wrapper; a last SIGKILL finds none
 
 
 def open_native(path: Path) -> int:

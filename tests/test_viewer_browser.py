@@ -25,6 +25,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from lanekeep import cli_view
+
 CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
 pytestmark = [
     pytest.mark.slow,
@@ -175,3 +177,8 @@ def test_web_viewer_draws_every_panel(tmp_path):
                 except subprocess.TimeoutExpired:
                     proc.kill()
         shutil.rmtree(profile, ignore_errors=True)
+    # Stopping `lanekeep view` stops the viewer binary under it too (once it kept serving).
+    deadline = time.monotonic() + 10
+    while cli_view._listening(web_port) and time.monotonic() < deadline:
+        time.sleep(0.2)
+    assert not cli_view._listening(web_port), "the web viewer outlived `lanekeep view`"
