@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 
 from lanekeep.cli import main
-from lanekeep.sweep_spec import SweepError, parse_sweep
+from lanekeep.sweep_spec import SweepError, check_values, parse_sweep
 
 pq = pytest.importorskip("pyarrow.parquet")
 
@@ -208,3 +208,16 @@ def test_local_workers_and_ray_give_identical_rows(tmp_path):
         assert a.pop("wall_s") > 0 and b.pop("wall_s") > 0
         assert a == b
     assert all(r["status"] == "completed" for r in local)
+
+
+EXAMPLE_SWEEPS = sorted(p for p in (Path(__file__).resolve().parents[1] / "examples" / "sweeps")
+                        .glob("*.toml") if "[parameters]" in p.read_text(encoding="utf-8"))
+
+
+@pytest.mark.parametrize("path", EXAMPLE_SWEEPS, ids=lambda p: p.name)
+def test_every_example_sweep_file_is_valid(path):
+    """The shipped example sweeps (not their base scenarios) expand into cells that pass the
+    scenario checks."""
+    spec = parse_sweep(path.read_text(encoding="utf-8"), str(path))
+    check_values(spec)
+    assert len(EXAMPLE_SWEEPS) >= 2 and spec.cells()
