@@ -25,11 +25,14 @@ from lanekeep.weather_effects import needs_depth
 
 # Geom groups (see mjcf/car.xml and lanekeep/world.py).
 GROUP_WORLD = 0
-GROUP_MARKING = 1
-GROUP_CAR_BODY = 2
-GROUP_CAR_COLLISION = 3
+GROUP_MARKING = 1  # paint drawn as geometry in both renders: raised dots, worn paint
+GROUP_CAR_BODY = 2  # the ego car's body and tyres: seen by neither camera
+GROUP_MARKING_LABEL = 3  # fresh paint geometry: the segmentation render only
 GROUP_HOOD = 4  # the ego car's hood: seen by the front camera when `show_hood` is on
-GROUP_SHADOW = 5  # translucent shadow geoms: hidden from the segmentation render
+# Translucent geoms of the RGB render only: shadows, puddles, snow bands and the filtered
+# fresh paint (lanekeep/paint_filter.py); hidden from the segmentation render.
+GROUP_RGB_OVERLAY = 5
+GROUP_SHADOW = GROUP_RGB_OVERLAY
 
 
 def camera_from_model(model: mujoco.MjModel, name: str, width: int = 1280,
@@ -136,10 +139,9 @@ class CameraRig:
             rgb, seg = mujoco.MjvOption(), mujoco.MjvOption()
             for option in (rgb, seg):
                 option.geomgroup[GROUP_CAR_BODY] = 0
-                option.geomgroup[GROUP_CAR_COLLISION] = 0
-                option.geomgroup[GROUP_SHADOW] = 1
                 option.geomgroup[GROUP_HOOD] = int(self.settings.show_hood and name == "front")
-            seg.geomgroup[GROUP_SHADOW] = 0
+            rgb.geomgroup[GROUP_RGB_OVERLAY], rgb.geomgroup[GROUP_MARKING_LABEL] = 1, 0
+            seg.geomgroup[GROUP_RGB_OVERLAY], seg.geomgroup[GROUP_MARKING_LABEL] = 0, 1
             self._rgb_option[name], self._seg_option[name] = rgb, seg
         self._depth_raw = np.empty((h, w), np.float32)
         extent = model.stat.extent

@@ -6,6 +6,8 @@ The car comes from mjcf/car.xml; everything else is added procedurally:
     gravel shoulders, and a grass ground plane that also carries the tyre contacts;
   - lane markings: one mesh geom per boundary, road segment and paint brightness, so that the
     segmentation render gives exact per-boundary masks (`World.marking_boundary[geom_id]`);
+    fresh paint strips are drawn in the RGB render as filtered ribbons instead
+    (lanekeep/paint_filter.py: a distant line stays a line);
   - lights, a gradient sky and fog as lanekeep/world_appearance.py decides from the scenario.
 Road and markings are visual only (contype 0): the flat ground plane carries the car, since
 MuJoCo collides meshes by their convex hull, which for a curved ribbon is meaningless.
@@ -21,9 +23,9 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from lanekeep import pavement, textures
+from lanekeep import paint_filter, pavement, textures
 from lanekeep.camera_mount import apply_camera_mount
-from lanekeep.cameras import GROUP_MARKING, GROUP_WORLD
+from lanekeep.cameras import GROUP_MARKING, GROUP_MARKING_LABEL, GROUP_RGB_OVERLAY, GROUP_WORLD
 from lanekeep.markings import MarkingPiece
 from lanekeep.mjcf import CAR_XML
 from lanekeep.pavement import LANE_U, SLAB_M
@@ -227,11 +229,15 @@ def _dot_mesh(road: Road, piece: MarkingPiece, sides: int = 8) -> Ribbon:
 
 def _add_markings(
     spec: mujoco.MjSpec, road: Road, layout: WorldLayout
-) -> dict[str, int]:
-    """Marking meshes grouped by (boundary, segment, brightness level); name -> boundary.
-    Faded levels use the worn paint texture (asphalt showing through pits and scuffs)."""
+) -> tuple[dict[str, int], set[str]]:
+    """Marking meshes grouped by (boundary, segment, brightness level); returns name ->
+    boundary, and the names of the filtered RGB ribbons. Faded levels use the worn paint
+    texture (asphalt showing through pits and scuffs) and stay geometry in both renders, as
+    do raised dots; fresh strips are geometry for the segmentation only (GROUP_MARKING_LABEL)
+    and a filtered ribbon for the RGB render (GROUP_RGB_OVERLAY, lanekeep/paint_filter.py)."""
     styles = road.markings
     groups: dict[tuple[int, int, int], list[Ribbon]] = {}
+    filtered: dict[tuple[int, int, int], list[Ribbon]] = {}
     bounds = road.segment_bounds()
     starts = np.array([b[0] for b in bounds])
     levels = layout.paint_brightness_levels
@@ -243,20 +249,38 @@ def _add_markings(
             road, piece.s_start_m, piece.s_end_m, piece.r_m - half, piece.r_m + half,
             MARKING_Z_M, tile_m=1.0, max_step_m=1.0)
         groups.setdefault((piece.boundary, segment, level), []).append(strip)
+        if not piece.dot and level == levels - 1:
+            filtered.setdefault((piece.boundary, segment, level), []).append(
+                paint_filter.filtered_strip(road, piece.s_start_m, piece.s_end_m, piece.r_m,
+                                            piece.width_m, MARKING_Z_M))
+    if filtered:
+        paint_filter.add_paint_texture(spec, "paint_filtered")
     names: dict[str, int] = {}
+    ribbons: set[str] = set()
     for (boundary, segment, level), strips in sorted(groups.items()):
         colour = np.asarray(styles[boundary].colour)
         brightness = 0.35 + 0.65 * level / max(levels - 1, 1)
         material = f"paint_b{boundary}_l{level}"
+        key = (boundary, segment, level)
         if material not in {m.name for m in spec.materials}:
             add_material(
                 spec, material, "paint" if level == levels - 1 else "paint_worn",
                 rgba=[*(colour * brightness), 1.0], specular=0.2, shininess=0.3,
             )
+            if key in filtered:
+                add_material(spec, f"{material}_filtered", "paint_filtered",
+                             rgba=[*(colour * brightness), paint_filter.PAINT_ALPHA],
+                             specular=0.2, shininess=0.3)
         name = f"marking_b{boundary}_s{segment}_l{level}"
-        add_mesh_geom(spec, name, Ribbon.concatenate(strips), material, GROUP_MARKING)
+        label_only = key in filtered and len(filtered[key]) == len(strips)
+        add_mesh_geom(spec, name, Ribbon.concatenate(strips), material,
+                      GROUP_MARKING_LABEL if label_only else GROUP_MARKING)
         names[name] = boundary
-    return names
+        if label_only:
+            add_mesh_geom(spec, f"{name}_rgb", Ribbon.concatenate(filtered[key]),
+                          f"{material}_filtered", GROUP_RGB_OVERLAY)
+            ribbons.add(f"{name}_rgb")
+    return names, ribbons
 
 
 def build_spec(
@@ -290,8 +314,10 @@ def build_spec(
                  specular=0.0)
     _add_environment(spec, road, scenario, look.lighting)
     _add_road_surface(spec, road, layout, look.asphalt_grid_step_m)
-    marking_names = _add_markings(spec, road, layout)
-    return spec, marking_names, add_conditions(spec, scenario, road, layout)
+    marking_names, ribbons = _add_markings(spec, road, layout)
+    conditions = add_conditions(spec, scenario, road, layout)
+    paint_filter.draw_overlays_last(spec, GROUP_RGB_OVERLAY, ribbons)
+    return spec, marking_names, conditions
 
 
 # "conditions.vehicles[1].lane = 5 not in 0..1", "conditions.shadows[0]: with this sun ...":

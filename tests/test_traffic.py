@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from lanekeep.cameras import GROUP_SHADOW, CameraRig, RenderSettings
+from lanekeep.paint_filter import FAR_DEPTH_M
 from lanekeep.scenario import VehicleSpec, load_scenario
 from lanekeep.vehicle_assets import kind_of, vehicle_parts
 from lanekeep.world import build
@@ -43,9 +44,13 @@ def _lowest_z(model: mujoco.MjModel, data: mujoco.MjData, g: int) -> float:
 
 
 def _mesh_points(model: mujoco.MjModel, data: mujoco.MjData, g: int) -> np.ndarray:
+    """World points of a mesh geom, without the buried triangle that orders an overlay's
+    drawing (lanekeep/paint_filter.py)."""
     mesh = model.geom_dataid[g]
     adr, n = model.mesh_vertadr[mesh], model.mesh_vertnum[mesh]
-    return data.geom_xpos[g] + model.mesh_vert[adr:adr + n] @ data.geom_xmat[g].reshape(3, 3).T
+    local = model.mesh_vert[adr:adr + n]
+    points = data.geom_xpos[g] + local @ data.geom_xmat[g].reshape(3, 3).T
+    return points[points[:, 2] > -FAR_DEPTH_M / 2]
 
 
 def _wheels(model, data, body):

@@ -7,7 +7,12 @@ Seeded (initial weights, shuffling, augmentation): the same data and arguments g
 weights on the same machine. Each epoch goes once over the training sequences (T frames each,
 from a zero state, so the first frame of every sequence trains the single-frame case), each
 sequence flipped left-right with probability 0.5 (slots swap sides) and given a random
-exposure, contrast, tint and noise: real cameras differ in all of them. After every epoch the
+exposure, contrast, tint and noise: real cameras differ in all of them. A share of the
+sequences (`--occlusion`, default 0.3) also gets opaque vehicle-sized blocks over 10-60% of its
+marking pixels, made by the same generator as `lanekeep eval`'s occlusion sets
+(`lanekeep/eval_sets.occlude`, training seeds, never the eval's): traffic hides paint on real
+roads far more often than the simulated worlds' 0-4 vehicles per 100 m do, and the labels
+stay, as TuSimple keeps a lane labelled behind a car. After every epoch the
 validation split is scored and the best epoch's weights are kept (checkpoint choice on the
 simulated validation split, never on real photos):
 
@@ -31,7 +36,9 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from lanekeep.dataset import LABEL_HEIGHT, LABEL_WIDTH, frame_label, load_split, read_recipe
+from lanekeep.dataset import (LABEL_HEIGHT, LABEL_WIDTH, camera_from_vector, frame_label,
+                              load_split, read_recipe)
+from lanekeep.eval_sets import occlude
 from lanekeep.detectors.lanenet import save_weights
 from lanekeep.detectors.lanenet_model import LaneNet, LaneNetConfig, architecture_summary
 from lanekeep.detectors.lanenet_targets import CellGrid, LossWeights, Targets, encode, lanenet_loss
@@ -81,6 +88,20 @@ def augment(frames: torch.Tensor, gen: torch.Generator) -> torch.Tensor:
     x = torch.where(grey, x.mean(dim=2, keepdim=True).expand_as(x), x)
     x = x + u(0.0, 0.03, 1, 1, 1, 1) * torch.randn(x.shape, generator=gen)
     return x.clamp(0.0, 1.0)
+
+
+def add_occluders(frames: np.ndarray, paint: np.ndarray, cameras: np.ndarray, share: float,
+                  rng: np.random.Generator) -> np.ndarray:
+    """uint8 (B, T, H, W, 3) with occluders over U(0.1, 0.6) of the marking pixels of a
+    `share` of the sequences (each keeps its blocks from frame to frame, as traffic does)."""
+    out = frames.copy()
+    height = frames.shape[2]
+    for b in np.flatnonzero(rng.random(len(frames)) < share):
+        cam = camera_from_vector(cameras[b])
+        horizon = (cam.horizon_row() + 0.5) * height / cam.height - 0.5
+        out[b], _ = occlude(frames[b], paint[b], horizon, cam.height_m,
+                            float(rng.uniform(0.1, 0.6)), rng)
+    return out
 
 
 def point_accuracy(obj_logits: torch.Tensor, x_offset: torch.Tensor, slot_logits: torch.Tensor,
@@ -138,6 +159,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--threads", type=int, default=2)
     parser.add_argument("--limit", type=int, default=0, help="use only N training sequences")
+    parser.add_argument("--occlusion", type=float, default=0.3,
+                        help="share of training sequences given occluders (0 = none)")
     args = parser.parse_args(argv)
     from tqdm import tqdm
 
@@ -179,7 +202,11 @@ def main(argv: list[str] | None = None) -> int:
         for step in bar:
             idx = order[step * args.batch:(step + 1) * args.batch]
             flip = flips[step * args.batch:(step + 1) * args.batch]
-            frames = torch.from_numpy(train["frames"][idx]).permute(0, 1, 4, 2, 3)
+            frames = train["frames"][idx]
+            if args.occlusion > 0.0:
+                frames = add_occluders(frames, train["paint"][idx], train["camera"][idx],
+                                       args.occlusion, rng)
+            frames = torch.from_numpy(frames).permute(0, 1, 4, 2, 3)
             frames = torch.where(torch.from_numpy(flip).view(-1, 1, 1, 1, 1),
                                  frames.flip(-1), frames)
             tg = {k: torch.where(torch.from_numpy(flip).view(-1, 1, 1, 1),
