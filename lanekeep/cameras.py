@@ -21,6 +21,7 @@ import numpy as np
 
 from lanekeep.camera_model import CameraModel
 from lanekeep.gl_backend import RendererUnavailable
+from lanekeep.lens import Lens, is_distorted
 from lanekeep.weather_effects import needs_depth
 
 # Geom groups (see mjcf/car.xml and lanekeep/world.py).
@@ -79,6 +80,9 @@ class RenderSettings:
     # frame). Episodes turn it on for fog and rain and then do the fog in image space
     # (lanekeep/weather_effects.py), with MuJoCo's linear fog off.
     depth: bool = False
+    # OpenCV lens distortion (k1, k2, p1, p2, k3) per camera name, applied to every render
+    # (lanekeep/lens.py); a camera not named, or all zero: a pinhole.
+    distortion: tuple[tuple[str, tuple[float, ...]], ...] = ()
 
     @classmethod
     def of(cls, scenario, width: int | None = None, height: int | None = None
@@ -87,7 +91,9 @@ class RenderSettings:
         depth = needs_depth(scenario.conditions)
         return cls(width or scenario.camera.width, height or scenario.camera.height,
                    scenario.camera.shadows, fog=scenario.conditions.fog > 0.0 and not depth,
-                   show_hood=scenario.camera.show_hood, depth=depth)
+                   show_hood=scenario.camera.show_hood, depth=depth,
+                   distortion=(("front", tuple(scenario.camera.distortion)),
+                               ("rear", tuple(scenario.camera.rear_distortion))))
 
 
 # Set while no MuJoCo render runs in this process. Mesa's llvmpipe rasterises with a thread per
@@ -128,6 +134,10 @@ class CameraRig:
                 f"{model.vis.global_.offwidth}x{model.vis.global_.offheight}"
             )
         self.cameras = {n: camera_from_model(model, n, w, h) for n in self.CAMERA_NAMES}
+        # With a lens, the delivered images and cameras are the distorted ones (lens.py).
+        self.lenses: dict[str, Lens] = {n: Lens(self.cameras[n], d)
+                                        for n, d in self.settings.distortion if is_distorted(d)}
+        self.cameras.update({n: lens.camera for n, lens in self.lenses.items()})
         try:
             self._renderers = {
                 n: mujoco.Renderer(model, height=h, width=w) for n in self.CAMERA_NAMES
@@ -149,6 +159,11 @@ class CameraRig:
         self._zfar = np.float32(model.vis.map.zfar * extent)
         self._closed = False
 
+    def distortion(self, camera: str) -> np.ndarray | None:
+        """A camera's lens coefficients (OpenCV), for its detectors; None for a pinhole."""
+        lens = self.lenses.get(camera)
+        return None if lens is None else lens.coefficients.copy()
+
     def render_rgb(self, data: mujoco.MjData, camera: str) -> np.ndarray:
         """RGB uint8 image (H, W, 3) of one camera."""
         renderer = self._renderers[camera]
@@ -157,7 +172,9 @@ class CameraRig:
         renderer.scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = self.settings.shadows
         renderer.scene.flags[mujoco.mjtRndFlag.mjRND_FOG] = self.settings.fog
         with _rendering():
-            return renderer.render()
+            rgb = renderer.render()
+        lens = self.lenses.get(camera)
+        return rgb if lens is None else lens(rgb)
 
     def render_rgb_depth(self, data: mujoco.MjData, camera: str, step_px: int = 4
                          ) -> tuple[np.ndarray, np.ndarray]:
@@ -168,7 +185,10 @@ class CameraRig:
         with _rendering():
             mujoco.mjr_readPixels(None, self._depth_raw, renderer._rect, renderer._mjr_context)
         # The buffer is bottom-up and in reversed-Z (as mujoco.Renderer linearises it).
-        raw = self._depth_raw[::-1][step_px // 2::step_px, step_px // 2::step_px]
+        raw = self._depth_raw[::-1]
+        if camera in self.lenses:
+            raw = self.lenses[camera](np.ascontiguousarray(raw), nearest=True)
+        raw = raw[step_px // 2::step_px, step_px // 2::step_px]
         near, far = self._znear, self._zfar
         c = np.float32(0.5) * (far + near) / (far - near) - np.float32(0.5)
         d = far * near / (far - near)
@@ -187,6 +207,8 @@ class CameraRig:
             renderer.disable_segmentation_rendering()
         ids = seg[..., 0].astype(np.int32)
         ids[seg[..., 1] != int(mujoco.mjtObj.mjOBJ_GEOM)] = -1
+        if camera in self.lenses:  # ids survive float32 exactly; nearest never mixes two
+            ids = self.lenses[camera](ids.astype(np.float32), nearest=True).astype(np.int32)
         return ids
 
     def close(self) -> None:

@@ -126,11 +126,14 @@ class Episode:
         self.dt_s = scenario.control_period_s
         self.front: dict[str, Detector] = {
             name: make_detector(name, self.rig.cameras["front"],
-                                front_detector_config(name, est.mode))
+                                front_detector_config(name, est.mode),
+                                self.rig.distortion("front"))
             for name in est.front_detectors
         }
         self.reference: Detector = make_detector(est.reference_detector,
-                                                   self.rig.cameras[est.reference_camera])
+                                                   self.rig.cameras[est.reference_camera],
+                                                   distortion=self.rig.distortion(
+                                                       est.reference_camera))
         self.estimator = LaneEstimator(
             list(self.front),
             estimator_settings(est),

@@ -124,6 +124,11 @@ class CameraConfig:
     roll_deg: float = 0.0  # about each camera's optical axis, + = image turns anticlockwise
     yaw_offset_deg: float = 0.0  # about the car's vertical axis, + = towards the car's left
     fov_scale: float = 1.0  # scales tan(field of view / 2): < 1 a longer lens
+    # OpenCV lens distortion k1, k2, p1, p2, k3 of the front and the rear camera
+    # (lanekeep/lens.py); all zero = a pinhole. The detectors are given the same
+    # coefficients, as from a camera file.
+    distortion: tuple[float, float, float, float, float] = (0.0, 0.0, 0.0, 0.0, 0.0)
+    rear_distortion: tuple[float, float, float, float, float] = (0.0, 0.0, 0.0, 0.0, 0.0)
 
     def __post_init__(self):
         if not (self.mount_height_m == 0.0 or 0.5 <= self.mount_height_m <= 4.0):
@@ -149,6 +154,12 @@ class CameraConfig:
         if not (self.jpeg_quality == 0 or 10 <= self.jpeg_quality <= 100):
             raise InvalidValue("jpeg_quality",
                                f"must be 0 (off) or 10..100, got {self.jpeg_quality}")
+        for key in ("distortion", "rear_distortion"):
+            value = getattr(self, key)
+            if len(value) != 5 or not all(
+                    math.isfinite(float(d)) and abs(float(d)) <= 2.0 for d in value):
+                raise InvalidValue(key, "must be 5 numbers k1, k2, p1, p2, k3 in [-2, 2], "
+                                        f"got {list(value)}")
         if self.antialias_samples not in (0, 2, 4, 8):
             raise InvalidValue("antialias_samples",
                                f"must be 0, 2, 4 or 8, got {self.antialias_samples}")

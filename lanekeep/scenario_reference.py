@@ -117,6 +117,14 @@ DESCRIPTIONS: dict[str, tuple[str, str]] = {
                               "-30..30"),
     "camera.fov_scale": ("Scales tan(field of view / 2); < 1 = a longer lens (the car's: "
                          "120 deg horizontal).", "0.3..1.5"),
+    "camera.distortion": ("OpenCV lens distortion k1, k2, p1, p2, k3 of the front camera; "
+                          "every image is bent by it and the detectors are given it. All zero "
+                          "= a pinhole; k1 < 0 = barrel (wide lenses). The delivered focal "
+                          "length grows by the least factor that keeps the image inside the "
+                          "render; coefficients that fold the image are an error.",
+                          "5 numbers, each -2..2"),
+    "camera.rear_distortion": ("The same for the rear camera (150 deg wide: the polynomial "
+                               "model folds early there).", "5 numbers, each -2..2"),
     "conditions": ("Light, weather, surface, traffic and image conditions; all off by "
                    "default.", ""),
     "conditions.time_of_day": ("Light; headlights are on unless day.", _one_of(TIMES_OF_DAY)),

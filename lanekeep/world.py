@@ -25,7 +25,14 @@ import numpy as np
 
 from lanekeep import paint_filter, pavement, textures
 from lanekeep.camera_mount import apply_camera_mount
-from lanekeep.cameras import GROUP_MARKING, GROUP_MARKING_LABEL, GROUP_RGB_OVERLAY, GROUP_WORLD
+from lanekeep.cameras import (
+    GROUP_MARKING,
+    GROUP_MARKING_LABEL,
+    GROUP_RGB_OVERLAY,
+    GROUP_WORLD,
+    front_and_rear,
+)
+from lanekeep.lens import is_distorted, lens_zoom
 from lanekeep.markings import MarkingPiece
 from lanekeep.mjcf import CAR_XML
 from lanekeep.pavement import LANE_U, SLAB_M
@@ -380,6 +387,11 @@ def build(scenario: Scenario, layout: WorldLayout | None = None) -> World:
         spec, marking_names, conditions = build_spec(scenario, road, layout)
         model = spec.compile()
         apply_camera_mount(model, scenario.camera)
+        cameras = front_and_rear(model, scenario.camera.width, scenario.camera.height)
+        for name, coefficients in (("front", scenario.camera.distortion),
+                                   ("rear", scenario.camera.rear_distortion)):
+            if is_distorted(coefficients):  # a folding lens, named before any render
+                lens_zoom(cameras[name], coefficients)
         _check_control_period(scenario, model.opt.timestep)
     except ScenarioError:
         raise
