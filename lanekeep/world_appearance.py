@@ -19,6 +19,8 @@ from lanekeep.world_lighting import (
     GRID_STEP_M,
     LIGHTING,
     SKY_DAY,
+    SKY_SCATTER,
+    direct_sun_share,
     fog_visibility_m,
     sun_direction,
 )
@@ -80,10 +82,15 @@ def lighting_of(cond: Conditions, road: Road) -> Lighting:
         fog_end = FOG_END_OF_VISIBILITY * fog_visibility_m(cond.fog) / MODEL_EXTENT_M
     else:
         fog_start, fog_end = 1e3, 2e3  # beyond zfar: no fog, the render flag can stay on
+    # Under fog the sun's direct light is scattered into diffuse skylight (world_lighting).
+    direct = direct_sun_share(cond)
+    sun_ambient = tuple(np.asarray(sun_ambient) + (1.0 - direct) * SKY_SCATTER
+                        * np.asarray(sun_diffuse))
+    sun_diffuse = tuple(direct * np.asarray(sun_diffuse))
     to_sun = sun_direction(cond, road)
     return Lighting(
-        sun_dir=tuple((-to_sun).tolist()), sun_diffuse=tuple(sun_diffuse),
-        sun_ambient=tuple(sun_ambient), sun_specular=glare,
+        sun_dir=tuple((-to_sun).tolist()), sun_diffuse=tuple(float(v) for v in sun_diffuse),
+        sun_ambient=tuple(float(v) for v in sun_ambient), sun_specular=glare * direct,
         headlight_ambient=head_amb, headlight_diffuse=head_dif,
         sky_zenith=tuple(float(v) for v in zenith), sky_horizon=tuple(float(v) for v in horizon),
         fog_start=fog_start, fog_end=fog_end,

@@ -38,11 +38,27 @@ FOG_END_OF_VISIBILITY = 0.6  # linear fog ends at this fraction of the visibilit
 
 GRID_STEP_M = 0.5  # lateral/along step of the asphalt mesh under headlights
 
+# Fog is a layer the sun shines through: its direct light falls as exp(-3 path / V), the path
+# being FOG_LAYER_M over the sine of the sun's elevation, and SKY_SCATTER of what is lost comes
+# down as diffuse skylight (the rest goes back up or is absorbed). At fog 1 (V = 25 m) the sun
+# is gone and shadows with it, as under real fog; at a light fog (V = 400 m) about half stays.
+FOG_LAYER_M = 60.0
+SKY_SCATTER = 0.6
+
 
 def fog_visibility_m(fog: float) -> float:
     """Meteorological visibility (5% contrast) of a fog density in (0, 1]."""
     near, far = FOG_VISIBILITY_M
     return near * (far / near) ** fog
+
+
+def direct_sun_share(conditions: Conditions) -> float:
+    """The share of the sun's direct light that the scenario's fog lets through (1 without
+    fog); the sun's diffuse light and the props' cast shadows are scaled by it."""
+    if conditions.fog <= 0.0:
+        return 1.0
+    sin_el = max(math.sin(math.radians(conditions.sun_elevation_deg)), 0.05)
+    return math.exp(-3.0 * FOG_LAYER_M / (fog_visibility_m(conditions.fog) * sin_el))
 
 
 def sun_direction(conditions: Conditions, road: Road) -> np.ndarray:

@@ -25,6 +25,7 @@ from lanekeep.road import Road
 from lanekeep.road_mesh import Ribbon
 from lanekeep.roadside_config import SIDES, Roadside
 from lanekeep.scenario import Scenario
+from lanekeep.world_lighting import direct_sun_share
 from lanekeep.world_parts import OVERLAY_Z_M, ConditionsInfo, WorldLayout, add_mesh_geom
 from lanekeep.world_roadside import _polygon_mesh, cast_shadow, disjoint_pieces, overlay_alpha
 
@@ -61,18 +62,20 @@ def add_props(spec: mujoco.MjSpec, scenario: Scenario, road: Road, to_sun: np.nd
         add_mesh_geom(spec, material.replace("prop_", "props_", 1), Ribbon.concatenate(meshes),
                       material, GROUP_WORLD)
     if props.casters and scenario.conditions.time_of_day != "night":
-        _add_shadows(spec, props, to_sun, info, cfg)
+        _add_shadows(spec, props, to_sun, info, cfg, direct_sun_share(scenario.conditions))
 
 
 def _add_shadows(spec: mujoco.MjSpec, props: assets.Props, to_sun: np.ndarray,
-                 info: ConditionsInfo, cfg: Roadside) -> None:
+                 info: ConditionsInfo, cfg: Roadside, direct_share: float) -> None:
+    """The props' cast shadows, as dark as the sun's direct light makes them (fog scatters it:
+    world_lighting.direct_sun_share)."""
     polygons = [cast_shadow(points, to_sun) for points in props.casters]
     polygons = [p for p in polygons if len(p) >= 3]
     earlier = list(info.shadow_polygons)
     pieces = disjoint_pieces(earlier + polygons)[len(disjoint_pieces(earlier)):]
     if not pieces:
         return
-    alpha = overlay_alpha(cfg.shadow_darkness)
+    alpha = overlay_alpha(cfg.shadow_darkness * direct_share)
     spec.add_material(name="props_shadow", rgba=[0.0, 0.0, 0.0, alpha], specular=0.0,
                       shininess=0.0)
     add_mesh_geom(spec, "props_shadow", _polygon_mesh(pieces, OVERLAY_Z_M), "props_shadow",
