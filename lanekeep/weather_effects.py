@@ -58,6 +58,18 @@ def focus_of_expansion(camera: CameraModel, forward: bool) -> np.ndarray:
     return np.asarray(uv, dtype=float).reshape(2)
 
 
+def _enlarged(small: np.ndarray, factor: int, x0: int, x1: int, y0: int, y1: int
+              ) -> np.ndarray:
+    """Rows y0..y1 and columns x0..x1 of `small` enlarged `factor` times, sampled as
+    cv2.resize's bilinear enlargement samples it (pixel centres aligned)."""
+    xs = ((np.arange(x0, x1, dtype=np.float32) + 0.5) / factor - 0.5)[None, :]
+    ys = ((np.arange(y0, y1, dtype=np.float32) + 0.5) / factor - 0.5)[:, None]
+    map_x = np.broadcast_to(xs, (y1 - y0, x1 - x0))
+    map_y = np.broadcast_to(ys, (y1 - y0, x1 - x0))
+    return cv2.remap(small, np.ascontiguousarray(map_x), np.ascontiguousarray(map_y),
+                     cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+
+
 class Weather:
     """The weather of one scenario for one camera (`camera`: its model at the frame size)."""
 
@@ -157,12 +169,15 @@ class Weather:
     def rain_alpha(self, depth_m: np.ndarray, rng: np.random.Generator,
                    speed_mps: float) -> np.ndarray:
         """Streaks in depth layers, hidden behind nearer scene: their share of the airlight
-        (uint8, 1/255)."""
+        (uint8, 1/255). A streak is drawn when the scene lies beyond its layer at both its
+        ends and its middle (the depth map's pixels there): one test per streak instead of a
+        full-frame mask per layer; a streak may cross a pole thinner than itself."""
         amount = self.conditions.rain
         h, w = self.height, self.width
         f = self.camera.fy
         sign = 1.0 if self.forward else -1.0  # away from / towards the focus
         alpha = np.zeros((h, w), np.uint8)
+        dh, dw = depth_m.shape
         for (near, far), count in zip(RAIN_LAYERS_M, RAIN_STREAKS_PER_LAYER, strict=True):
             n = int(count * amount * (w * h) / (1280 * 720))
             z = rng.uniform(near, far, n)
@@ -170,35 +185,40 @@ class Weather:
             velocity = sign * (p0 - self.foe) * abs(speed_mps)
             velocity[:, 1] += f * RAIN_FALL_MPS
             p1 = p0 + velocity * (EXPOSURE_S / z)[:, None]
-            lines = np.stack([p0, p1], 1).round().astype(np.int32)
-            layer = np.zeros((h, w), np.uint8)
+            visible = np.ones(n, bool)
+            for t in (0.0, 0.5, 1.0):
+                q = p0 + t * (p1 - p0)
+                col = np.clip((q[:, 0] // DEPTH_STEP_PX).astype(int), 0, dw - 1)
+                row = np.clip((q[:, 1] // DEPTH_STEP_PX).astype(int), 0, dh - 1)
+                visible &= depth_m[row, col] > near  # the scene lies beyond the layer
+            lines = np.stack([p0, p1], 1)[visible].round().astype(np.int32)
             bright = int(round(255 * (0.15 + 0.25 * amount) * 1.8 / (1.0 + near)))
-            cv2.polylines(layer, list(lines), False, bright, 1, cv2.LINE_AA)
-            behind = np.where(depth_m > near, 255, 0).astype(np.uint8)  # scene beyond the layer
-            alpha = cv2.max(alpha, cv2.min(layer, self._full(behind, cv2.INTER_NEAREST)))
+            cv2.polylines(alpha, list(lines), False, bright, 1, cv2.LINE_AA)
         return cv2.GaussianBlur(alpha, (3, 5), 0)
 
     def lens_drops(self, image: np.ndarray, rng: np.random.Generator) -> np.ndarray:
-        """Water drops on the lens: soft discs showing a blurred, brightened view."""
+        """Water drops on the lens: soft discs showing a blurred, brightened view. The blurred
+        view (1/8 size) and the discs' mask (1/4 size) are enlarged only around each drop."""
         if len(self.drops) == 0:
             return image
         self.drops[:, 1] += rng.uniform(0.0, 1.5, len(self.drops)) * self.scale  # slide down
         gone = self.drops[:, 1] - self.drops[:, 2] > self.height
         self.drops[gone, 1] = -self.drops[gone, 2]
-        small = cv2.resize(image, (self.width // 8, self.height // 8), interpolation=cv2.INTER_AREA)
-        blurred = self._full(cv2.blur(small, (3, 3)))
-        blurred = cv2.convertScaleAbs(blurred, alpha=1.1, beta=12)
+        small = cv2.blur(cv2.resize(image, (self.width // 8, self.height // 8),
+                                    interpolation=cv2.INTER_AREA), (3, 3))
         mask = np.zeros((self.height // 4, self.width // 4), np.uint8)
         for x, y, r in self.drops:
             cv2.circle(mask, (int(x / 4), int(y / 4)), max(1, int(r / 4)), 255, -1, cv2.LINE_AA)
-        mask = self._full(cv2.blur(mask, (3, 3)))
+        mask = cv2.blur(mask, (3, 3))
         out = image.copy()
         for x, y, r in self.drops:  # blend only around each drop
             x0, y0 = max(0, int(x - r - 6)), max(0, int(y - r - 6))
             x1, y1 = min(self.width, int(x + r + 7)), min(self.height, int(y + r + 7))
             if x1 > x0 and y1 > y0:
-                out[y0:y1, x0:x1] = self._blend(image[y0:y1, x0:x1], blurred[y0:y1, x0:x1],
-                                                mask[y0:y1, x0:x1])
+                blurred = cv2.convertScaleAbs(_enlarged(small, 8, x0, x1, y0, y1), alpha=1.1,
+                                              beta=12)
+                out[y0:y1, x0:x1] = self._blend(image[y0:y1, x0:x1], blurred,
+                                                _enlarged(mask, 4, x0, x1, y0, y1))
         return out
 
     def snow(self, image: np.ndarray, rng: np.random.Generator) -> np.ndarray:
