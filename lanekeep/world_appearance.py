@@ -8,6 +8,7 @@ patches another's elements by name afterwards.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -82,9 +83,11 @@ def lighting_of(cond: Conditions, road: Road) -> Lighting:
         fog_end = FOG_END_OF_VISIBILITY * fog_visibility_m(cond.fog) / MODEL_EXTENT_M
     else:
         fog_start, fog_end = 1e3, 2e3  # beyond zfar: no fog, the render flag can stay on
-    # Under fog the sun's direct light is scattered into diffuse skylight (world_lighting).
+    # Under fog the sun's direct light is scattered into diffuse skylight (world_lighting):
+    # what it took from a horizontal surface (diffuse x sin elevation) comes back as ambient.
     direct = direct_sun_share(cond)
-    sun_ambient = tuple(np.asarray(sun_ambient) + (1.0 - direct) * SKY_SCATTER
+    on_ground = max(math.sin(math.radians(cond.sun_elevation_deg)), 0.0)
+    sun_ambient = tuple(np.asarray(sun_ambient) + (1.0 - direct) * SKY_SCATTER * on_ground
                         * np.asarray(sun_diffuse))
     sun_diffuse = tuple(direct * np.asarray(sun_diffuse))
     to_sun = sun_direction(cond, road)

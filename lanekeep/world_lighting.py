@@ -40,7 +40,8 @@ GRID_STEP_M = 0.5  # lateral/along step of the asphalt mesh under headlights
 
 # Fog is a layer the sun shines through: its direct light falls as exp(-3 path / V), the path
 # being FOG_LAYER_M over the sine of the sun's elevation, and SKY_SCATTER of what is lost comes
-# down as diffuse skylight (the rest goes back up or is absorbed). At fog 1 (V = 25 m) the sun
+# down as diffuse skylight (the rest goes back up or is absorbed), in proportion to what the
+# sun gave a horizontal surface (diffuse x sin elevation). At fog 1 (V = 25 m) the sun
 # is gone and shadows with it, as under real fog; at a light fog (V = 400 m) about half stays.
 FOG_LAYER_M = 60.0
 SKY_SCATTER = 0.6

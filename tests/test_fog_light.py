@@ -26,7 +26,11 @@ def test_fog_turns_sunlight_into_skylight():
     road = load_scenario("clear_straight").build_road()
     clear, foggy = lighting_of(Conditions(), road), lighting_of(Conditions(fog=0.75), road)
     assert np.mean(foggy.sun_diffuse) < 0.05 * np.mean(clear.sun_diffuse)
+    elevation = np.radians(Conditions().sun_elevation_deg)
+    ground_clear = np.mean(clear.sun_diffuse) * np.sin(elevation) + np.mean(clear.sun_ambient)
+    ground_foggy = np.mean(foggy.sun_diffuse) * np.sin(elevation) + np.mean(foggy.sun_ambient)
     assert np.mean(foggy.sun_ambient) > 2.0 * np.mean(clear.sun_ambient)
+    assert 0.5 * ground_clear < ground_foggy < ground_clear  # some is lost, none is made
     assert foggy.sun_specular < clear.sun_specular
 
 
