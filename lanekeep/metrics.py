@@ -65,13 +65,19 @@ class Verdict:
 
 @dataclass(frozen=True)
 class SourceReport:
-    """Accuracy of one offset source over an episode (cm)."""
+    """Accuracy of one offset source over an episode (cm).
+
+    `drift_cm` is paper 000's frame-to-frame drift: over consecutive steps where the source
+    has an offset, the RMS of its change from the last step minus the true offset's change
+    (the car's own motion is in both, so what is left is jitter and lag). NaN with fewer than
+    two consecutive offsets."""
 
     rmse_cm: float
     max_cm: float
     ade_cm: float
     fde_cm: float
     valid_share: float
+    drift_cm: float = math.nan
 
 
 @dataclass(frozen=True)
@@ -124,7 +130,7 @@ class EpisodeReport:
         names = list(self.sources)
         width = max(10, *(len(n) for n in names))
         rows = [("RMSE", "rmse_cm"), ("max error", "max_cm"), ("ADE", "ade_cm"),
-                ("FDE", "fde_cm"), ("valid %", "valid_share")]
+                ("FDE", "fde_cm"), ("drift", "drift_cm"), ("valid %", "valid_share")]
         lines = [f"{'(cm)':<10}" + "".join(f"{n:>{width + 2}}" for n in names)]
         for label, key in rows:
             cells = []
@@ -142,7 +148,8 @@ class EpisodeReport:
         )
         near, far = self.ade_range_m
         lines.append(f"ADE/FDE: lane centre vs exact road geometry at x = {near:g}-{far:g} m "
-                     f"ahead; FDE at {far:g} m")
+                     f"ahead; FDE at {far:g} m; drift: RMS of the offset's change between "
+                     "frames minus the true change")
         if self.criteria:
             lines.append(f"criteria: {'PASS' if self.passed else 'FAIL'}")
             lines.extend("  " + v.line() for v in self.criteria)
@@ -173,6 +180,8 @@ class _ErrorSums:
 @dataclass
 class _SourceAccumulator:
     offsets: _ErrorSums = field(default_factory=_ErrorSums)
+    drift: _ErrorSums = field(default_factory=_ErrorSums)
+    last: tuple[float, float] | None = None  # (estimate, truth) of the previous step, if valid
     lanes: int = 0               # steps with a lane centre line
     lateral_sum_m: float = 0.0   # sum over those steps of the mean error over the ADE points
     final_sum_m: float = 0.0     # sum over those steps of the error at the last ADE point
@@ -203,6 +212,11 @@ class Metrics:
         if estimate_m is not None and math.isfinite(estimate_m):
             acc.valid += 1
             acc.offsets.add(estimate_m - truth_m)
+            if acc.last is not None:
+                acc.drift.add((estimate_m - acc.last[0]) - (truth_m - acc.last[1]))
+            acc.last = (estimate_m, truth_m)
+        else:
+            acc.last = None
 
     def add_lane(self, name: str, centre: np.ndarray | None, truth_y: np.ndarray) -> None:
         """Lateral errors of lane centre `centre` ([c0, c1, c2]; None = no lane this step)
@@ -246,6 +260,7 @@ class Metrics:
                 ade_cm=acc.lateral_sum_m / acc.lanes * 100 if acc.lanes else math.nan,
                 fde_cm=acc.final_sum_m / acc.lanes * 100 if acc.lanes else math.nan,
                 valid_share=acc.valid / acc.steps if acc.steps else 0.0,
+                drift_cm=acc.drift.rms_cm(),
             )
         car = self._car
         return EpisodeReport(

@@ -63,7 +63,8 @@ def test_report_names_the_range_and_survives_json():
     report = _score([np.zeros(3)], [np.zeros(3)], points=(5.0, 10.0, 15.0))
     assert report.ade_range_m == (5.0, 15.0)
     assert report.table().splitlines()[-1] == (
-        "ADE/FDE: lane centre vs exact road geometry at x = 5-15 m ahead; FDE at 15 m")
+        "ADE/FDE: lane centre vs exact road geometry at x = 5-15 m ahead; FDE at 15 m; "
+        "drift: RMS of the offset's change between frames minus the true change")
     default = _score([np.zeros(3)], [np.zeros_like(XS)])
     assert "x = 4-20 m ahead; FDE at 20 m" in default.table()
     text = json.dumps(default.to_dict())
@@ -92,3 +93,36 @@ def test_a_perfect_quadratic_scores_about_1cm_on_case2_arc():
     report = _score([best], [lane_centre_at(road, *pose, lane, XS)])
     assert 0.5 < report.sources["a"].ade_cm < 1.2
     assert 1.5 < report.sources["a"].fde_cm < 3.0
+
+
+def test_drift_is_the_change_between_frames_minus_the_true_change():
+    """A steady bias has no drift; a 1 cm jitter about the truth has 2 cm; a step without an
+    offset breaks the chain (its neighbours are not consecutive)."""
+    m = Metrics(["biased", "jitter", "gappy"])
+    truth = [0.10, 0.12, 0.15, 0.13, 0.10]
+    for k, t in enumerate(truth):
+        m.add_offset("biased", t + 0.05, t)
+        m.add_offset("jitter", t + (0.01 if k % 2 else -0.01), t)
+        m.add_offset("gappy", None if k in (1, 3) else t + 0.01 * k, t)
+    sources = m.report("s", 0, 0.1).sources
+    assert sources["biased"].drift_cm == pytest.approx(0.0, abs=1e-9)
+    assert sources["jitter"].drift_cm == pytest.approx(2.0)
+    assert math.isnan(sources["gappy"].drift_cm)
+
+
+def test_the_drift_table_compares_tracks_with_raw_detections():
+    from lanekeep.cli_episode import drift_table
+
+    def report(name: str, raw: float, track: float) -> EpisodeReport:
+        src = {"hough": SourceReport(1, 1, 1, 1, 1, drift_cm=raw),
+               "hough:track": SourceReport(1, 1, 1, 1, 1, drift_cm=track),
+               "fused": SourceReport(1, 1, 1, 1, 1, drift_cm=track),
+               "reference": SourceReport(1, 1, 1, 1, 1)}
+        return EpisodeReport(scenario=name, seed=0, duration_s=1.0, steps=10, sources=src,
+                             car_rms_cm=1.0, car_max_cm=1.0, lane_departures=0,
+                             mmae_switches=0, no_estimate_s=0.0, reference_repairs=0)
+
+    lines = drift_table([report("a", 2.0, 1.0), report("b", 4.0, 4.0)]).splitlines()
+    assert lines[3].split()[1:] == ["2.00", "1.00", "-50%", "1.00"]
+    assert lines[4].split()[1:] == ["4.00", "4.00", "+0%", "4.00"]
+    assert lines[5].split()[1:] == ["3.00", "2.50", "-17%"]  # the mean row
