@@ -217,13 +217,26 @@ def build_set(condition: str, recipe: EvalRecipe) -> dict[str, np.ndarray]:
     return out
 
 
+def renderer_fingerprint() -> str:
+    """Hash of the code and models that draw a set (the package's modules and MJCF files): a
+    cached set made by other code is rendered again rather than silently scored (any change
+    counts, so a cache outlives no edit of the package)."""
+    root = Path(__file__).resolve().parent
+    from lanekeep.mjcf import CAR_XML
+
+    digest = hashlib.sha256()
+    for path in sorted([*root.glob("*.py"), *Path(CAR_XML).parent.glob("*.xml")]):
+        digest.update(path.name.encode())
+        digest.update(path.read_bytes())
+    return digest.hexdigest()
+
+
 def set_key(condition: str, recipe: EvalRecipe) -> str:
-    """Hash of everything that makes the set (not the renderer's code: clear the cache after
-    changing the world builder or the renderer)."""
+    """Hash of everything that makes the set, the renderer's code included."""
     seeds = [condition_seed(condition, i) for i in range(recipe.worlds)]
     blob = json.dumps({"format": FORMAT, "dataset": DATASET_FORMAT, "condition": condition,
                        "recipe": asdict(recipe), "rendered": asdict(recipe.dataset_recipe()),
-                       "seeds": seeds, "ns": EVAL_NAMESPACE},
+                       "seeds": seeds, "ns": EVAL_NAMESPACE, "code": renderer_fingerprint()},
                       sort_keys=True)
     return hashlib.sha256(blob.encode()).hexdigest()
 
