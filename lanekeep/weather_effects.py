@@ -16,6 +16,11 @@ pass as the colour) so that they sit in the scene, not on top of it.
     there on a flat wet surface), blurred vertically (a rough water film), and blended with
     Schlick's Fresnel reflectance of water (R0 = 0.02) at the ray's grazing angle, times
     WET_FILM * wet (the share of the surface under a water film).
+  - Headlights in fog (dawn, dusk, night; front camera): the fog scatters the beams back to the
+    camera, a veil over the lit cone that grows with the fog along the ray: HEADLIGHT_VEIL x
+    the beam's strength along the ray x (1 - exp(-3 min(d, HEADLIGHT_REACH_M) / V)). A low
+    beam is wide and cut off sharply above its axis: Gaussian in azimuth (HEADLIGHT_SPREAD_DEG)
+    and in elevation, narrow above the axis (HEADLIGHT_CUT_DEG) and wide below it.
   - Motion blur: a zoom blur about the focus of expansion (the image flow of forward motion
     grows with the distance from it), scaled by the speed.
   - Snowflakes and lens drops as before (flakes of three sizes; drops that stay on the lens and
@@ -44,6 +49,14 @@ EXPOSURE_S = 0.005  # the camera's exposure time: how long a drop's streak is
 WATER_R0 = 0.02  # Fresnel reflectance of water at normal incidence
 WET_FILM = 0.5  # share of the road under a mirror-like water film at wet = 1
 REFLECTION_BLUR = 15  # vertical blur of the reflection at 720 rows (a rough film)
+# The ego car's low beams (lanekeep/world_lighting.add_car_lights): their axis in the vehicle
+# frame, cone, and how far their light reaches into the fog; the veil's strength at full beam.
+HEADLIGHT_AXIS_DEG = -2.0  # elevation of the beams' axis
+HEADLIGHT_SPREAD_DEG = 18.0  # Gaussian width in azimuth and below the axis
+HEADLIGHT_CUT_DEG = 2.0  # ... and above it: the low beam's cut-off line
+HEADLIGHT_REACH_M = 40.0
+HEADLIGHT_VEIL = 0.25
+HEADLIGHT_RGB = (255.0, 247.0, 230.0)
 BLUR_SCALE_PER_MPS = 0.0022  # zoom-blur scale per m/s at motion_blur = 1 (9 px at the bottom)
 
 
@@ -93,6 +106,8 @@ class Weather:
         veil = 0.35 * c.snow
         self.snow_veil = np.round(np.arange(256) * (1.0 - veil) + 235.0 * veil).astype(np.uint8)
         self._init_reflection(camera, v, u)
+        lit = c.fog > 0.0 and c.time_of_day != "day" and self.forward
+        self.beam = self._beam(camera, v, u) if lit else None
         # Lens drops: centre (x, y), radius in pixels; they stay and slide down.
         n_drops = int(round(14 * c.rain))
         r = rng.uniform(8.0, 30.0, n_drops) * self.scale
@@ -123,6 +138,25 @@ class Weather:
         self.reflect_alpha = np.round(255 * share).astype(np.uint8)[:, None]
         self.reflect_rows = int(min(np.count_nonzero(self.reflect_alpha >= 5),
                                     self.horizon, self.height - self.horizon))
+
+    @staticmethod
+    def _beam(camera: CameraModel, v: np.ndarray, u: np.ndarray) -> np.ndarray:
+        """The low beams' strength (0..1) along each depth-map pixel's ray."""
+        rays = camera.pixel_rays(np.stack([u, v], -1).astype(float))
+        azimuth = np.degrees(np.arctan2(rays[..., 1], rays[..., 0]))
+        elevation = np.degrees(np.arctan2(rays[..., 2], np.hypot(rays[..., 0], rays[..., 1])))
+        above = elevation - HEADLIGHT_AXIS_DEG
+        width = np.where(above > 0.0, HEADLIGHT_CUT_DEG, HEADLIGHT_SPREAD_DEG)
+        ahead = rays[..., 0] > 0.0
+        return np.where(ahead, np.exp(-(azimuth / HEADLIGHT_SPREAD_DEG) ** 2
+                                      - (above / width) ** 2), 0.0).astype(np.float32)
+
+    def headlight_veil(self, image: np.ndarray, depth_m: np.ndarray) -> np.ndarray:
+        """The beams' light scattered back by the fog (see the module docstring)."""
+        reach = np.minimum(depth_m * self.ray_factor, HEADLIGHT_REACH_M)
+        share = HEADLIGHT_VEIL * self.beam * (1.0 - np.exp(-self.extinction_per_m * reach))
+        veil = self._full(share)[..., None] * np.asarray(HEADLIGHT_RGB, np.float32)
+        return cv2.add(image, np.round(veil).astype(np.uint8))
 
     def wet_reflection(self, image: np.ndarray, depth_m: np.ndarray) -> np.ndarray:
         """Mirror the view above the horizon onto the wet ground below it (Fresnel-weighted)."""
@@ -254,6 +288,8 @@ class Weather:
                 alpha = streaks if alpha is None else cv2.add(
                     alpha, cv2.multiply(streaks, 255 - alpha, scale=1 / 255))
             out = self._blend(out, self.air_image, alpha)
+        if self.beam is not None:
+            out = self.headlight_veil(out, depth_m)
         if c.snow > 0.0:
             out = self.snow(out, rng)
         if c.rain > 0.0:

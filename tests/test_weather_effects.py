@@ -126,3 +126,22 @@ def test_a_wet_road_mirrors_the_sky_near_the_horizon_only_on_the_ground(cameras)
     assert grazing > 40 + 40 and steep < 40 + 5
     wall = weather.wet_reflection(frame, np.minimum(ground, 1.0))  # nothing is flat ground
     assert np.array_equal(wall[top + 8:], frame[top + 8:])
+
+
+def test_headlights_light_the_fog_ahead_below_their_cut_off_only_at_night(cameras):
+    """The low beams' veil: brightest along the beam, nothing above the cut-off line, none by
+    day or on the rear camera."""
+    dark = np.full((H, W, 3), 10, np.uint8)
+    depth = _depth(200.0)
+    night = Weather(Conditions(fog=0.5, time_of_day="night"), cameras["front"], (8, 8, 9),
+                    np.random.default_rng(0))
+    out = night(dark, depth, np.random.default_rng(1)).astype(float).mean(-1)
+    horizon = int(round(cameras["front"].horizon_row()))
+    centre = out[horizon + 2:horizon + 12, W // 2 - 10:W // 2 + 10].mean()
+    side = out[horizon + 2:horizon + 12, :10].mean()
+    sky = out[: max(horizon - 25, 1)].mean()
+    assert centre > side + 20.0 and centre > sky + 20.0, (centre, side, sky)
+    for conditions, camera in ((Conditions(fog=0.5), "front"),
+                               (Conditions(fog=0.5, time_of_day="night"), "rear")):
+        weather = Weather(conditions, cameras[camera], (8, 8, 9), np.random.default_rng(0))
+        assert weather.beam is None
