@@ -36,12 +36,18 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from lanekeep.dataset import (LABEL_HEIGHT, LABEL_WIDTH, camera_from_vector, frame_label,
-                              load_split, read_recipe)
-from lanekeep.eval_sets import occlude
+from lanekeep.dataset import (
+    LABEL_HEIGHT,
+    LABEL_WIDTH,
+    camera_from_vector,
+    frame_label,
+    load_split,
+    read_recipe,
+)
 from lanekeep.detectors.lanenet import save_weights
 from lanekeep.detectors.lanenet_model import LaneNet, LaneNetConfig, architecture_summary
 from lanekeep.detectors.lanenet_targets import CellGrid, LossWeights, Targets, encode, lanenet_loss
+from lanekeep.eval_sets import occlude
 
 FLIP_SLOTS = np.array([1, 0, 3, 2, 4], np.int64)  # ego-left <-> ego-right, next-left <-> next-right
 
