@@ -55,6 +55,7 @@ from lanekeep.world_traffic import update_dynamic
 
 PAVEMENT_SEED = 0x9A5E  # the pavement texture's own generator: [scenario seed, this]
 PAINT_SEED = 0x9A17  # the worn paint texture's
+PAINT_SHADE_STEP_M = 0.5  # how finely a paint strip is checked against the cast shadows
 DOT_HEIGHT_M = 0.015  # a Botts' dot's dome above the paint layer
 
 
@@ -234,17 +235,34 @@ def _dot_mesh(road: Road, piece: MarkingPiece, sides: int = 8) -> Ribbon:
     return Ribbon(verts, faces, uv)
 
 
+def _in_cast_shadow(road: Road, piece: MarkingPiece, conditions: ConditionsInfo) -> bool:
+    """Whether any of a paint strip lies in a static cast shadow (zones, props), sampled
+    along its centre line every PAINT_SHADE_STEP_M."""
+    if not conditions.shadow_polygons:
+        return False
+    n = max(2, int(math.ceil((piece.s_end_m - piece.s_start_m) / PAINT_SHADE_STEP_M)) + 1)
+    s = np.linspace(piece.s_start_m, piece.s_end_m, n)
+    return bool(conditions.shaded(road.position(s, np.full(n, piece.r_m))).any())
+
+
 def _add_markings(
-    spec: mujoco.MjSpec, road: Road, layout: WorldLayout
+    spec: mujoco.MjSpec, road: Road, layout: WorldLayout, conditions: ConditionsInfo
 ) -> tuple[dict[str, int], set[str]]:
-    """Marking meshes grouped by (boundary, segment, brightness level); returns name ->
-    boundary, and the names of the filtered RGB ribbons. Faded levels use the worn paint
+    """Marking meshes grouped by (boundary, segment, brightness level, drawing); returns name
+    -> boundary, and the names of the filtered RGB ribbons. Faded levels use the worn paint
     texture (asphalt showing through pits and scuffs) and stay geometry in both renders, as
-    do raised dots; fresh strips are geometry for the segmentation only (GROUP_MARKING_LABEL)
-    and a filtered ribbon for the RGB render (GROUP_RGB_OVERLAY, lanekeep/paint_filter.py)."""
+    do raised dots and paint in a cast shadow; other fresh strips are geometry for the
+    segmentation only (GROUP_MARKING_LABEL) and a filtered ribbon for the RGB render
+    (GROUP_RGB_OVERLAY, lanekeep/paint_filter.py).
+
+    Why shaded paint stays geometry: MuJoCo draws the filtered ribbons in its translucent pass,
+    after which a shadow overlay darkens them once where it darkens the asphalt twice
+    (paint_filter): a ribbon in shade would keep sqrt(0.45) = 0.67 of its light where the
+    asphalt keeps 0.45, and shaded lines would stand out as they do not on a real road.
+    Moving vehicles' shadows are not known here; under them the ribbons keep that error."""
     styles = road.markings
-    groups: dict[tuple[int, int, int], list[Ribbon]] = {}
-    filtered: dict[tuple[int, int, int], list[Ribbon]] = {}
+    groups: dict[tuple[int, int, int, bool], list[Ribbon]] = {}
+    filtered: dict[tuple[int, int, int, bool], list[Ribbon]] = {}
     bounds = road.segment_bounds()
     starts = np.array([b[0] for b in bounds])
     levels = layout.paint_brightness_levels
@@ -255,36 +273,41 @@ def _add_markings(
         strip = _dot_mesh(road, piece) if piece.dot else ribbon(
             road, piece.s_start_m, piece.s_end_m, piece.r_m - half, piece.r_m + half,
             MARKING_Z_M, tile_m=1.0, max_step_m=1.0)
-        groups.setdefault((piece.boundary, segment, level), []).append(strip)
-        if not piece.dot and level == levels - 1:
-            filtered.setdefault((piece.boundary, segment, level), []).append(
+        to_filter = (not piece.dot and level == levels - 1
+                     and not _in_cast_shadow(road, piece, conditions))
+        key = (piece.boundary, segment, level, to_filter)
+        groups.setdefault(key, []).append(strip)
+        if to_filter:
+            filtered.setdefault(key, []).append(
                 paint_filter.filtered_strip(road, piece.s_start_m, piece.s_end_m, piece.r_m,
                                             piece.width_m, MARKING_Z_M))
     if filtered:
         paint_filter.add_paint_texture(spec, "paint_filtered")
     names: dict[str, int] = {}
     ribbons: set[str] = set()
-    for (boundary, segment, level), strips in sorted(groups.items()):
+    materials = {m.name for m in spec.materials}
+    for (boundary, segment, level, to_filter), strips in sorted(groups.items()):
         colour = np.asarray(styles[boundary].colour)
         brightness = 0.35 + 0.65 * level / max(levels - 1, 1)
         material = f"paint_b{boundary}_l{level}"
-        key = (boundary, segment, level)
-        if material not in {m.name for m in spec.materials}:
+        if material not in materials:
             add_material(
                 spec, material, "paint" if level == levels - 1 else "paint_worn",
                 rgba=[*(colour * brightness), 1.0], specular=0.2, shininess=0.3,
             )
-            if key in filtered:
+            materials.add(material)
+        name = f"marking_b{boundary}_s{segment}_l{level}" + ("_filtered" if to_filter else "")
+        add_mesh_geom(spec, name, Ribbon.concatenate(strips), material,
+                      GROUP_MARKING_LABEL if to_filter else GROUP_MARKING)
+        names[name] = boundary
+        if to_filter:
+            if f"{material}_filtered" not in materials:
                 add_material(spec, f"{material}_filtered", "paint_filtered",
                              rgba=[*(colour * brightness), paint_filter.PAINT_ALPHA],
                              specular=0.2, shininess=0.3)
-        name = f"marking_b{boundary}_s{segment}_l{level}"
-        label_only = key in filtered and len(filtered[key]) == len(strips)
-        add_mesh_geom(spec, name, Ribbon.concatenate(strips), material,
-                      GROUP_MARKING_LABEL if label_only else GROUP_MARKING)
-        names[name] = boundary
-        if label_only:
-            add_mesh_geom(spec, f"{name}_rgb", Ribbon.concatenate(filtered[key]),
+                materials.add(f"{material}_filtered")
+            add_mesh_geom(spec, f"{name}_rgb", Ribbon.concatenate(filtered[(boundary, segment,
+                                                                            level, True)]),
                           f"{material}_filtered", GROUP_RGB_OVERLAY)
             ribbons.add(f"{name}_rgb")
     return names, ribbons
@@ -321,8 +344,8 @@ def build_spec(
                  specular=0.0)
     _add_environment(spec, road, scenario, look.lighting)
     _add_road_surface(spec, road, layout, look.asphalt_grid_step_m)
-    marking_names, ribbons = _add_markings(spec, road, layout)
-    conditions = add_conditions(spec, scenario, road, layout)
+    conditions = add_conditions(spec, scenario, road, layout)  # first: its cast shadows
+    marking_names, ribbons = _add_markings(spec, road, layout, conditions)
     paint_filter.draw_overlays_last(spec, GROUP_RGB_OVERLAY, ribbons)
     return spec, marking_names, conditions
 

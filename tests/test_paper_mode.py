@@ -85,17 +85,20 @@ def test_paper_mode_keeps_the_lane_in_every_paper_case(name):
 
 @pytest.mark.slow
 def test_case2_model_2_is_worse_in_the_sharp_turn():
-    """Paper Table 3: model #2's RMSE 47.29 cm, model #1's 21.12 cm. (The paper's MMAE then
-    follows model #1 through the turn; ours does not, for its reference is model #2's own
-    algorithm on the rear camera and shares its bias in the turn: see README, "The paper's
-    loop". [lanenet-loop] replaces that reference.)"""
+    """Paper Table 3: model #2's RMSE 47.29 cm, model #1's 21.12 cm (2.24x). Ours: 1.16x
+    overall and 1.17x in the turn (measured; 1.30x and 1.36x before distant paint was drawn
+    filtered, lanekeep/paint_filter.py: model #1, the long-range one, gained most from lines
+    that no longer break up 30-60 m ahead). (The paper's MMAE then follows model #1 through
+    the turn; ours does not, for its reference is model #2's own algorithm on the rear camera
+    and shares its bias in the turn: see README, "The paper's loop". [lanenet-loop] replaces
+    that reference.)"""
     report, trace = paper_run("case2_sharp_turn")
     curvature, _, _, errors = trace.arrays()
     turn = np.abs(curvature) > 0.01  # the 40 m arc and the steep ends of its clothoids
     hough, sliding = report.sources["hough"].rmse_cm, report.sources["sliding_window"].rmse_cm
-    assert sliding > 1.2 * hough, report.table()
+    assert sliding > 1.1 * hough, report.table()
     in_turn = np.sqrt(np.nanmean(errors[turn] ** 2, axis=0))
-    assert in_turn[SLIDING] > 1.2 * in_turn[HOUGH], in_turn
+    assert in_turn[SLIDING] > 1.1 * in_turn[HOUGH], in_turn
 
 
 @pytest.mark.slow

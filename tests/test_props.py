@@ -86,7 +86,7 @@ def test_a_pole_casts_its_shadow_away_from_the_sun():
         az, el = math.radians(az_deg), math.radians(el_deg)
         to_sun = np.array([math.cos(el) * math.cos(az), math.cos(el) * math.sin(az), math.sin(el)])
         info.shadow_polygons = []
-        _add_shadows(spec, props, to_sun, info, Roadside())
+        _add_shadows(spec, props, to_sun, info, Roadside(), direct_share=1.0)
         (poly,) = info.shadow_polygons
         tip = poly[np.argmax(np.hypot(poly[:, 0], poly[:, 1]))]
         assert np.hypot(*tip) == pytest.approx(height / math.tan(el), rel=0.05)
