@@ -248,21 +248,24 @@ def _in_cast_shadow(road: Road, piece: MarkingPiece, conditions: ConditionsInfo)
 def _add_markings(
     spec: mujoco.MjSpec, road: Road, layout: WorldLayout, conditions: ConditionsInfo
 ) -> tuple[dict[str, int], set[str]]:
-    """Marking meshes grouped by (boundary, segment, brightness level, drawing); returns name
-    -> boundary, and the names of the filtered RGB ribbons. Faded levels use the worn paint
-    texture (asphalt showing through pits and scuffs) and stay geometry in both renders, as
-    do raised dots and paint in a cast shadow; other fresh strips are geometry for the
-    segmentation only (GROUP_MARKING_LABEL) and a filtered ribbon for the RGB render
-    (GROUP_RGB_OVERLAY, lanekeep/paint_filter.py).
+    """Marking meshes grouped by (boundary, segment, brightness level); returns name ->
+    boundary, and the names of the colour render's own paint geoms. Faded levels use the worn
+    paint texture (asphalt showing through pits and scuffs) and, like raised dots, are geometry
+    in both renders (GROUP_MARKING). Fresh strips are geometry for the segmentation only
+    (GROUP_MARKING_LABEL) and, for the colour render (GROUP_RGB_OVERLAY), a filtered ribbon
+    (lanekeep/paint_filter.py) or, inside a static cast shadow, a copy of their geometry.
 
     Why shaded paint stays geometry: MuJoCo draws the filtered ribbons in its translucent pass,
     after which a shadow overlay darkens them once where it darkens the asphalt twice
     (paint_filter): a ribbon in shade would keep sqrt(0.45) = 0.67 of its light where the
     asphalt keeps 0.45, and shaded lines would stand out as they do not on a real road.
-    Moving vehicles' shadows are not known here; under them the ribbons keep that error."""
+    Moving vehicles' shadows are not known here; under them the ribbons keep that error. The
+    segmentation meshes do not depend on the shadows, so the masks are the same with or
+    without them."""
     styles = road.markings
-    groups: dict[tuple[int, int, int, bool], list[Ribbon]] = {}
-    filtered: dict[tuple[int, int, int, bool], list[Ribbon]] = {}
+    groups: dict[tuple[int, int, int], list[Ribbon]] = {}
+    filtered: dict[tuple[int, int, int], list[Ribbon]] = {}
+    shaded: dict[tuple[int, int, int], list[Ribbon]] = {}
     bounds = road.segment_bounds()
     starts = np.array([b[0] for b in bounds])
     levels = layout.paint_brightness_levels
@@ -273,20 +276,23 @@ def _add_markings(
         strip = _dot_mesh(road, piece) if piece.dot else ribbon(
             road, piece.s_start_m, piece.s_end_m, piece.r_m - half, piece.r_m + half,
             MARKING_Z_M, tile_m=1.0, max_step_m=1.0)
-        to_filter = (not piece.dot and level == levels - 1
-                     and not _in_cast_shadow(road, piece, conditions))
-        key = (piece.boundary, segment, level, to_filter)
+        key = (piece.boundary, segment, level)
         groups.setdefault(key, []).append(strip)
-        if to_filter:
+        if piece.dot or level != levels - 1:
+            continue
+        if _in_cast_shadow(road, piece, conditions):
+            shaded.setdefault(key, []).append(strip)
+        else:
             filtered.setdefault(key, []).append(
                 paint_filter.filtered_strip(road, piece.s_start_m, piece.s_end_m, piece.r_m,
                                             piece.width_m, MARKING_Z_M))
     if filtered:
         paint_filter.add_paint_texture(spec, "paint_filtered")
     names: dict[str, int] = {}
-    ribbons: set[str] = set()
+    colour_only: set[str] = set()
     materials = {m.name for m in spec.materials}
-    for (boundary, segment, level, to_filter), strips in sorted(groups.items()):
+    for key, strips in sorted(groups.items()):
+        boundary, segment, level = key
         colour = np.asarray(styles[boundary].colour)
         brightness = 0.35 + 0.65 * level / max(levels - 1, 1)
         material = f"paint_b{boundary}_l{level}"
@@ -296,21 +302,27 @@ def _add_markings(
                 rgba=[*(colour * brightness), 1.0], specular=0.2, shininess=0.3,
             )
             materials.add(material)
-        name = f"marking_b{boundary}_s{segment}_l{level}" + ("_filtered" if to_filter else "")
+        name = f"marking_b{boundary}_s{segment}_l{level}"
+        split = len(filtered.get(key, ())) + len(shaded.get(key, ())) == len(strips)
         add_mesh_geom(spec, name, Ribbon.concatenate(strips), material,
-                      GROUP_MARKING_LABEL if to_filter else GROUP_MARKING)
+                      GROUP_MARKING_LABEL if split else GROUP_MARKING)
         names[name] = boundary
-        if to_filter:
+        if not split:
+            continue
+        if key in filtered:
             if f"{material}_filtered" not in materials:
                 add_material(spec, f"{material}_filtered", "paint_filtered",
                              rgba=[*(colour * brightness), paint_filter.PAINT_ALPHA],
                              specular=0.2, shininess=0.3)
                 materials.add(f"{material}_filtered")
-            add_mesh_geom(spec, f"{name}_rgb", Ribbon.concatenate(filtered[(boundary, segment,
-                                                                            level, True)]),
+            add_mesh_geom(spec, f"{name}_rgb", Ribbon.concatenate(filtered[key]),
                           f"{material}_filtered", GROUP_RGB_OVERLAY)
-            ribbons.add(f"{name}_rgb")
-    return names, ribbons
+            colour_only.add(f"{name}_rgb")
+        if key in shaded:
+            add_mesh_geom(spec, f"{name}_shaded_rgb", Ribbon.concatenate(shaded[key]),
+                          material, GROUP_RGB_OVERLAY)
+            colour_only.add(f"{name}_shaded_rgb")
+    return names, colour_only
 
 
 def build_spec(

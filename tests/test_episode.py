@@ -91,8 +91,9 @@ def test_fused_against_the_models_on_the_paper_cases(paper_reports):
     Measured (`lanekeep bench`, HEAD of the [realism] session that set it): fused 1.07 / 7.31
     / 3.52 / 1.05 / 5.04 cm against best tracks 1.06 / 7.12 / 3.24 / 0.79 / 4.39 (losses
     0.01-0.65 cm; case 5 lost most once fog scattered the dusk sun into skylight, with the
-    rear reference at 6.4 cm). Before the filtered paint the guard counted wins (3 of 5, losses up to 0.35 cm);
-    the renders' changes flip such counts, decided by hundredths of a centimetre."""
+    rear reference at 6.4 cm). Before the filtered paint the guard counted wins (3 of 5,
+    losses up to 0.35 cm); the renders' changes flip such counts, decided by hundredths of a
+    centimetre."""
     raw_wins = []
     for name, report in paper_reports.items():
         sources = report.sources
