@@ -20,8 +20,10 @@ What MuJoCo's translucent pass does to it (mjr_render, stated where it matters):
     (shadows, puddles, snow) must be drawn after the paint, or a shadow would not darken the
     paint it falls on: `draw_overlays_last` gives each overlay mesh a tiny buried triangle far
     away, which makes it the nearest by that measure (drawn first, and last in the second
-    pass). Paint under an overlay is then darkened once, not twice: a shadow that leaves 0.4
-    of the light on asphalt leaves sqrt(0.4) = 0.63 on the paint.
+    pass). Paint under an overlay is still darkened once, not twice: a shadow that leaves 0.4
+    of the light on asphalt would leave sqrt(0.4) = 0.63 on a ribbon, so paint inside a static
+    cast shadow is drawn as geometry instead (world._add_markings); under moving vehicles'
+    shadows the ribbons keep that error.
 """
 
 from __future__ import annotations

@@ -235,14 +235,20 @@ def _dot_mesh(road: Road, piece: MarkingPiece, sides: int = 8) -> Ribbon:
     return Ribbon(verts, faces, uv)
 
 
-def _in_cast_shadow(road: Road, piece: MarkingPiece, conditions: ConditionsInfo) -> bool:
-    """Whether any of a paint strip lies in a static cast shadow (zones, props), sampled
-    along its centre line every PAINT_SHADE_STEP_M."""
-    if not conditions.shadow_polygons:
-        return False
-    n = max(2, int(math.ceil((piece.s_end_m - piece.s_start_m) / PAINT_SHADE_STEP_M)) + 1)
-    s = np.linspace(piece.s_start_m, piece.s_end_m, n)
-    return bool(conditions.shaded(road.position(s, np.full(n, piece.r_m))).any())
+def _in_cast_shadow(road: Road, pieces: list[MarkingPiece], conditions: ConditionsInfo
+                    ) -> np.ndarray:
+    """Per paint strip, whether any of it lies in a static cast shadow (zones, props), sampled
+    along its centre line every PAINT_SHADE_STEP_M; all strips' points tested in one pass over
+    the shadow polygons."""
+    if not conditions.shadow_polygons or not pieces:
+        return np.zeros(len(pieces), bool)
+    counts = [max(2, int(math.ceil((p.s_end_m - p.s_start_m) / PAINT_SHADE_STEP_M)) + 1)
+              for p in pieces]
+    s = np.concatenate([np.linspace(p.s_start_m, p.s_end_m, n)
+                        for p, n in zip(pieces, counts, strict=True)])
+    r = np.repeat([p.r_m for p in pieces], counts)
+    inside = conditions.shaded(road.position(s, r))
+    return np.logical_or.reduceat(inside, np.cumsum([0, *counts[:-1]]))
 
 
 def _add_markings(
@@ -269,7 +275,9 @@ def _add_markings(
     bounds = road.segment_bounds()
     starts = np.array([b[0] for b in bounds])
     levels = layout.paint_brightness_levels
-    for piece in road.marking_pieces(layout.lead_m):
+    pieces = road.marking_pieces(layout.lead_m)
+    in_shadow = _in_cast_shadow(road, pieces, conditions)
+    for piece, shade in zip(pieces, in_shadow, strict=True):
         segment = int(np.searchsorted(starts, piece.s_start_m, side="right") - 1)
         level = int(np.clip(round(piece.brightness * (levels - 1)), 0, levels - 1))
         half = piece.width_m / 2.0
@@ -280,7 +288,7 @@ def _add_markings(
         groups.setdefault(key, []).append(strip)
         if piece.dot or level != levels - 1:
             continue
-        if _in_cast_shadow(road, piece, conditions):
+        if shade:
             shaded.setdefault(key, []).append(strip)
         else:
             filtered.setdefault(key, []).append(
