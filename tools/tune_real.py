@@ -39,13 +39,31 @@ def read_labels(path: Path, h_samples: list[int]) -> list[list[int]]:
     return lanes
 
 
-def ego_lanes(lanes: list[list[int]], h_samples: list[int], centre: float) -> list[list[int]]:
+def x_at_bottom(lane: list[int], h_samples: list[int], bottom: float) -> float | None:
+    """Where a labelled lane meets the frame's bottom row: a line through its lowest five
+    labelled points, extended. Lanes end at different rows (a far lane's label can stop at
+    row 380 near the frame's edge), so comparing their lowest labelled x would rank a far
+    lane as nearer the centre than the ego boundary beside it."""
+    pts = [(v, x) for v, x in zip(h_samples, lane, strict=True) if x >= 0]
+    if not pts:
+        return None
+    pts = sorted(pts)[-5:]
+    if len(pts) == 1:
+        return float(pts[0][1])
+    vs, xs = np.asarray(pts, dtype=float).T
+    slope, intercept = np.polyfit(vs, xs, 1)
+    return float(slope * bottom + intercept)
+
+
+def ego_lanes(lanes: list[list[int]], h_samples: list[int], centre: float, bottom: float
+              ) -> list[list[int]]:
+    """The two labelled lanes that bound the ego lane: nearest the image centre, one each side,
+    where they meet the frame's bottom row."""
     left, right = None, None
     for lane in lanes:
-        xs = [(v, x) for v, x in zip(h_samples, lane, strict=True) if x >= 0]
-        if not xs:
+        x = x_at_bottom(lane, h_samples, bottom)
+        if x is None:
             continue
-        x = max(xs)[1]  # at the lowest labelled row
         if x < centre and (left is None or x > left[0]):
             left = (x, lane)
         if x >= centre and (right is None or x < right[0]):
@@ -84,7 +102,7 @@ def main() -> int:
                 pred = estimate_lanes(estimate, camera, h_samples, x_range)
             gt = read_labels(label, h_samples)
             acc, _ = score_frame(pred, gt, h_samples)
-            ego_gt = ego_lanes(gt, h_samples, image.shape[1] / 2.0)
+            ego_gt = ego_lanes(gt, h_samples, image.shape[1] / 2.0, image.shape[0] - 1.0)
             _, per = score_frame(pred, ego_gt, h_samples)
             ego_acc = sum(per) / max(len(ego_gt), 1)
             overall.append(acc)
