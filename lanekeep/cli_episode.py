@@ -239,6 +239,7 @@ def _init_worker(threads: int, stop, steps=None) -> None:
     _STOP, _STEPS = stop, steps
     ignore_stop_signals()
     os.environ["LP_NUM_THREADS"] = str(threads)  # Mesa llvmpipe, read when EGL starts
+    os.environ["OMP_NUM_THREADS"] = str(threads)  # torch (LaneNet), read at its import
     import cv2
 
     cv2.setNumThreads(threads)

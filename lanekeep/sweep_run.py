@@ -67,6 +67,7 @@ def _init_local_worker(threads: int) -> None:
 
     ignore_stop_signals()  # the parent decides what a Ctrl-C stops
     os.environ["LP_NUM_THREADS"] = str(threads)  # Mesa llvmpipe reads it when EGL starts
+    os.environ["OMP_NUM_THREADS"] = str(threads)  # torch (LaneNet), read at its import
     import cv2
 
     cv2.setNumThreads(threads)
