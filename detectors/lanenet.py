@@ -15,6 +15,8 @@ difference between consecutive thumbnails: what the GRU remembers of another roa
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass, fields, replace
 from importlib import resources
 from pathlib import Path
@@ -42,6 +44,23 @@ FORMAT = "lanekeep-lanenet/1"
 CANDIDATE_SCORE = 0.05  # the lowest objectness kept as a candidate proposal (for AP)
 DEFAULT_WEIGHTS = "weights/lanenet.pt"  # inside the detectors package
 
+
+
+@contextmanager
+def _one_thread() -> Iterator[None]:
+    """One intra-op thread for the network: oneDNN's convolutions sum in an order that depends
+    on the thread count (outputs differ by ~1e-7), and in a closed loop that grows into
+    another episode; so a bench worker and the parent must run it alike. The network is small
+    enough that a second thread hardly helps (`lanekeep perf` measures it)."""
+    before = torch.get_num_threads()
+    if before == 1:
+        yield
+        return
+    torch.set_num_threads(1)
+    try:
+        yield
+    finally:
+        torch.set_num_threads(before)
 
 class WeightsError(ValueError):
     """A weights file that cannot become a LaneNet; the message starts with the file's path."""
@@ -175,7 +194,7 @@ class LaneNetDetector:
         changed = self._scene_changed(image)
         if changed:
             self._state = None
-        with torch.inference_mode():
+        with torch.inference_mode(), _one_thread():
             out, self._state = self.model(torch.from_numpy(image)[None, None], self._state)
         rows, cols = self.model.config.grid
         grid = CellGrid(frame.shape[1], frame.shape[0], rows, cols)

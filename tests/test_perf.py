@@ -10,8 +10,8 @@ from lanekeep.cli_episode import BenchJob, longest_first, run_bench, run_episode
 from lanekeep.perf import format_results
 
 STAGES = {"render_front", "render_rear", "effects_front", "effects_rear", "detect_hough",
-          "detect_sliding_window", "detect_reference", "track", "mmae", "control", "physics",
-          "score", "record"}
+          "detect_sliding_window", "detect_lanenet", "detect_reference", "track", "mmae",
+          "control", "physics", "score", "record"}
 
 
 def test_perf_json_holds_every_documented_figure(tmp_path, capsys):
