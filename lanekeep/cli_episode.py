@@ -402,12 +402,14 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     overrides = criteria_mod.overrides_from_args(args)
     plugins = PluginOverrides.from_args(args)
     names = args.scenarios or shipped_scenarios()
-    scenarios = {name: plugins.apply(load_scenario(name))  # fail fast on a bad name
+    # as each episode will run them: the mode first (its own front models), then the command
+    # line's detectors; fail fast on a bad name
+    scenarios = {name: plugins.apply(with_mode(load_scenario(name), args.mode))
                  for name in names}
     for scenario in scenarios.values():  # and on a bad scenario, before any worker starts
         if args.seed is not None:  # (shadow casters stand where the seed puts them)
             scenario = dataclasses.replace(scenario, seed=args.seed)
-        check_scenario(with_mode(scenario, args.mode), args.seconds)
+        check_scenario(scenario, args.seconds)
     code = weights_error("bench", args, list(scenarios.values()))
     if code is not None:
         return code

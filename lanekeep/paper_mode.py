@@ -26,7 +26,7 @@ from dataclasses import replace
 
 from lanekeep.detectors.config import DetectorsConfig, load_config
 from lanekeep.estimators.lane_estimator import EstimatorSettings
-from lanekeep.scenario import EstimationConfig, Scenario
+from lanekeep.scenario import DEFAULT_FRONT_DETECTORS, EstimationConfig, Scenario
 
 # Front ground windows (x_near_m, x_far_m, y_half_m) of the paper's two models. Model #2's
 # 4-12 m x +-3 m holds the ego lane's two boundaries (+-1.85 m) on a straight, and loses the
@@ -42,10 +42,15 @@ def is_paper(scenario: Scenario) -> bool:
 
 
 def with_mode(scenario: Scenario, mode: str | None) -> Scenario:
-    """The scenario with its estimation mode set (None keeps the file's)."""
+    """The scenario with its estimation mode set (None keeps the file's). Front models that
+    are the old mode's defaults become the new mode's (the paper's loop runs its two models);
+    models a scenario names are kept."""
     if mode is None:
         return scenario
-    return replace(scenario, estimation=replace(scenario.estimation, mode=mode))
+    est = scenario.estimation
+    own_default = est.front_detectors == DEFAULT_FRONT_DETECTORS[est.mode]
+    front = None if own_default else est.front_detectors
+    return replace(scenario, estimation=replace(est, mode=mode, front_detectors=front))
 
 
 def estimator_settings(est: EstimationConfig) -> EstimatorSettings:

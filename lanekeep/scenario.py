@@ -280,6 +280,11 @@ OUTPUT_MODES = ("select", "fused")
 ESTIMATION_MODES = ("default", "paper")
 MODEL_LANES = ("track", "detection")
 CAMERAS = ("front", "rear")
+# The front models of each estimation mode when a scenario names none: our loop adds the
+# learned model (detectors/lanenet.py) to the paper's two classical ones; the paper's loop
+# keeps its two.
+DEFAULT_FRONT_DETECTORS = {"default": ("hough", "sliding_window", "lanenet"),
+                           "paper": ("hough", "sliding_window")}
 
 
 @dataclass(frozen=True)
@@ -297,8 +302,11 @@ class EstimationConfig:
     # feed-forward, model #1 long range and model #2 short range. It overrides residual_mode,
     # model_lane and the front windows; "default" is our loop with its improvements.
     mode: str = "default"
-    front_detectors: tuple[str, ...] = ("hough", "sliding_window")
-    reference_detector: str = "sliding_window"
+    # None: the mode's own (DEFAULT_FRONT_DETECTORS), filled in at construction.
+    front_detectors: tuple[str, ...] | None = None
+    # The learned detector on the rear camera, as the paper's reference is a learned one
+    # (CLRNet); model #2 ("sliding_window") there errs with front model #2 and fails in traffic.
+    reference_detector: str = "lanenet"
     reference_camera: str = "rear"
     residual_mode: str = "distance_aligned"
     output: str = "select"
@@ -311,6 +319,8 @@ class EstimationConfig:
     def __post_init__(self):
         if self.mode not in ESTIMATION_MODES:
             raise InvalidValue("mode", f"must be one of {ESTIMATION_MODES}, got {self.mode!r}")
+        if self.front_detectors is None:
+            object.__setattr__(self, "front_detectors", DEFAULT_FRONT_DETECTORS[self.mode])
         if not self.front_detectors:
             raise InvalidValue("front_detectors", "at least one front detector is needed")
         if self.reference_camera not in CAMERAS:

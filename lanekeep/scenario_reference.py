@@ -164,7 +164,9 @@ DESCRIPTIONS: dict[str, tuple[str, str]] = {
     "estimation.mode": ("default = our loop; paper = the paper's own loop (overrides "
                         "residual_mode, model_lane and the front windows).",
                         _one_of(ESTIMATION_MODES)),
-    "estimation.front_detectors": ("The MMAE's models, front camera, in order.",
+    "estimation.front_detectors": ("The MMAE's models, front camera, in order. Not set: the "
+                                   "mode's own, hough, sliding_window and lanenet (default) or "
+                                   "the paper's hough and sliding_window (paper).",
                                    "registered names, package.module:Class, entry points"),
     "estimation.reference_detector": ("The MMAE's reference (the paper's observer).",
                                       "as front_detectors"),

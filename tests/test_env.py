@@ -56,7 +56,7 @@ def test_observation_names_every_estimate():
             obs = env.step([0.0, 0.3]).observation
     finally:
         env.close()
-    assert set(obs["lanes"]) == {"hough", "sliding_window", "fused"}
+    assert set(obs["lanes"]) == {"hough", "sliding_window", "lanenet", "fused"}
     assert set(obs["lanes"]["fused"]) == {"valid", "offset_m", "heading_rad", "curvature_1pm"}
     assert set(obs["vehicle"]) >= {"speed_mps", "yaw_rate_rps"}
     assert 10.0 < float(obs["vehicle"]["speed_mps"]) < 20.0  # the scenario starts at 15 m/s

@@ -78,24 +78,49 @@ def test_fused_rmse_within_10cm_on_clear_roads(name):
 
 
 TRACK_MARGIN_CM = 0.75
+PAPER_FRONT_MODELS = ("hough", "sliding_window")
+
+
+@pytest.fixture(scope="module")
+def paper_two_model_reports():
+    """The paper's own comparison: its two classical front models, the learned rear reference."""
+    reports = {}
+    for name in PAPER_CASES:
+        scenario = load_scenario(name)
+        est = dataclasses.replace(scenario.estimation, front_detectors=PAPER_FRONT_MODELS)
+        with Episode(dataclasses.replace(scenario, estimation=est)) as episode:
+            reports[name] = episode.run()
+    return reports
 
 
 @pytest.mark.slow
-def test_fused_against_the_models_on_the_paper_cases(paper_reports):
-    """As the paper's Tables 3-4 compare (the MMAE output against each model's own output),
-    the fused output beats the best raw detections in at least 4 of 5 cases. Like for like,
-    against each model's own Kalman track at the same look-ahead, it is within TRACK_MARGIN_CM
-    of the best track in every case: a regression guard on today's state, not a target
-    ([lanenet-loop] asks for <= in every scenario).
-
-    Measured (`lanekeep bench`, HEAD of the [realism] session that set it): fused 1.07 / 7.31
-    / 3.52 / 1.05 / 5.04 cm against best tracks 1.06 / 7.12 / 3.24 / 0.79 / 4.39 (losses
-    0.01-0.65 cm; case 5 lost most once fog scattered the dusk sun into skylight, with the
-    rear reference at 6.4 cm). Before the filtered paint the guard counted wins (3 of 5,
-    losses up to 0.35 cm); the renders' changes flip such counts, decided by hundredths of a
-    centimetre."""
-    raw_wins = []
+def test_fused_stays_near_the_best_track_on_the_paper_cases(paper_reports):
+    """The default loop (three front models, LaneNet's among them): against each model's own
+    Kalman track at the same look-ahead, the fused output is within TRACK_MARGIN_CM of the best
+    track in every case: a regression guard on today's state, not a target ([lanenet-loop]
+    asks for <= in every scenario). Measured (`lanekeep bench`, the session that made LaneNet
+    a default front model): fused 1.1 / 7.2 / 2.6 / 0.7 / 4.7 cm against best tracks 1.0 /
+    6.8 / 2.5 / 0.6 / 4.6. Its raw detections are LaneNet's at 1.1 / 6.4 / 2.5 / 0.6 / 5.1:
+    the fused output beats the best raw only in case 5, so the paper's raw comparison is made
+    with the paper's two models (the next test)."""
     for name, report in paper_reports.items():
+        sources = report.sources
+        fused = sources["fused"].rmse_cm
+        tracks = [v.rmse_cm for k, v in sources.items() if k.endswith(":track")]
+        assert len(tracks) == 3
+        assert fused <= min(tracks) + TRACK_MARGIN_CM, f"{name}\n{report.table()}"
+    tables = "\n\n".join(f"{n}\n{r.table()}" for n, r in paper_reports.items())
+    assert all(r.lane_departures == 0 for r in paper_reports.values()), tables
+
+
+@pytest.mark.slow
+def test_fused_beats_the_papers_two_models_raw_on_the_paper_cases(paper_two_model_reports):
+    """As the paper's Tables 3-4 compare (the MMAE output of its two classical front models
+    against each model's own output, with a learned rear reference), the fused output beats
+    the best raw detections in at least 4 of 5 cases and stays within TRACK_MARGIN_CM of the
+    best own track in every case."""
+    raw_wins = []
+    for name, report in paper_two_model_reports.items():
         sources = report.sources
         fused = sources["fused"].rmse_cm
         tracks = [v.rmse_cm for k, v in sources.items() if k.endswith(":track")]
@@ -103,9 +128,9 @@ def test_fused_against_the_models_on_the_paper_cases(paper_reports):
                 for k in sources if k.endswith(":track")]
         raw_wins.append(fused <= min(raws))
         assert fused <= min(tracks) + TRACK_MARGIN_CM, f"{name}\n{report.table()}"
-    tables = "\n\n".join(f"{n}\n{r.table()}" for n, r in paper_reports.items())
+    tables = "\n\n".join(f"{n}\n{r.table()}" for n, r in paper_two_model_reports.items())
     assert sum(raw_wins) >= 4, tables
-    assert all(r.lane_departures == 0 for r in paper_reports.values()), tables
+    assert all(r.lane_departures == 0 for r in paper_two_model_reports.values()), tables
 
 
 def test_same_scenario_twice_gives_identical_metrics():

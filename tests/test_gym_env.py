@@ -68,7 +68,7 @@ def test_spaces_name_the_estimates_and_no_truth():
         obs, _ = env.reset()
         space = env.observation_space
         assert obs["front"].shape == (SIZE[1], SIZE[0], 3) and obs["front"].dtype == np.uint8
-        assert set(space["lanes"].spaces) == {"hough", "sliding_window", "fused"}
+        assert set(space["lanes"].spaces) == {"hough", "sliding_window", "lanenet", "fused"}
         assert set(space["vehicle"].spaces) == {"speed_mps", "yaw_rate_rps", "accel_long_mps2",
                                                 "accel_lat_mps2", "steer_angle_rad"}
         names = str(space).lower()

@@ -102,7 +102,8 @@ def test_an_episode_runs_to_its_end_without_reading_truth(name):
     assert report.sources["fused"].valid_share > 0.9
     # Fair columns: each front model's raw detections and its own track, then the output.
     assert list(report.sources) == ["hough", "hough:track", "sliding_window",
-                                    "sliding_window:track", "fused", "reference"]
+                                    "sliding_window:track", "lanenet", "lanenet:track", "fused",
+                                    "reference"]
     # (at half size, model #1 loses case 1's shaded lane for some steps: its track coasts)
     assert report.sources["hough:track"].valid_share > 0.5
 

@@ -7,7 +7,7 @@ loses the lane and the MMAE follows model #2 there (paper Fig. 12)."""
 from __future__ import annotations
 
 import functools
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 import pytest
@@ -74,6 +74,21 @@ def test_paper_mode_gives_each_model_its_own_window_and_the_pid_table_2():
     assert long_range[1] > base.profiles.front.x_far_m > short_range[1]
     straight, curvy = PaperGains().gains(False), PaperGains().gains(True)
     assert curvy.kp == pytest.approx(2 * straight.kp) and straight.ki == 0.0
+
+
+def test_each_mode_has_its_own_front_models_and_the_learned_reference():
+    """Our loop runs LaneNet beside the paper's two classical models; the paper's loop runs its
+    two. Both take the learned detector on the rear camera as the reference (the paper's is
+    a learned one). Switching the mode switches default models and keeps named ones."""
+    ours = load_scenario("clear_curve")
+    assert ours.estimation.front_detectors == ("hough", "sliding_window", "lanenet")
+    assert ours.estimation.reference_detector == "lanenet"
+    paper = with_mode(ours, "paper")
+    assert paper.estimation.front_detectors == ("hough", "sliding_window")
+    assert paper.estimation.reference_detector == "lanenet"
+    assert with_mode(paper, "default").estimation == ours.estimation
+    named = replace(ours, estimation=replace(ours.estimation, front_detectors=("hough",)))
+    assert with_mode(named, "paper").estimation.front_detectors == ("hough",)
 
 
 @pytest.mark.slow
