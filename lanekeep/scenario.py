@@ -309,7 +309,12 @@ class EstimationConfig:
     reference_detector: str = "lanenet"
     reference_camera: str = "rear"
     residual_mode: str = "distance_aligned"
-    output: str = "select"
+    # "fused": the probability-weighted lane of the models; "select": the likeliest model's
+    # (the paper's rule, which paper mode keeps). With three models and a learned reference
+    # that is noisier than their differences, the weighted lane won on the tuning scenarios
+    # (tools/tuning/: the MMAE output's RMSE above the best own track by 0.36 cm on average
+    # against 1.19, car maximum summed 135 cm against 187).
+    output: str = "fused"
     # What a model hands the output: its Kalman estimate ("track", the MMAE filter's state) or
     # its own detection when its track's gate accepts it ("detection", the paper's PID input).
     model_lane: str = "track"

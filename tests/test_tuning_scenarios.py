@@ -68,3 +68,24 @@ def test_noise_tool_refuses_a_shipped_scenario_file():
     with pytest.raises(SystemExit) as exit_info:
         tool.parse_args([str(path)])
     assert exit_info.value.code == 2
+
+
+def _compare_tool():
+    spec = importlib.util.spec_from_file_location(
+        "compare_estimation", TOOLS / "compare_estimation.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_compare_tool_defaults_to_the_tuning_scenarios_and_refuses_scored_ones():
+    tool = _compare_tool()
+    args = tool.parse_args(["output=select,fused"])
+    assert sorted(Path(a) for a in args.scenarios) == TUNING
+    assert (args.key, args.values) == ("output", ["select", "fused"])
+    with pytest.raises(SystemExit) as scored:
+        tool.parse_args(["output=fused", "clear_curve"])
+    assert scored.value.code == 2
+    with pytest.raises(SystemExit) as unknown:
+        tool.parse_args(["no_such_key=1"])
+    assert unknown.value.code == 2
