@@ -28,11 +28,12 @@ from lanekeep.detectors.base import Detector, LaneEstimate, poly_eval
 from lanekeep.detectors.registry import make_detector
 from lanekeep.estimators.lane_estimator import CLOSED_LOOP_TRACKER, EstimatorOutput, LaneEstimator
 from lanekeep.estimators.odometry import DeadReckoning
+from lanekeep.estimators.roll import RollFilter, corrected
 from lanekeep.ground_truth import lane_centre_at, lane_centre_fit, lane_offsets
 from lanekeep.interrupts import stop_point, stop_requested
 from lanekeep.metrics import EpisodeReport, Metrics
 from lanekeep.paint_visibility import visible_paint
-from lanekeep.paper_mode import estimator_settings, front_detector_config
+from lanekeep.paper_mode import estimator_settings, front_detector_config, roll_compensation
 from lanekeep.record import EpisodeInfo, NullRecorder, Recorder
 from lanekeep.render import make_effects
 from lanekeep.scenario import Scenario
@@ -134,6 +135,7 @@ class Episode:
                                                    self.rig.cameras[est.reference_camera],
                                                    distortion=self.rig.distortion(
                                                        est.reference_camera))
+        self.roll = RollFilter(roll_compensation(est), self.dt_s)
         self.estimator = LaneEstimator(
             list(self.front),
             estimator_settings(est),
@@ -179,7 +181,7 @@ class Episode:
             sensed_pose = self._true_pose()  # scoring: where the frames are taken from
             frames = self._sense()
             signals = self.sensors.sample(self.world.car)
-            estimates = self._detect(frames, events)
+            estimates = self._roll_corrected(self._detect(frames, events), signals)
             estimate = self._estimate(estimates, signals)  # laps "track" and "mmae"
             events.extend(estimate.events)
             self._percept = Percept(index=self.index, time_s=float(self.world.data.time),
@@ -253,6 +255,15 @@ class Episode:
                                            frames[est.reference_camera], events)
         self.clock.lap("detect_reference")
         return out
+
+    def _roll_corrected(self, estimates: dict[str, LaneEstimate], signals: VehicleSignals
+                        ) -> dict[str, LaneEstimate]:
+        """Each camera's lanes with the body roll's offset error taken out (estimators/roll.py),
+        from the lateral accelerometer."""
+        self.roll.update(signals.accel_lat_mps2)
+        camera = {REFERENCE: self.scenario.estimation.reference_camera}
+        return {name: corrected(e, self.roll.offset_error_m(camera.get(name, "front")))
+                for name, e in estimates.items()}
 
     def _estimate(self, estimates: dict[str, LaneEstimate], signals: VehicleSignals
                   ) -> EstimatorOutput:

@@ -26,6 +26,7 @@ from dataclasses import replace
 
 from lanekeep.detectors.config import DetectorsConfig, load_config
 from lanekeep.estimators.lane_estimator import EstimatorSettings
+from lanekeep.estimators.roll import RollCompensation
 from lanekeep.scenario import DEFAULT_FRONT_DETECTORS, EstimationConfig, Scenario
 
 # Front ground windows (x_near_m, x_far_m, y_half_m) of the paper's two models. Model #2's
@@ -62,6 +63,14 @@ def estimator_settings(est: EstimationConfig) -> EstimatorSettings:
     return replace(settings, residual_mode="one_step_delay", output="select",
                    model_lane="detection", output_at="nearest_row", mmae_input="detection",
                    mmae_at_car=True, prefer_accepted=False)
+
+
+def roll_compensation(est: EstimationConfig) -> RollCompensation:
+    """The scenario's body roll compensation; the paper's loop has none."""
+    if est.mode == "paper":
+        return RollCompensation()
+    return RollCompensation(est.roll_gradient_deg_per_mps2,
+                            (("front", est.roll_lever_front_m), ("rear", est.roll_lever_rear_m)))
 
 
 def front_detector_config(name: str, mode: str,

@@ -320,6 +320,13 @@ class EstimationConfig:
     model_lane: str = "track"
     offset_lookahead_m: float = 4.0  # where offsets are compared and reported (front)
     control_lookahead_m: float = 8.0  # where the PID reads the chosen lane
+    # Body roll compensation (estimators/roll.py; default mode only): the car's roll per m/s^2
+    # of lateral acceleration (a suspension constant; 0 turns it off) and each camera's offset
+    # error per radian of roll, both measured by tools/measure_roll_coupling.py on the tuning
+    # scenarios.
+    roll_gradient_deg_per_mps2: float = 0.71
+    roll_lever_front_m: float = 2.4
+    roll_lever_rear_m: float = 2.5
 
     def __post_init__(self):
         if self.mode not in ESTIMATION_MODES:
@@ -339,6 +346,12 @@ class EstimationConfig:
         for key in ("offset_lookahead_m", "control_lookahead_m"):
             if not 0.0 <= getattr(self, key) <= 40.0:
                 raise InvalidValue(key, f"must be in [0, 40] m, got {getattr(self, key)}")
+        if not 0.0 <= self.roll_gradient_deg_per_mps2 <= 5.0:
+            raise InvalidValue("roll_gradient_deg_per_mps2",
+                               f"must be in [0, 5], got {self.roll_gradient_deg_per_mps2}")
+        for key in ("roll_lever_front_m", "roll_lever_rear_m"):
+            if not -10.0 <= getattr(self, key) <= 10.0:
+                raise InvalidValue(key, f"must be in [-10, 10] m, got {getattr(self, key)}")
 
 
 @dataclass(frozen=True)

@@ -172,6 +172,12 @@ DESCRIPTIONS: dict[str, tuple[str, str]] = {
                                       "as front_detectors"),
     "estimation.reference_camera": ("Camera the reference detector looks through.",
                                      _one_of(CAMERAS)),
+    "estimation.roll_gradient_deg_per_mps2": (
+        "The car's body roll per m/s^2 of lateral acceleration, with which each camera's lane "
+        "is corrected for roll from the lateral accelerometer (default mode; 0 = off).", ""),
+    "estimation.roll_lever_front_m": ("Front camera's offset error per radian of body roll.",
+                                      ""),
+    "estimation.roll_lever_rear_m": ("Rear camera's offset error per radian of body roll.", ""),
     "estimation.residual_mode": ("distance_aligned: reference and models compared at the same "
                                  "road position; one_step_delay: the paper's eq. 2.",
                                  _one_of(RESIDUAL_MODES)),
