@@ -16,9 +16,9 @@ TOOLS = Path(__file__).resolve().parents[1] / "tools"
 TUNING = sorted((TOOLS / "tuning").glob("*.toml"))
 
 
-def _noise_tool():
-    spec = importlib.util.spec_from_file_location(
-        "measure_detector_noise", TOOLS / "measure_detector_noise.py")
+def _tool(name: str):
+    """A script of tools/ loaded as a module."""
+    spec = importlib.util.spec_from_file_location(name, TOOLS / f"{name}.py")
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     return module
@@ -45,7 +45,7 @@ def test_tuning_scenarios_are_not_shipped():
 
 
 def test_noise_tool_defaults_to_the_tuning_scenarios():
-    tool = _noise_tool()
+    tool = _tool("measure_detector_noise")
     args = tool.parse_args([])
     assert sorted(Path(a) for a in args.scenarios) == TUNING
     assert not args.allow_scored
@@ -53,7 +53,7 @@ def test_noise_tool_defaults_to_the_tuning_scenarios():
 
 @pytest.mark.parametrize("arg", ["clear_straight", "case2_sharp_turn"])
 def test_noise_tool_refuses_a_shipped_scenario(arg, capsys):
-    tool = _noise_tool()
+    tool = _tool("measure_detector_noise")
     with pytest.raises(SystemExit) as exit_info:
         tool.parse_args([str(TUNING[0]), arg])
     assert exit_info.value.code == 2
@@ -63,23 +63,15 @@ def test_noise_tool_refuses_a_shipped_scenario(arg, capsys):
 
 
 def test_noise_tool_refuses_a_shipped_scenario_file():
-    tool = _noise_tool()
+    tool = _tool("measure_detector_noise")
     path = Path(load_scenario("fog").source)
     with pytest.raises(SystemExit) as exit_info:
         tool.parse_args([str(path)])
     assert exit_info.value.code == 2
 
 
-def _compare_tool():
-    spec = importlib.util.spec_from_file_location(
-        "compare_estimation", TOOLS / "compare_estimation.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
 def test_compare_tool_defaults_to_the_tuning_scenarios_and_refuses_scored_ones():
-    tool = _compare_tool()
+    tool = _tool("compare_estimation")
     args = tool.parse_args(["output=select,fused"])
     assert sorted(Path(a) for a in args.scenarios) == TUNING
     assert (args.key, args.values) == ("output", ["select", "fused"])
