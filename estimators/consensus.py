@@ -15,21 +15,23 @@ import numpy as np
 from scipy.stats import chi2
 
 
-def corroborated(measurements: Sequence[np.ndarray | None], r: np.ndarray,
-                 probability: float = 0.99, points_m: Sequence[float] = (5.0, 15.0)
-                 ) -> list[bool]:
+def corroborated(measurements: Sequence[np.ndarray | None],
+                 r: np.ndarray | Sequence[np.ndarray], probability: float = 0.99,
+                 points_m: Sequence[float] = (5.0, 15.0)) -> list[bool]:
     """For each measurement, whether at least one other measurement agrees with it.
 
     `measurements` are lane polynomials [c0, c1, c2] (None = no detection); `r` is the
-    covariance of one detector's coefficients, assumed the same for all and independent
-    between detectors. They are compared by the lane's lateral position at `points_m` ahead
-    (where a car is steered from: position and heading), not by the far curvature, where two
-    fits of the same paint differ most.
+    covariance of a detector's coefficients: one 3x3 matrix for all, or one per measurement
+    (detectors differ), the detectors independent of each other. They are compared by the
+    lane's lateral position at `points_m` ahead (where a car is steered from: position and
+    heading), not by the far curvature, where two fits of the same paint differ most.
     """
     h = np.vander(np.asarray(points_m, dtype=float), 3, increasing=True)
-    s = h @ (2.0 * np.asarray(r, dtype=float)) @ h.T
+    r = np.asarray(r, dtype=float)
+    per_measurement = r if r.ndim == 3 else np.broadcast_to(r, (len(measurements), 3, 3))
+    if per_measurement.shape != (len(measurements), 3, 3):
+        raise ValueError(f"expected one 3x3 R or one per measurement, got shape {r.shape}")
     threshold = float(chi2.ppf(probability, len(points_m)))
-    s_inv = np.linalg.inv(s)
     z = [None if m is None else h @ np.asarray(m, dtype=float) for m in measurements]
     agree = [False] * len(z)
     for i, a in enumerate(z):
@@ -38,6 +40,7 @@ def corroborated(measurements: Sequence[np.ndarray | None], r: np.ndarray,
             if a is None or b is None:
                 continue
             d = a - b
-            if float(d @ s_inv @ d) <= threshold:
+            s = h @ (per_measurement[i] + per_measurement[j]) @ h.T  # S = H (R_a + R_b) H'
+            if float(d @ np.linalg.solve(s, d)) <= threshold:
                 agree[i] = agree[j] = True
     return agree

@@ -17,7 +17,7 @@ detection is measured from the detections themselves.
 from __future__ import annotations
 
 import tomllib
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from importlib import resources
 
@@ -35,17 +35,47 @@ ACCEPTED = (UpdateStatus.UPDATED.value, UpdateStatus.INITIALIZED.value,
             UpdateStatus.RESTARTED.value)
 
 TRACKER_TOML = "closed_loop_tracker.toml"
+BY_DETECTOR = "measured_coefficient_covariance_by_detector"
 
 
-def closed_loop_tracker(text: str | None = None) -> TrackerConfig:
+@dataclass(frozen=True)
+class TrackerTuning:
+    """The closed loop's trackers: each detector measured on its own gets its own R (the
+    learned detector's fits scatter far less than the classical ones', and a track with its
+    detector's R neither lags a good detector nor follows a noisy one's scatter); any other
+    detector (a plug-in) gets the pooled one, `default`."""
+
+    default: TrackerConfig
+    by_detector: Mapping[str, TrackerConfig] = field(default_factory=dict)
+
+    def for_detector(self, name: str) -> TrackerConfig:
+        return self.by_detector.get(name, self.default)
+
+
+def _covariance(value: object, key: str, source: str) -> np.ndarray:
+    """A measured 3x3 coefficient covariance from the tuning file."""
+    try:
+        matrix = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        matrix = np.empty(0)
+    if matrix.shape != (3, 3):
+        raise ConfigError(source, key, "must be a 3x3 matrix of numbers")
+    return matrix
+
+
+def closed_loop_tracker(text: str | None = None) -> TrackerTuning:
     """The closed loop's tracker tuning from estimators/closed_loop_tracker.toml (or `text`):
-    its [tracker] table, with R = r_scale x the measured coefficient covariance."""
+    its [tracker] table, with R = r_scale x the measured coefficient covariance, the pooled
+    one (`measured_coefficient_covariance`) as the default and each detector's own
+    (`[measured_coefficient_covariance_by_detector]`) for that detector."""
     source = TRACKER_TOML
     if text is None:
         text = resources.files("lanekeep.estimators").joinpath(TRACKER_TOML).read_text()
     data = tomllib.loads(text)
     try:
-        covariance = np.asarray(data.pop("measured_coefficient_covariance"), dtype=float)
+        pooled = _covariance(data.pop("measured_coefficient_covariance"),
+                             "measured_coefficient_covariance", source)
+        per_detector = data.pop(BY_DETECTOR, {})
         scale = float(data.pop("r_scale"))
         table = data.pop("tracker")
     except KeyError as err:
@@ -55,13 +85,23 @@ def closed_loop_tracker(text: str | None = None) -> TrackerConfig:
     if "coefficient_covariance" in table:
         raise ConfigError(source, "tracker.coefficient_covariance",
                           "comes from measured_coefficient_covariance x r_scale")
-    table["coefficient_covariance"] = [[scale * v for v in row] for row in covariance.tolist()]
-    try:
-        return from_dict(TrackerConfig, table, path="tracker", source=source)
-    except ConfigError:
-        raise
-    except ValueError as err:  # TrackerConfig's own checks
-        raise ConfigError(source, "tracker", str(err)) from None
+
+    def config(covariance: np.ndarray, key: str) -> TrackerConfig:
+        rows = [[scale * v for v in row] for row in covariance.tolist()]
+        try:
+            return from_dict(TrackerConfig, {**table, "coefficient_covariance": rows},
+                             path="tracker", source=source)
+        except ConfigError:
+            raise
+        except ValueError as err:  # TrackerConfig's own checks
+            raise ConfigError(source, key, str(err)) from None
+
+    if not isinstance(per_detector, dict):
+        raise ConfigError(source, BY_DETECTOR, "must be a table of detector = 3x3 matrix")
+    by_detector = {name: config(_covariance(value, f"{BY_DETECTOR}.{name}", source),
+                                f"{BY_DETECTOR}.{name}")
+                   for name, value in per_detector.items()}
+    return TrackerTuning(config(pooled, "tracker"), by_detector)
 
 
 CLOSED_LOOP_TRACKER = closed_loop_tracker()
@@ -121,13 +161,15 @@ class LaneEstimator:
     """Trackers, distance-aligned MMAE and output policy for a set of front models."""
 
     def __init__(self, model_names: list[str], settings: EstimatorSettings,
-                 reference_x_m: float, tracker: TrackerConfig = CLOSED_LOOP_TRACKER) -> None:
+                 reference_x_m: float,
+                 tracker: TrackerConfig | TrackerTuning = CLOSED_LOOP_TRACKER) -> None:
         self.names = list(model_names)
         self.settings = settings
         self.lane_width_m = settings.lane_width_prior_m
         self.reference_x_m = reference_x_m
-        self.tracker_config = tracker
-        self.trackers = {name: LaneTracker(tracker) for name in self.names}
+        tuning = tracker if isinstance(tracker, TrackerTuning) else TrackerTuning(tracker)
+        self.tracker_configs = {name: tuning.for_detector(name) for name in self.names}
+        self.trackers = {name: LaneTracker(self.tracker_configs[name]) for name in self.names}
         # Distance-aligned residuals: each model's past lane estimate is carried by odometry to
         # the point the reference measures now (estimators/alignment.py), so the MMAE compares
         # values for the same road position at the same step (lag 0 in its own terms).
@@ -194,9 +236,8 @@ class LaneEstimator:
         detection the gate rejects but another model's detection corroborates restarts that
         track: the track, not the two detectors, has lost the road (a tight turn's onset
         outruns the constant-rate model)."""
-        agreed = dict(zip(centres, corroborated(list(centres.values()),
-                                                self.tracker_config.coefficient_r),
-                          strict=True))
+        noise = [self.tracker_configs[name].coefficient_r for name in centres]
+        agreed = dict(zip(centres, corroborated(list(centres.values()), noise), strict=True))
         tracked, status = {}, {}
         for name, tracker in self.trackers.items():
             tracker.predict(ego.dt_s, ego.speed_mps, ego.yaw_rate_rps, ego.lateral_speed_mps)
@@ -252,18 +293,24 @@ class LaneEstimator:
         "detection"` is the paper's PID input: the selected model's own detection, with its
         track standing in while the detector has nothing or failed the track's chi-square
         gate (one wild fit, a boundary bent onto a passing car, would otherwise steer the car
-        off its lane within a step). "fused" weights each model's lane by its probability.
+        off its lane within a step). "fused" weights each model's lane by its probability;
+        "precision" by its probability over its track's offset variance at the look-ahead
+        (`_precision_weights`).
         """
         names = self.names
         chosen = int(selection.selected)
         lanes = {n: self._lane_of(centres[n], tracked[n], status[n]) for n in names}
-        if self.settings.output == "fused":
-            polys = [(p, lanes[n]) for p, n in zip(selection.probabilities, names, strict=True)
-                     if lanes[n] is not None]
-            if not polys:
+        if self.settings.output in ("fused", "precision"):
+            live = [i for i, n in enumerate(names) if lanes[n] is not None]
+            if not live:
                 return chosen, None
-            weight = sum(p for p, _ in polys)
-            centre = sum(p * c for p, c in polys) / weight
+            weights = np.asarray(selection.probabilities, dtype=float)
+            if self.settings.output == "precision":
+                precise = self._precision_weights(weights)
+                # no live track with a variance (lanes from detections alone): probabilities
+                weights = precise if precise[live].sum() > 0 else weights
+            weight = sum(weights[i] for i in live)
+            centre = sum(weights[i] * lanes[names[i]] for i in live) / weight
         else:
             chosen = self._choose(selection.probabilities, status)
             centre = lanes[names[chosen]]
@@ -287,6 +334,21 @@ class LaneEstimator:
         if centre is None:
             return None, x_m
         return -float(poly_eval(centre, x_m)), x_m
+
+    def _precision_weights(self, probabilities: np.ndarray) -> np.ndarray:
+        """p_n / sigma_n^2: each model's lane taken as a Gaussian measurement of the road with
+        its track's offset variance at the look-ahead (C P C', which its detector's measured R
+        and its own history set, and which grows while it coasts), made wider by 1 / p_n for a
+        model the MMAE trusts less. The weighted mean is then the product of those Gaussians'
+        mean: the models average where they are alike, and a steady model outweighs a noisy
+        one that the reference cannot yet tell apart from it."""
+        x_m = self.settings.offset_lookahead_m
+        weights = np.zeros(len(self.names))
+        for i, name in enumerate(self.names):
+            variance = self.trackers[name].offset_variance_m2(x_m)
+            if variance is not None and variance > 0:
+                weights[i] = probabilities[i] / variance
+        return weights
 
     def _choose(self, probabilities: np.ndarray, status: dict[str, str]) -> int:
         """The MMAE's likeliest model, unless its filter rejected (or had no) detection this

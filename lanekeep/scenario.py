@@ -276,7 +276,7 @@ class Conditions:
 
 
 RESIDUAL_MODES = ("distance_aligned", "one_step_delay")
-OUTPUT_MODES = ("select", "fused")
+OUTPUT_MODES = ("select", "fused", "precision")
 ESTIMATION_MODES = ("default", "paper")
 MODEL_LANES = ("track", "detection")
 CAMERAS = ("front", "rear")

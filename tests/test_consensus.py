@@ -28,6 +28,18 @@ def test_far_curvature_disagreement_alone_does_not_break_agreement():
     assert corroborated([a, b], R, points_m=(5.0, 15.0)) == [True, True]
 
 
+def test_each_detector_brings_its_own_noise():
+    """S = R_a + R_b: a gap that two noisy detectors explain is too wide for two steady ones,
+    and a wrong shape of R is refused."""
+    a, b = np.zeros(3), np.array([0.25, 0.0, 0.0])
+    noisy, steady = 4.0 * R, R / 16.0
+    assert corroborated([a, b], [noisy, noisy]) == [True, True]
+    assert corroborated([a, b], [steady, steady]) == [False, False]
+    assert corroborated([a, b], np.stack([steady, noisy])) == corroborated([a, b], [noisy, steady])
+    with pytest.raises(ValueError, match="one per measurement"):
+        corroborated([a, b, a], [R, R])
+
+
 def test_restart_replaces_a_lagging_track_with_the_measurement():
     tracker = LaneTracker(TrackerConfig())
     tracker.update_coefficients([0.0, 0.0, 0.0])

@@ -98,11 +98,21 @@ def test_the_tracker_tuning_file_is_read_strictly():
     from lanekeep.estimators.lane_estimator import TRACKER_TOML, closed_loop_tracker
 
     text = resources.files("lanekeep.estimators").joinpath(TRACKER_TOML).read_text()
-    config = closed_loop_tracker(text)
+    tuning = closed_loop_tracker(text)
+    config = tuning.default
     assert config.coast_with_rates is False
     data = tomllib.loads(text)
     measured = np.asarray(data["measured_coefficient_covariance"])
     np.testing.assert_allclose(config.coefficient_r, data["r_scale"] * measured)
+    own = data["measured_coefficient_covariance_by_detector"]
+    assert set(own) == {"hough", "sliding_window", "lanenet"}
+    for name, covariance in own.items():
+        np.testing.assert_allclose(tuning.for_detector(name).coefficient_r,
+                                   data["r_scale"] * np.asarray(covariance))
+        assert tuning.for_detector(name).coast_with_rates is False
+    assert tuning.for_detector("my_plugin:Detector") is config
+    with pytest.raises(ConfigError, match="by_detector.lanenet"):
+        closed_loop_tracker(text.replace("\nlanenet = [", "\nlanenet = [[1.0], ", 1))
     with pytest.raises(ConfigError, match="tracker.c1_accel_psd"):
         closed_loop_tracker(text.replace("c1_accel_psd_ps3 =", "c1_accel_psd =", 1))
     with pytest.raises(ConfigError, match="r_scale"):
@@ -121,7 +131,11 @@ def test_paper_settings_hand_on_the_selected_detection_at_its_own_row():
     settings = estimator_settings(EstimationConfig(mode="paper"))
     assert (settings.residual_mode, settings.model_lane, settings.output_at) == (
         "one_step_delay", "detection", "nearest_row")
-    estimator = LaneEstimator(NAMES, settings, reference_x_m=-4.0)
+    from lanekeep.estimators.lane_estimator import CLOSED_LOOP_TRACKER
+
+    # one R for both models, so that their probabilities stay equal until the jump
+    estimator = LaneEstimator(NAMES, settings, reference_x_m=-4.0,
+                              tracker=CLOSED_LOOP_TRACKER.default)
     for k in range(10):
         estimator.update({n: _lane(0.0) for n in NAMES}, _lane(0.0), _ego(k))
     jump = LaneEstimate(valid=True, offset_m=-1.5, x_m=5.0, left=np.array([3.35, 0.0, 0.0]),
@@ -131,3 +145,46 @@ def test_paper_settings_hand_on_the_selected_detection_at_its_own_row():
     assert out.selected == 0  # the argmax (equal so far: the first), not the accepted one
     assert (out.offset_m, out.offset_x_m) == (-1.5, 5.0)
     assert out.reference_x_m == 0.0
+
+
+def test_each_detector_tracks_with_its_own_measured_noise():
+    """The shipped tuning gives every measured detector its own R (a plug-in the pooled one),
+    and the corroboration between models uses each one's: a steady detector's track follows
+    its detections more closely than a noisy detector's track follows the same detections."""
+    from lanekeep.estimators.lane_estimator import CLOSED_LOOP_TRACKER
+
+    names = ["hough", "lanenet", "mod:Plugin"]
+    estimator = LaneEstimator(names, EstimatorSettings(lane_width_prior_m=WIDTH), -4.0)
+    for name in names:
+        assert estimator.trackers[name].config is CLOSED_LOOP_TRACKER.for_detector(name)
+    assert estimator.trackers["mod:Plugin"].config is CLOSED_LOOP_TRACKER.default
+    for k in range(30):
+        estimator.update({n: _lane(0.0) for n in names}, _lane(0.0), _ego(k))
+    out = estimator.update({n: _lane(0.1) for n in names}, _lane(0.0), _ego(30))
+    moved = {n: out.tracked[n][0] for n in names}
+    assert moved["lanenet"] > moved["hough"] > 0.0
+
+
+def test_precision_output_equals_a_direct_computation():
+    """output = "precision": the lane is sum_n (p_n / v_n) c_n / sum_n (p_n / v_n), with p the
+    MMAE's probabilities and v each track's offset variance at the look-ahead."""
+    names = ["hough", "sliding_window", "lanenet"]
+    settings = EstimatorSettings(lane_width_prior_m=WIDTH, output="precision")
+    estimator = LaneEstimator(names, settings, reference_x_m=-4.0)
+    lanes = {"hough": 0.05, "sliding_window": -0.03, "lanenet": 0.01}
+    for k in range(25):
+        jitter = 0.01 * (-1) ** k
+        out = estimator.update({n: _lane(c + jitter * (n == "hough")) for n, c in lanes.items()},
+                               _lane(0.0), _ego(k))
+    p = out.selection.probabilities
+    v = np.array([estimator.trackers[n].offset_variance_m2(4.0) for n in names])
+    w = p / v
+    expected = sum(wi * out.tracked[n] for wi, n in zip(w, names, strict=True)) / w.sum()
+    np.testing.assert_allclose(out.centre, expected, rtol=1e-12, atol=1e-12)
+    fused = LaneEstimator(names, EstimatorSettings(lane_width_prior_m=WIDTH, output="fused"),
+                          reference_x_m=-4.0)
+    for k in range(25):
+        jitter = 0.01 * (-1) ** k
+        plain = fused.update({n: _lane(c + jitter * (n == "hough")) for n, c in lanes.items()},
+                             _lane(0.0), _ego(k))
+    assert not np.allclose(plain.centre, out.centre)  # the variances change the weights

@@ -7,20 +7,28 @@ score (it scores every shipped scenario, lanekeep/scenarios/*.toml): tuning the 
 bench's scenarios would tune it on its test set. Scenario names or files may be given instead;
 a shipped scenario is refused unless --allow-scored is given.
 
-Runs each scenario's episode, collects every valid detection's centre line [c0, c1, c2] minus
-the true centre line at the pose its frame was taken from, and prints the covariance of the
-errors' core (an iterated 97.5% chi-square trim, which keeps ~80%: the tails are heavy) and the
-share of detections a tracker gate would reject with it, then the result as the TOML to paste
-into estimators/closed_loop_tracker.toml (`measured_coefficient_covariance`). The truth is the
-least-squares quadratic of the exact road centre over the front detectors' own fit window
-(detectors/detectors.toml [profiles.front]), so that the errors are the detectors' and not the
-difference between two windows' quadratic fits of a curving road.
+Runs each scenario's episode (`--workers` at a time), collects every valid detection's centre
+line [c0, c1, c2] minus the true centre line at the pose its frame was taken from, per front
+detector, and prints per detector and for all of them together the covariance of the errors'
+core (an iterated 97.5% chi-square trim, which keeps ~80%: the tails are heavy) and the share
+of detections a tracker gate would reject with it, then the result as the TOML to paste into
+estimators/closed_loop_tracker.toml: the pooled covariance as `measured_coefficient_covariance`
+(the R of a detector measured on its own nowhere, e.g. a plug-in) and each detector's own in
+`[measured_coefficient_covariance_by_detector]`. Detectors differ by more than an order of
+magnitude (the learned one's offsets are far steadier than the classical ones'), and a track
+whose R is its detector's follows a good detector without lag and smooths a noisy one. The
+truth is the least-squares quadratic of the exact road centre over the front detectors' own fit
+window (detectors/detectors.toml [profiles.front]), so that the errors are the detectors' and
+not the difference between two windows' quadratic fits of a curving road.
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 import sys
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -44,13 +52,15 @@ def front_window() -> tuple[float, float]:
     return tuple(sorted((float(front.x_near_m), float(front.x_far_m))))
 
 
-def coefficient_errors(name: str | Path, fit_range_m: tuple[float, float]) -> list[np.ndarray]:
-    """Detection minus truth, one row per valid front detection of one episode."""
+def coefficient_errors(name: str | Path, fit_range_m: tuple[float, float]
+                       ) -> dict[str, list[np.ndarray]]:
+    """Per front detector, detection minus truth, one row per valid detection of one
+    episode."""
     from lanekeep.episode import Episode
     from lanekeep.ground_truth import lane_truth
 
     scenario = load_scenario(name)
-    errors = []
+    errors: dict[str, list[np.ndarray]] = {}
     with Episode(scenario) as episode:
         for _ in range(episode.total_steps):
             step = episode.step()
@@ -59,8 +69,17 @@ def coefficient_errors(name: str | Path, fit_range_m: tuple[float, float]) -> li
             for detector in episode.front:
                 centre = episode.estimator.centre_of(step.estimates[detector])
                 if centre is not None:
-                    errors.append(np.asarray(centre) - truth)
+                    errors.setdefault(detector, []).append(np.asarray(centre) - truth)
     return errors
+
+
+def _init_worker(threads: int) -> None:
+    """One worker's thread counts, before EGL, OpenCV or torch start (as `lanekeep bench`)."""
+    os.environ["LP_NUM_THREADS"] = os.environ["OMP_NUM_THREADS"] = str(threads)
+    os.environ.setdefault("MUJOCO_GL", "egl")
+    import cv2
+
+    cv2.setNumThreads(threads)
 
 
 def core_covariance(errors: np.ndarray, quantile: float = 0.975, rounds: int = 5
@@ -81,14 +100,24 @@ def _num(value: float) -> str:
     return f"{mantissa}e{int(exponent)}"
 
 
-def toml_block(cov: np.ndarray, count: int, kept: float, names: list[str]) -> str:
-    """The covariance as the lines to paste into estimators/closed_loop_tracker.toml."""
+def toml_matrix(key: str, cov: np.ndarray) -> str:
+    """`key = [[...], ...]` in TOML, one row a line."""
     rows = "\n".join("  [" + ", ".join(_num(v) for v in row) + "]," for row in cov)
-    return (
-        f"# scenarios: {' '.join(names)}\n"
-        f"# {count:,} detections, the {kept:.0%} core of a robust fit; stds {stds_text(cov)}\n"
-        f"measured_coefficient_covariance = [\n{rows}\n]"
-    )
+    return f"{key} = [\n{rows}\n]"
+
+
+def toml_block(pooled: Fit, per_detector: dict[str, Fit], names: list[str]) -> str:
+    """The covariances as the lines to paste into estimators/closed_loop_tracker.toml."""
+    lines = [f"# scenarios: {' '.join(names)}",
+             f"# all detectors: {pooled.count:,} detections, the {pooled.kept:.0%} core of a "
+             f"robust fit; stds {stds_text(pooled.cov)}",
+             toml_matrix("measured_coefficient_covariance", pooled.cov), "",
+             "[measured_coefficient_covariance_by_detector]"]
+    for detector, fit in per_detector.items():
+        lines.append(f"# {detector}: {fit.count:,} detections, the {fit.kept:.0%} core; "
+                     f"stds {stds_text(fit.cov)}")
+        lines.append(toml_matrix(detector, fit.cov))
+    return "\n".join(lines)
 
 
 def stds_text(cov: np.ndarray) -> str:
@@ -112,6 +141,7 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
                         help="scenario names or files (default: every file in tools/tuning/)")
     parser.add_argument("--allow-scored", action="store_true",
                         help="allow shipped scenarios, which `lanekeep bench` scores")
+    parser.add_argument("--workers", type=int, default=2, help="episodes run at a time")
     args = parser.parse_args(argv)
     if not args.scenarios:
         args.scenarios = [str(path) for path in tuning_scenarios()]
@@ -129,6 +159,31 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     return args
 
 
+@dataclass(frozen=True)
+class Fit:
+    """The robust core of one set of coefficient errors."""
+
+    count: int
+    mean: np.ndarray
+    cov: np.ndarray
+    kept: float
+
+    @classmethod
+    def of(cls, errors: np.ndarray) -> Fit:
+        mean, cov, kept = core_covariance(errors)
+        return cls(len(errors), mean, cov, kept)
+
+    def report(self, title: str, errors: np.ndarray) -> None:
+        print(f"{title}: {self.count} detections, core {self.kept:.0%}")
+        print("  core mean (bias):", self.mean)
+        print("  stds:", stds_text(self.cov))
+        gate = chi2.ppf(0.99, 3)
+        for scale in (1.0, 2.0, 4.0):
+            d2 = np.einsum("ij,jk,ik->i", errors, np.linalg.inv(scale * self.cov), errors)
+            print(f"  R = {scale:g} x core: {np.mean(d2 > gate):.1%} of detections beyond "
+                  "the 99% gate")
+
+
 def main(argv: list[str] | None = None) -> None:
     args = parse_args(argv)
     window = front_window()
@@ -139,26 +194,27 @@ def main(argv: list[str] | None = None) -> None:
     print("  scored by the bench: " + (", ".join(scored) if scored else "none"))
     print(f"  truth: least-squares quadratic of the road centre over x = {window[0]:g} .. "
           f"{window[1]:g} m (detectors.toml [profiles.front])")
-    errors_per = []
-    for arg, name in zip(args.scenarios, names, strict=True):
-        errors = coefficient_errors(arg, window)
-        print(f"  {name}: {len(errors)} detections", flush=True)
-        errors_per.extend(errors)
-    errors = np.array(errors_per)
-    mean, cov, kept = core_covariance(errors)
+    per_detector: dict[str, list[np.ndarray]] = {}
+    threads = max(1, (os.cpu_count() or 1) // args.workers)
+    with ProcessPoolExecutor(args.workers, initializer=_init_worker,
+                             initargs=(threads,)) as pool:
+        jobs = pool.map(coefficient_errors, args.scenarios, [window] * len(names))
+        for name, errors in zip(names, jobs, strict=True):
+            counts = ", ".join(f"{d} {len(e)}" for d, e in errors.items())
+            print(f"  {name}: {counts} detections", flush=True)
+            for detector, rows in errors.items():
+                per_detector.setdefault(detector, []).extend(rows)
     np.set_printoptions(precision=3, suppress=False)
-    print(f"{len(errors)} detections, core {kept:.0%}")
-    print("core mean (bias):", mean)
-    print("covariance:\n", cov)
-    print("stds:", stds_text(cov))
-    gate = chi2.ppf(0.99, 3)
-    for scale in (1.0, 2.0, 4.0):
-        d2 = np.einsum("ij,jk,ik->i", errors, np.linalg.inv(scale * cov), errors)
-        print(f"R = {scale:g} x core: {np.mean(d2 > gate):.1%} of detections beyond the 99% gate")
+    arrays = {d: np.array(rows) for d, rows in per_detector.items()}
+    fits = {d: Fit.of(e) for d, e in arrays.items()}
+    for detector, fit in fits.items():
+        fit.report(detector, arrays[detector])
+    everything = np.concatenate(list(arrays.values()))
+    pooled = Fit.of(everything)
+    pooled.report("all detectors", everything)
     print("\nTOML (estimators/closed_loop_tracker.toml):")
-    print(toml_block(cov, len(errors), kept, names))
+    print(toml_block(pooled, fits, names))
     sys.stdout.flush()
-
 
 if __name__ == "__main__":
     main()
