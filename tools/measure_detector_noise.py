@@ -28,8 +28,8 @@ import argparse
 import os
 import sys
 from concurrent.futures import ProcessPoolExecutor
-from dataclasses import dataclass
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 from scipy.stats import chi2
@@ -159,9 +159,9 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     return args
 
 
-@dataclass(frozen=True)
-class Fit:
-    """The robust core of one set of coefficient errors."""
+class Fit(NamedTuple):
+    """The robust core of one set of coefficient errors (a NamedTuple: the tool is also loaded
+    from its file by tools/compare_estimation.py and the tests, outside sys.modules)."""
 
     count: int
     mean: np.ndarray
