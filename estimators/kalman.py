@@ -266,6 +266,11 @@ class LaneTracker:
         """[c0, c1, c2] of y(x) = c0 + c1 x + c2 x^2, or None while invalid."""
         return self._kf.x[:N_COEF, 0].copy() if self.valid else None
 
+    @property
+    def coefficient_covariance(self) -> np.ndarray | None:
+        """The 3x3 covariance of [c0, c1, c2] (P's coefficient block), or None while invalid."""
+        return self._kf.P[:N_COEF, :N_COEF].copy() if self.valid else None
+
     def lateral_m(self, x_m: float = 0.0) -> float | None:
         """y of the tracked curve at look-ahead x_m (positive left), or None while invalid."""
         return float(self._h_lateral(x_m) @ self._kf.x[:, 0]) if self.valid else None

@@ -294,29 +294,26 @@ class LaneEstimator:
         track standing in while the detector has nothing or failed the track's chi-square
         gate (one wild fit, a boundary bent onto a passing car, would otherwise steer the car
         off its lane within a step). "fused" weights each model's lane by its probability;
-        "precision" by its probability over its track's offset variance at the look-ahead
-        (`_precision_weights`).
+        "precision" fuses the lanes with their tracks' covariances (`_precision_fused`).
         """
         names = self.names
         chosen = int(selection.selected)
         lanes = {n: self._lane_of(centres[n], tracked[n], status[n]) for n in names}
+        live = [i for i, n in enumerate(names) if lanes[n] is not None]
         if self.settings.output in ("fused", "precision"):
-            live = [i for i, n in enumerate(names) if lanes[n] is not None]
             if not live:
                 return chosen, None
-            weights = np.asarray(selection.probabilities, dtype=float)
+            p = selection.probabilities
+            centre = None
             if self.settings.output == "precision":
-                precise = self._precision_weights(weights)
-                # no live track with a variance (lanes from detections alone): probabilities
-                weights = precise if precise[live].sum() > 0 else weights
-            weight = sum(weights[i] for i in live)
-            centre = sum(weights[i] * lanes[names[i]] for i in live) / weight
+                centre = self._precision_fused(lanes, p)
+            if centre is None:  # probability-weighted (or no live track has a covariance)
+                centre = sum(p[i] * lanes[names[i]] for i in live) / sum(p[i] for i in live)
         else:
             chosen = self._choose(selection.probabilities, status)
             centre = lanes[names[chosen]]
             if centre is None:  # the selected model has nothing at all: take any live one
-                live = [lanes[n] for n in names if lanes[n] is not None]
-                centre = live[0] if live else None
+                centre = lanes[names[live[0]]] if live else None
         return chosen, centre
 
     def _offset(self, selected: int, centre: np.ndarray | None,
@@ -335,20 +332,30 @@ class LaneEstimator:
             return None, x_m
         return -float(poly_eval(centre, x_m)), x_m
 
-    def _precision_weights(self, probabilities: np.ndarray) -> np.ndarray:
-        """p_n / sigma_n^2: each model's lane taken as a Gaussian measurement of the road with
-        its track's offset variance at the look-ahead (C P C', which its detector's measured R
-        and its own history set, and which grows while it coasts), made wider by 1 / p_n for a
-        model the MMAE trusts less. The weighted mean is then the product of those Gaussians'
-        mean: the models average where they are alike, and a steady model outweighs a noisy
-        one that the reference cannot yet tell apart from it."""
-        x_m = self.settings.offset_lookahead_m
-        weights = np.zeros(len(self.names))
-        for i, name in enumerate(self.names):
-            variance = self.trackers[name].offset_variance_m2(x_m)
-            if variance is not None and variance > 0:
-                weights[i] = probabilities[i] / variance
-        return weights
+    def _precision_fused(self, lanes: dict[str, np.ndarray | None],
+                         probabilities: np.ndarray) -> np.ndarray | None:
+        """The product of the models' Gaussians: c = (sum_n p_n P_n^-1)^-1 sum_n p_n P_n^-1 c_n.
+
+        Each model's lane is a Gaussian estimate of the road's [c0, c1, c2] with its track's
+        covariance P_n (which its detector's measured R and its own history set, and which
+        grows while it coasts), made wider by 1 / p_n for a model the MMAE trusts less. Each
+        coefficient then comes from the models that measure it well: the near offset from a
+        steady model, the far curvature from one whose fits hold out there (lanenet's near
+        offset is the steadiest and its far curvature the noisiest, closed_loop_tracker.toml),
+        and models that are alike average. None when no live lane has a track.
+        """
+        information = np.zeros((3, 3))
+        vector = np.zeros(3)
+        for p, name in zip(probabilities, self.names, strict=True):
+            covariance = self.trackers[name].coefficient_covariance
+            if lanes[name] is None or covariance is None:
+                continue
+            weight = p * np.linalg.inv(covariance)  # p_n P_n^-1
+            information += weight
+            vector += weight @ np.asarray(lanes[name], dtype=float)
+        if not information.any():
+            return None
+        return np.linalg.solve(information, vector)
 
     def _choose(self, probabilities: np.ndarray, status: dict[str, str]) -> int:
         """The MMAE's likeliest model, unless its filter rejected (or had no) detection this

@@ -166,8 +166,8 @@ def test_each_detector_tracks_with_its_own_measured_noise():
 
 
 def test_precision_output_equals_a_direct_computation():
-    """output = "precision": the lane is sum_n (p_n / v_n) c_n / sum_n (p_n / v_n), with p the
-    MMAE's probabilities and v each track's offset variance at the look-ahead."""
+    """output = "precision": the lane is (sum_n p_n P_n^-1)^-1 sum_n p_n P_n^-1 c_n, with p the
+    MMAE's probabilities and P_n each track's coefficient covariance."""
     names = ["hough", "sliding_window", "lanenet"]
     settings = EstimatorSettings(lane_width_prior_m=WIDTH, output="precision")
     estimator = LaneEstimator(names, settings, reference_x_m=-4.0)
@@ -177,10 +177,13 @@ def test_precision_output_equals_a_direct_computation():
         out = estimator.update({n: _lane(c + jitter * (n == "hough")) for n, c in lanes.items()},
                                _lane(0.0), _ego(k))
     p = out.selection.probabilities
-    v = np.array([estimator.trackers[n].offset_variance_m2(4.0) for n in names])
-    w = p / v
-    expected = sum(wi * out.tracked[n] for wi, n in zip(w, names, strict=True)) / w.sum()
-    np.testing.assert_allclose(out.centre, expected, rtol=1e-12, atol=1e-12)
+    info = [pn * np.linalg.inv(estimator.trackers[n].P[:3, :3])
+            for pn, n in zip(p, names, strict=True)]
+    expected = np.linalg.solve(sum(info), sum(w @ out.tracked[n]
+                                              for w, n in zip(info, names, strict=True)))
+    np.testing.assert_allclose(out.centre, expected, rtol=1e-9, atol=1e-12)
+    assert min(out.tracked[n][0] for n in names) < out.centre[0] < max(
+        out.tracked[n][0] for n in names)
     fused = LaneEstimator(names, EstimatorSettings(lane_width_prior_m=WIDTH, output="fused"),
                           reference_x_m=-4.0)
     for k in range(25):
