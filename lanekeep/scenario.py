@@ -294,7 +294,8 @@ class EstimationConfig:
     The paper runs two front models and a rear-camera reference; residuals compare the
     reference with the models one step earlier (eq. 2, "one_step_delay") or, our default,
     at the same road position ("distance_aligned"). Output: the paper's argmax ("select") or
-    the probability-weighted lane ("fused").
+    the probability-weighted lane ("fused"), or, the default, the lanes fused with their tracks'
+    covariances and the probabilities ("precision").
     """
 
     # "paper": the paper's own loop (lanekeep/paper_mode.py): one-step-delay residuals, the
@@ -309,13 +310,17 @@ class EstimationConfig:
     reference_detector: str = "lanenet"
     reference_camera: str = "rear"
     residual_mode: str = "distance_aligned"
+    # "precision" (default): the models' lanes fused with their tracks' covariances, each
+    # weighted by its MMAE probability (estimators/lane_estimator.py `_precision_fused`);
     # "fused": the probability-weighted lane of the models; "select": the likeliest model's
-    # (the paper's rule, which paper mode keeps). With three models and a learned reference
-    # that is noisier than their differences, the weighted lane won on the tuning scenarios
-    # (`python tools/compare_estimation.py output=select,fused`: the MMAE output's RMSE above
-    # the best own track by 0.36 cm on average against 1.20, car maxima summed 135 cm against
-    # 187; with the roll compensation, 0.25 against 0.95 cm, but car maxima 174 against 161).
-    output: str = "fused"
+    # (the paper's rule, which paper mode keeps). Chosen on the tuning scenarios with each
+    # detector's own tracker R (`python tools/compare_estimation.py output=fused,precision`):
+    # the output's RMSE above the best own track by +0.05 cm on average against +0.07, at or
+    # below it (to the 0.01 cm printed) in 6 of 9 against 4; car maxima summed 165 cm against
+    # 157 (worst 42.4 against 33.9, tune_traffic_lead_van_three_lanes, where lanenet's
+    # curvature flips sign at a clothoid's end). Before, with one pooled R, "fused" beat
+    # "select" there (+0.25 cm against +0.95).
+    output: str = "precision"
     # What a model hands the output: its Kalman estimate ("track", the MMAE filter's state) or
     # its own detection when its track's gate accepts it ("detection", the paper's PID input).
     model_lane: str = "track"
