@@ -182,7 +182,9 @@ DESCRIPTIONS: dict[str, tuple[str, str]] = {
                                  "road position; one_step_delay: the paper's eq. 2.",
                                  _one_of(RESIDUAL_MODES)),
     "estimation.output": ("select = the most probable model's lane (the paper); fused = the "
-                          "probability-weighted lane.", _one_of(OUTPUT_MODES)),
+                          "probability-weighted lane; precision = the lanes fused with their "
+                          "tracks' covariances, each weighted by its probability.",
+                          _one_of(OUTPUT_MODES)),
     "estimation.model_lane": ("What a model hands the output: its Kalman track, or its own "
                               "detection when its track's gate accepts it.",
                               _one_of(MODEL_LANES)),
