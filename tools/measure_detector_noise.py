@@ -14,9 +14,9 @@ core (an iterated 97.5% chi-square trim, which keeps ~80%: the tails are heavy) 
 of detections a tracker gate would reject with it, then the result as the TOML to paste into
 estimators/closed_loop_tracker.toml: the pooled covariance as `measured_coefficient_covariance`
 (the R of a detector measured on its own nowhere, e.g. a plug-in) and each detector's own in
-`[measured_coefficient_covariance_by_detector]`. Detectors differ by more than an order of
-magnitude (the learned one's offsets are far steadier than the classical ones'), and a track
-whose R is its detector's follows a good detector without lag and smooths a noisy one. The
+`[measured_coefficient_covariance_by_detector]`. Detectors differ (at 4 m ahead the learned
+one's lateral std is 0.74 cm, the classical ones' 1.4-2.0; at 20 m it is the noisiest), and a
+track whose R is its detector's follows a good detector without lag and smooths a noisy one. The
 truth is the least-squares quadratic of the exact road centre over the front detectors' own fit
 window (detectors/detectors.toml [profiles.front]), so that the errors are the detectors' and
 not the difference between two windows' quadratic fits of a curving road.
