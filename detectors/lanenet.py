@@ -30,6 +30,7 @@ from lanekeep.detectors.base import LaneEstimate
 from lanekeep.detectors.birds_eye import detector_view
 from lanekeep.detectors.config import DetectorsConfig, GroundWindow, load_config
 from lanekeep.detectors.lanenet_decode import (
+    CURVATURE_PRIOR_PER_M,
     Boundary,
     DecodeSettings,
     Proposals,
@@ -115,11 +116,12 @@ class LaneNetSettings:
     min_points: int = 4
     seed: int = 0
     scene_change_grey: float = 30.0  # mean |grey difference| of thumbnails (0..255) = new scene
+    curvature_prior_per_m: float = CURVATURE_PRIOR_PER_M  # lanenet_decode.DecodeSettings
 
     def decode(self) -> DecodeSettings:
         return DecodeSettings(score_threshold=self.score_threshold, inlier_px=self.inlier_px,
                               iterations=self.ransac_iterations, min_points=self.min_points,
-                              seed=self.seed)
+                              seed=self.seed, curvature_prior_per_m=self.curvature_prior_per_m)
 
 
 @dataclass(frozen=True)
@@ -234,4 +236,4 @@ class LaneNetDetector:
         decoded = self.infer(frame)
         rules = self.config.lane
         return ego_estimate(decoded.boundaries, self._camera_for(frame.shape[1], frame.shape[0]),
-                            self.x_ref, rules.lane_width_m, rules.width_tolerance_m)
+                            self.x_ref, rules.lane_width_m, rules.width_tolerance_m, self._decode)

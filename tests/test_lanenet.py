@@ -344,3 +344,66 @@ def test_overfit_synthetic_lanes_end_to_end(tmp_path):
         est = detector.detect(frame)
         expected = offset_m - curvature * est.x_m ** 2
         assert est.valid and abs(est.offset_m - expected) < 0.05, (est, expected)
+
+
+def _ground_boundary(camera: CameraModel, slot: int, coeffs: np.ndarray, x: np.ndarray,
+                     noise_px: float, rng: np.random.Generator):
+    """A fitted-boundary stand-in: ground points on y = coeffs(x) moved across by pixel noise
+    (metres per pixel at each distance), with their image points."""
+    from lanekeep.detectors.lanenet_decode import Boundary
+
+    dist = np.abs(x - camera.position_m[0])
+    y = coeffs[0] + coeffs[1] * x + coeffs[2] * x * x
+    y = y + rng.normal(0.0, noise_px, len(x)) * dist / camera.fx
+    uv, _ = camera.project_ground(np.stack([x, y], -1))
+    return Boundary(slot=slot, coeffs=np.asarray(coeffs, float), frame="ground", points_px=uv,
+                    score=0.9, points_xy=np.stack([x, y], -1))
+
+
+def test_parallel_pair_bends_a_short_side_with_the_long_one():
+    from lanekeep.detectors.lanenet_decode import parallel_pair
+
+    camera, rng = _camera(), np.random.default_rng(3)
+    true_left, true_right = np.array([1.7, 0.01, 2e-3]), np.array([-2.0, 0.01, 2e-3])
+    left = _ground_boundary(camera, 0, true_left, np.linspace(5, 40, 30), 1.0, rng)
+    right = _ground_boundary(camera, 1, true_right, np.linspace(5, 9, 6), 1.0, rng)
+    own = ransac_fit(np.stack([np.ones(6), right.points_xy[:, 0], right.points_xy[:, 0] ** 2],
+                              -1), right.points_xy[:, 1],
+                     np.abs(right.points_xy[:, 0] - 1.0) / camera.fx, 6.0, 50, rng)[0]
+    c_left, c_right = parallel_pair(left, right, camera, DecodeSettings())
+    at = lambda c: c[0] + c[1] * 20.0 + c[2] * 400.0  # noqa: E731
+    assert c_left[1:] == pytest.approx(c_right[1:])  # one heading, one bend
+    assert abs(at(c_right) - at(true_right)) < 0.1  # within 10 cm at 20 m
+    assert abs(at(c_right) - at(true_right)) < abs(at(own) - at(true_right))
+    assert abs(at(c_left) - at(true_left)) < 0.1
+
+
+def test_parallel_pair_needs_three_points_a_side():
+    from lanekeep.detectors.lanenet_decode import parallel_pair
+
+    camera, rng = _camera(), np.random.default_rng(0)
+    left = _ground_boundary(camera, 0, np.array([1.8, 0, 0]), np.linspace(5, 30, 10), 0.5, rng)
+    right = _ground_boundary(camera, 1, np.array([-1.9, 0, 0]), np.array([6.0, 7.0]), 0.5, rng)
+    assert parallel_pair(left, right, camera, DecodeSettings()) is None
+
+
+def test_curvature_prior_holds_a_near_fit_straight_and_leaves_a_long_one():
+    camera, rng = _camera(), np.random.default_rng(1)
+    settings = DecodeSettings()
+    none = DecodeSettings(curvature_prior_per_m=0.0)
+    assert none.curvature_prior_row(3).shape == (0, 3)
+    row = settings.curvature_prior_row(3)
+    assert row.shape == (1, 3) and row[0, 2] == pytest.approx(
+        settings.pixel_noise_px / (settings.curvature_prior_per_m / 2))
+
+    def c2(x, curvature, s):
+        y = 1.8 + curvature / 2 * x * x + rng.normal(0, 2.0, len(x)) * x / camera.fx
+        basis = np.stack([np.ones_like(x), x, x * x], -1)
+        return ransac_fit(basis, y, np.maximum(x - 1.0, 1.0) / camera.fx, 6.0, 100,
+                          np.random.default_rng(0), s.curvature_prior_row(3))[0][2]
+
+    near = np.linspace(4, 9, 8)  # a straight line seen to 9 m: the prior damps a noisy bend
+    bends = [(abs(c2(near, 0.0, settings)), abs(c2(near, 0.0, none))) for _ in range(20)]
+    assert np.mean([b[0] for b in bends]) < 0.5 * np.mean([b[1] for b in bends])
+    far = np.linspace(4, 45, 40)  # a 100 m radius seen to 45 m: the points win
+    assert c2(far, 0.01, settings) == pytest.approx(0.005, rel=0.2)
