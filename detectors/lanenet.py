@@ -31,6 +31,8 @@ from lanekeep.detectors.birds_eye import detector_view
 from lanekeep.detectors.config import DetectorsConfig, GroundWindow, load_config
 from lanekeep.detectors.lanenet_decode import (
     CURVATURE_PRIOR_PER_M,
+    UNSEEN_WEIGHT,
+    WIDTH_STD_M,
     Boundary,
     DecodeSettings,
     Proposals,
@@ -117,11 +119,14 @@ class LaneNetSettings:
     seed: int = 0
     scene_change_grey: float = 30.0  # mean |grey difference| of thumbnails (0..255) = new scene
     curvature_prior_per_m: float = CURVATURE_PRIOR_PER_M  # lanenet_decode.DecodeSettings
+    unseen_weight: float = UNSEEN_WEIGHT  # lanenet_decode.DecodeSettings
+    width_std_m: float = WIDTH_STD_M  # lanenet_decode.DecodeSettings
 
     def decode(self) -> DecodeSettings:
         return DecodeSettings(score_threshold=self.score_threshold, inlier_px=self.inlier_px,
                               iterations=self.ransac_iterations, min_points=self.min_points,
-                              seed=self.seed, curvature_prior_per_m=self.curvature_prior_per_m)
+                              seed=self.seed, curvature_prior_per_m=self.curvature_prior_per_m,
+                              unseen_weight=self.unseen_weight, width_std_m=self.width_std_m)
 
 
 @dataclass(frozen=True)
@@ -202,7 +207,8 @@ class LaneNetDetector:
         grid = CellGrid(frame.shape[1], frame.shape[0], rows, cols)
         candidates = proposals(out.objectness[0, 0].numpy(), out.x_offset[0, 0].numpy(),
                                out.slot[0, 0].numpy(), grid,
-                               min(CANDIDATE_SCORE, self._decode.score_threshold))
+                               min(CANDIDATE_SCORE, self._decode.score_threshold),
+                               out.marking[0, 0].numpy())
         keep = candidates.scores > self._decode.score_threshold
         props = Proposals(*(getattr(candidates, f.name)[keep] for f in fields(Proposals)))
         camera = self._camera_for(frame.shape[1], frame.shape[0])

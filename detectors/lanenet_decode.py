@@ -29,6 +29,8 @@ from lanekeep.detectors.base import LaneEstimate
 from lanekeep.detectors.lanenet_targets import OTHER, SLOTS, CellGrid
 
 CURVATURE_PRIOR_PER_M = 0.003
+UNSEEN_WEIGHT = 0.3  # 1 = paint ignored
+WIDTH_STD_M = 0.15  # 0 = no width prior
 
 
 @dataclass(frozen=True)
@@ -47,6 +49,12 @@ class DecodeSettings:
     # 6 cm). Chosen on the simulated validation split (tools/tune_lanenet_decode.py).
     curvature_prior_per_m: float = CURVATURE_PRIOR_PER_M
     pixel_noise_px: float = 2.0  # std of a proposal's x in frame pixels
+    # A boundary point where the paint head sees no paint (behind a car, or guessed through the
+    # dark) is inferred, not seen: its std is pixel_noise_px / max(paint, unseen_weight). The
+    # ego pair's width is held to the lane's width with `width_std_m`, so that a side made of
+    # inferred points follows the seen side (tools/tune_lanenet_decode.py, occluded split).
+    unseen_weight: float = UNSEEN_WEIGHT
+    width_std_m: float = WIDTH_STD_M
 
     def __post_init__(self) -> None:
         if not 0.0 < self.score_threshold < 1.0:
@@ -55,6 +63,8 @@ class DecodeSettings:
             raise ValueError("inlier_px > 0, iterations >= 1, min_points >= 3")
         if self.curvature_prior_per_m < 0 or self.pixel_noise_px <= 0:
             raise ValueError("curvature_prior_per_m >= 0, pixel_noise_px > 0")
+        if not 0.0 < self.unseen_weight <= 1.0 or self.width_std_m < 0:
+            raise ValueError("unseen_weight in (0, 1], width_std_m >= 0")
 
     def curvature_prior_row(self, n_params: int) -> np.ndarray:
         """The prior as one more row of a fit weighted to pixels, the curvature term last:
@@ -76,6 +86,7 @@ class Proposals:
     scores: np.ndarray
     slots: np.ndarray
     slot_probs: np.ndarray  # (N,) probability of the chosen slot
+    paint: np.ndarray  # (N,) probability that paint is seen in the cell (1 without that head)
 
 
 @dataclass(frozen=True)
@@ -91,6 +102,7 @@ class Boundary:
     score: float  # mean objectness of the inliers
     points_xy: np.ndarray | None = None
     horizon_row: float | None = None
+    paint: np.ndarray | None = None  # each inlier's paint probability (Proposals.paint)
 
     @property
     def name(self) -> str:
@@ -142,11 +154,15 @@ def _poly(c: np.ndarray, x: np.ndarray) -> np.ndarray:
 
 
 def proposals(objectness: np.ndarray, x_offset: np.ndarray, slot_logits: np.ndarray,
-              grid: CellGrid, score_threshold: float) -> Proposals:
+              grid: CellGrid, score_threshold: float,
+              marking_logits: np.ndarray | None = None) -> Proposals:
     """Proposals of one frame from its head outputs: objectness logits (rows, cols), offsets
-    (rows, cols) in 0..1, slot logits (n_slots, rows, cols)."""
+    (rows, cols) in 0..1, slot logits (n_slots, rows, cols), paint logits (rows, cols)."""
     prob = 1.0 / (1.0 + np.exp(-np.asarray(objectness, dtype=np.float64)))
     r, c = np.nonzero(prob > score_threshold)
+    paint = np.ones(len(r))
+    if marking_logits is not None:
+        paint = 1.0 / (1.0 + np.exp(-np.asarray(marking_logits, dtype=np.float64)[r, c]))
     x = grid.cell_to_x(c, x_offset[r, c])
     y = grid.row_centres()[r]
     logits = slot_logits[:, r, c].astype(np.float64)
@@ -155,7 +171,7 @@ def proposals(objectness: np.ndarray, x_offset: np.ndarray, slot_logits: np.ndar
     half_w, half_h = grid.cell_w / 2.0, grid.cell_h / 2.0
     boxes = np.stack([x - half_w, y - half_h, x + half_w, y + half_h], -1)
     return Proposals(np.stack([x, y], -1).reshape(-1, 2), boxes.reshape(-1, 4), prob[r, c],
-                     p.argmax(axis=0).astype(np.int64), p.max(axis=0, initial=0.0))
+                     p.argmax(axis=0).astype(np.int64), p.max(axis=0, initial=0.0), paint)
 
 
 def ransac_fit(basis: np.ndarray, target: np.ndarray, scale: np.ndarray, threshold: float,
@@ -280,17 +296,22 @@ def _fit_one(props: Proposals, idx: np.ndarray, slot: int, settings: DecodeSetti
         score=float(props.scores[idx][inliers].mean()),
         points_xy=None if xy is None else xy[inliers],
         horizon_row=horizon,
+        paint=props.paint[idx][inliers],
     )
     return boundary, inliers
 
 
 def parallel_pair(left: Boundary, right: Boundary, camera: CameraModel,
-                  settings: DecodeSettings) -> tuple[np.ndarray, np.ndarray] | None:
+                  settings: DecodeSettings, lane_width_m: float | None = None
+                  ) -> tuple[np.ndarray, np.ndarray] | None:
     """The ego pair refitted as one lane: its own c0 per side, one heading c1 and one bend c2
     (the two lines of a lane are parallel), on both sides' inlier ground points weighted to
-    pixels, with the curvature prior; points off by more than `inlier_px` are dropped and the
-    fit repeated. A side seen only near the car (occluded, or short in the dark) then bends
-    with the side seen far. None when either side keeps fewer than 3 points."""
+    pixels, with the curvature prior; points off by more than `inlier_px` (over their own std)
+    are dropped and the fit repeated. A side seen only near the car (occluded, or short in the dark) then bends
+    with the side seen far. Points are weighted by how surely paint is seen there, and with
+    `lane_width_m` and `settings.width_std_m` the pair's width is held to the lane's, so that
+    a side inferred through an occluder leans on the seen one. None when either side keeps
+    fewer than 3 points."""
     blocks, targets, weights, sides = [], [], [], []
     for k, b in enumerate((left, right)):
         x, y = b.points_xy[:, 0], b.points_xy[:, 1]
@@ -298,18 +319,27 @@ def parallel_pair(left: Boundary, right: Boundary, camera: CameraModel,
         basis[:, k], basis[:, 2], basis[:, 3] = 1.0, x, x * x
         blocks.append(basis)
         targets.append(y)
-        weights.append(camera.fx / np.maximum(np.abs(x - camera.position_m[0]), 1.0))
+        seen = np.ones(len(x)) if b.paint is None else b.paint
+        px_per_m = camera.fx / np.maximum(np.abs(x - camera.position_m[0]), 1.0)
+        weights.append(px_per_m * np.maximum(seen, settings.unseen_weight))
         sides.append(np.full(len(x), k))
     basis, target = np.concatenate(blocks), np.concatenate(targets)
     w, side = np.concatenate(weights), np.concatenate(sides)
     prior = settings.curvature_prior_row(4)
+    prior_target = np.zeros(len(prior))
+    if lane_width_m is not None and settings.width_std_m > 0:
+        # c0_left - c0_right = width (parallel lines: their distance, up to cos(heading))
+        scale = settings.pixel_noise_px / settings.width_std_m
+        prior = np.vstack([prior, [[scale, -scale, 0.0, 0.0]]])
+        prior_target = np.append(prior_target, scale * lane_width_m)
     keep = np.ones(len(target), bool)
     for _ in range(3):
         if min(np.count_nonzero(keep & (side == k)) for k in (0, 1)) < 3:
             return None
         c, *_ = np.linalg.lstsq(np.vstack([basis[keep] * w[keep, None], prior]),
-                                np.concatenate([target[keep] * w[keep], np.zeros(len(prior))]),
+                                np.concatenate([target[keep] * w[keep], prior_target]),
                                 rcond=None)
+        # residual over each point's own std: an inferred point may stray further
         inliers = np.abs(basis @ c - target) * w < settings.inlier_px
         if np.array_equal(inliers, keep):
             break
@@ -338,7 +368,7 @@ def ego_estimate(boundaries: list[Boundary], camera: CameraModel | None, x_ref: 
     if left is None or right is None:
         missing = " and ".join(n for n, b in (("left", left), ("right", right)) if b is None)
         return LaneEstimate.invalid(f"ego pair not found ({missing} missing)", x_m=x_ref)
-    pair = parallel_pair(left, right, camera, settings or DecodeSettings())
+    pair = parallel_pair(left, right, camera, settings or DecodeSettings(), lane_width_m)
     c_left, c_right = pair if pair is not None else (left.coeffs, right.coeffs)
     y_left, y_right = float(_poly(c_left, x_ref)), float(_poly(c_right, x_ref))
     width = y_left - y_right

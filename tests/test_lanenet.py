@@ -407,3 +407,39 @@ def test_curvature_prior_holds_a_near_fit_straight_and_leaves_a_long_one():
     assert np.mean([b[0] for b in bends]) < 0.5 * np.mean([b[1] for b in bends])
     far = np.linspace(4, 45, 40)  # a 100 m radius seen to 45 m: the points win
     assert c2(far, 0.01, settings) == pytest.approx(0.005, rel=0.2)
+
+
+def test_a_side_inferred_without_paint_leans_on_the_seen_side_and_the_lane_width():
+    from dataclasses import replace
+
+    from lanekeep.detectors.lanenet_decode import parallel_pair
+
+    camera, rng = _camera(), np.random.default_rng(5)
+    seen = _ground_boundary(camera, 1, np.array([-1.8, 0.0, 0.0]), np.linspace(5, 30, 20),
+                            1.0, rng)
+    # the left side guessed through an occluder: 0.5 m too far out, and no paint seen there
+    guessed = _ground_boundary(camera, 0, np.array([2.4, 0.0, 0.0]), np.linspace(5, 30, 20),
+                               1.0, rng)
+    guessed = replace(guessed, paint=np.full(20, 0.02))
+    seen = replace(seen, paint=np.full(20, 0.95))
+    ignore = DecodeSettings(unseen_weight=1.0, width_std_m=0.0)
+    c_left, _ = parallel_pair(guessed, seen, camera, ignore, 3.7)
+    assert c_left[0] == pytest.approx(2.4, abs=0.05)  # paint ignored: the guess stands
+    trust_paint = DecodeSettings(unseen_weight=0.01, width_std_m=0.15)
+    c_left, c_right = parallel_pair(guessed, seen, camera, trust_paint, 3.7)
+    assert c_right[0] == pytest.approx(-1.8, abs=0.05)  # the seen side stays where it is
+    assert abs(c_left[0] - 1.9) < 0.15  # the guessed side follows it at the lane's width
+    with pytest.raises(ValueError):
+        DecodeSettings(unseen_weight=0.0)
+
+
+def test_proposals_carry_the_paint_probability():
+    grid = CellGrid(W, H, 4, 4)
+    obj = np.full((4, 4), -10.0)
+    obj[2, 1] = obj[3, 2] = 10.0
+    marking = np.zeros((4, 4))
+    marking[2, 1], marking[3, 2] = 5.0, -5.0
+    props = proposals(obj, np.full((4, 4), 0.5), np.zeros((5, 4, 4)), grid, 0.5, marking)
+    assert props.paint.round(2).tolist() == [0.99, 0.01]
+    assert proposals(obj, np.full((4, 4), 0.5), np.zeros((5, 4, 4)), grid, 0.5).paint.tolist() \
+        == [1.0, 1.0]

@@ -1,74 +1,119 @@
-"""Choose LaneNet's decoding prior on the simulated validation split, never on the test sets.
+"""Choose LaneNet's decoding priors on the simulated validation split, never on the test sets.
 
     python tools/make_dataset.py --out data/lanenet --train 0 --val 24 --test 0   # ~1.5 min
-    python tools/tune_lanenet_decode.py --data data/lanenet [--priors 0,0.01,0.005,0.002,0.001]
+    python tools/tune_lanenet_decode.py --data data/lanenet
 
-For each curvature prior (`DecodeSettings.curvature_prior_per_m`, 1/m; 0 = none) the shipped
-weights run over every validation sequence (front and rear frames, each sequence from a reset
-state, frames upscaled to 1280x720 as `lanekeep eval` does), and the ego lane is scored by
-`lanekeep/lane_eval.py`'s rules: ADE / FDE at 4-20 m, offset error, share of valid frames.
-Prints one row per prior and the one with the lowest ADE (ties: the weaker prior). Labels are
-read only to score. The validation worlds are disjoint from the training worlds and from
-`lanekeep eval`'s sets, so the choice is scored afresh there.
+The shipped weights run once over every validation sequence (front and rear frames, each
+sequence from a reset state, frames upscaled to 1280x720 as `lanekeep eval` does), on the
+sequences as rendered and on a copy with vehicle-sized occluders over 60% of their paint
+(`lanekeep/eval_sets.occlude`, seeded apart from `lanekeep eval`'s sets). Each combination of
+the decoding's priors (`DecodeSettings`: curvature prior, weight of points where no paint is
+seen, std of the ego pair's width about the lane's) then decodes the same network outputs,
+and the ego lane is scored by `lanekeep/lane_eval.py`'s rules: ADE at 4-20 m and the offset
+error (cm), and the share of valid frames. The choice is the lowest mean of ADE + offset error
+over the two copies. Labels are read only to score. The validation worlds are disjoint from the
+training worlds and from `lanekeep eval`'s, so the choice is scored afresh there.
 """
 
 from __future__ import annotations
 
 import argparse
+import itertools
 import sys
+from dataclasses import replace
 from pathlib import Path
 
 import cv2
 import numpy as np
 
 from lanekeep.dataset import LABEL_HEIGHT, LABEL_WIDTH, camera_from_vector, load_split
-from lanekeep.detectors.lanenet import LaneNetDetector, LaneNetSettings
+from lanekeep.detectors.lanenet import LaneNetDetector
+from lanekeep.detectors.lanenet_decode import DecodeSettings, ego_estimate, fit_boundaries
+from lanekeep.detectors.lanenet_targets import CellGrid
+from lanekeep.eval_sets import occlude
 from lanekeep.lane_eval import ego_errors, offset_error
 
+OCCLUSION_SEED = 0x0CC1  # occluders of the validation copy (lanekeep eval's use their own)
 
-def score(data: dict, settings: LaneNetSettings, weights: str | None) -> dict[str, float]:
-    """Ego-lane ADE / FDE / offset error (cm) and valid share over a split."""
-    errors, offsets, valid = [], [], []
-    detectors: dict[bytes, LaneNetDetector] = {}
+
+def outputs(data: dict, occlusion: float, weights: str | None) -> list[tuple]:
+    """Per frame: (proposals, grid, camera, detector, labels, rear) from one network pass."""
+    rng = np.random.default_rng(OCCLUSION_SEED)
+    out, detectors = [], {}
     for q in range(len(data["frames"])):
         camera = camera_from_vector(data["camera"][q])
         key = camera.K.tobytes() + camera.position_m.tobytes() + camera.rotation.tobytes()
         if key not in detectors:
-            detectors[key] = LaneNetDetector(camera, settings=settings, weights=weights)
+            detectors[key] = LaneNetDetector(camera, weights=weights)
         det = detectors[key]
         det.reset()
-        rear = bool(data["is_rear"][q])
-        for t, frame in enumerate(data["frames"][q]):
+        frames = data["frames"][q]
+        if occlusion > 0:
+            height = frames.shape[1]
+            horizon = (camera.horizon_row() + 0.5) * height / camera.height - 0.5
+            frames, _ = occlude(frames, data["paint"][q], horizon, camera.height_m, occlusion,
+                                rng)
+        for t, frame in enumerate(frames):
             big = cv2.resize(frame, (LABEL_WIDTH, LABEL_HEIGHT), interpolation=cv2.INTER_LINEAR)
-            est = det.detect(big)
-            labels = data["slots"][q, t], data["ground_y"][q, t]
-            errors.append(ego_errors(est, labels[1], labels[0], rear))
-            offsets.append(offset_error(est, labels[1], labels[0], rear))
-            valid.append(est.valid)
+            decoded = det.infer(big)
+            rows, cols = det.model.config.grid
+            out.append((decoded.proposals, CellGrid(LABEL_WIDTH, LABEL_HEIGHT, rows, cols),
+                        camera, det, (data["slots"][q, t], data["ground_y"][q, t]),
+                        bool(data["is_rear"][q])))
+    return out
+
+
+def score(frames: list[tuple], settings: DecodeSettings) -> dict[str, float]:
+    """Ego-lane ADE / FDE / offset error (cm) and valid share of decoded frames."""
+    errors, offsets, valid = [], [], []
+    for props, grid, camera, det, (slots, ground_y), rear in frames:
+        lane = det.config.lane
+        est = ego_estimate(fit_boundaries(props, grid, settings, camera), camera, det.x_ref,
+                           lane.lane_width_m, lane.width_tolerance_m, settings)
+        errors.append(ego_errors(est, ground_y, slots, rear))
+        offsets.append(offset_error(est, ground_y, slots, rear))
+        valid.append(est.valid)
     err = np.asarray(errors) * 100.0
     return {"ade_cm": float(np.nanmean(err)), "fde_cm": float(np.nanmean(err[:, :, -1])),
-            "median_fde_cm": float(np.nanmedian(err[:, :, -1])),
             "offset_err_cm": float(np.nanmean(offsets) * 100.0), "valid": float(np.mean(valid))}
+
+
+def _floats(text: str) -> list[float]:
+    return sorted({float(v) for v in text.split(",")})
 
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--data", required=True, help="dataset folder with a val split")
-    parser.add_argument("--priors", default="0,0.01,0.005,0.003,0.002,0.001,0.0005",
-                        help="curvature priors to try (1/m, comma-separated; 0 = none)")
+    parser.add_argument("--curvature", default="0,0.005,0.003,0.002,0.001",
+                        help="curvature priors (1/m; 0 = none)")
+    parser.add_argument("--unseen", default="1,0.5,0.3,0.1",
+                        help="weights of points with no paint seen (1 = paint ignored)")
+    parser.add_argument("--width-std", default="0,0.5,0.3,0.15",
+                        help="std of the ego pair's width about the lane's (m; 0 = none)")
+    parser.add_argument("--occlusion", type=float, default=0.6,
+                        help="share of paint hidden in the occluded copy")
     parser.add_argument("--weights", default=None, help="LaneNet weights (default: shipped)")
     args = parser.parse_args(argv)
     data = load_split(Path(args.data), "val")
+    copies = {"as rendered": outputs(data, 0.0, args.weights),
+              f"occluded {args.occlusion:.0%}": outputs(data, args.occlusion, args.weights)}
     rows = []
-    for prior in sorted({float(p) for p in args.priors.split(",")}):
-        s = score(data, LaneNetSettings(curvature_prior_per_m=prior), args.weights)
-        rows.append((prior, s))
-        print(f"prior {prior:<7g} ADE {s['ade_cm']:6.1f}  FDE {s['fde_cm']:6.1f} "
-              f"(median {s['median_fde_cm']:5.1f})  offset {s['offset_err_cm']:5.1f} cm  "
-              f"valid {s['valid']:.2f}", flush=True)
-    best = min(rows, key=lambda r: (round(r[1]["ade_cm"], 1), r[0] > 0, -r[0]))
-    print(f"lowest ADE: prior {best[0]:g} 1/m ({best[1]['ade_cm']:.1f} cm) over "
-          f"{len(data['frames'])} sequences")
+    for curvature, unseen, width_std in itertools.product(
+            _floats(args.curvature), _floats(args.unseen), _floats(args.width_std)):
+        settings = replace(DecodeSettings(), curvature_prior_per_m=curvature,
+                           unseen_weight=unseen, width_std_m=width_std)
+        scores = {name: score(frames, settings) for name, frames in copies.items()}
+        objective = float(np.mean([s["ade_cm"] + s["offset_err_cm"] for s in scores.values()]))
+        rows.append((objective, curvature, unseen, width_std))
+        print(f"curvature {curvature:<6g} unseen {unseen:<4g} width_std {width_std:<5g} "
+              + "  ".join(f"{name}: ADE {s['ade_cm']:5.1f} offset {s['offset_err_cm']:5.1f} "
+                          f"valid {s['valid']:.2f}" for name, s in scores.items())
+              + f"  objective {objective:.2f}", flush=True)
+    best = min(rows)
+    print(f"chosen: curvature_prior_per_m {best[1]:g}, unseen_weight {best[2]:g}, "
+          f"width_std_m {best[3]:g} (objective {best[0]:.2f}) over {len(data['frames'])} "
+          "validation sequences")
     return 0
 
 
