@@ -308,10 +308,10 @@ def parallel_pair(left: Boundary, right: Boundary, camera: CameraModel,
     (the two lines of a lane are parallel), on both sides' inlier ground points weighted to
     pixels, with the curvature prior; points off by more than `inlier_px` (over their own std)
     are dropped and the fit repeated. A side seen only near the car (occluded, or short in the
-    dark) then bends with the side seen far. Points are weighted by how surely paint is seen there, and with
-    `lane_width_m` and `settings.width_std_m` the pair's width is held to the lane's, so that
-    a side inferred through an occluder leans on the seen one. None when either side keeps
-    fewer than 3 points."""
+    dark) then bends with the side seen far. Points are weighted by how surely paint is seen
+    there, and with `lane_width_m` and `settings.width_std_m` the pair's width is held to the
+    lane's, so that a side inferred through an occluder leans on the seen one. None when
+    either side keeps fewer than 3 points."""
     blocks, targets, weights, sides = [], [], [], []
     for k, b in enumerate((left, right)):
         x, y = b.points_xy[:, 0], b.points_xy[:, 1]
