@@ -231,21 +231,29 @@ def estimate_horizon_row(groups: list[np.ndarray], grid: CellGrid) -> float:
 
 def fit_boundaries(props: Proposals, grid: CellGrid, settings: DecodeSettings,
                    camera: CameraModel | None = None) -> list[Boundary]:
-    """One boundary per slot (several for "other"), fitted by RANSAC; ordered by slot."""
-    rng = np.random.default_rng(settings.seed)
-    groups = {s: np.flatnonzero(props.slots == s) for s in range(len(SLOTS))}
+    """One boundary per slot (several for "other"), fitted by RANSAC; ordered by slot.
+
+    Mirror-symmetric: each pool's points are taken in an order by row and distance from the
+    middle column, and each pool draws from its own generator, seeded alike for a slot and its
+    mirror slot (ego-left and ego-right, ...), so that the mirror image of a frame's proposals
+    gives the mirror image of its boundaries, not another random draw."""
+    middle = (grid.frame_width - 1) / 2.0
+    order = np.lexsort((np.abs(props.points_px[:, 0] - middle), props.points_px[:, 1]))
+    groups = {s: order[props.slots[order] == s] for s in range(len(SLOTS))}
     horizon = None
     if camera is None:
         horizon = estimate_horizon_row([props.points_px[i] for i in groups.values()], grid)
     # "Other" boundaries lie beyond both neighbour lanes: fit each side on its own, so that
     # RANSAC never draws one curve through points of the far left and the far right.
     other = groups.pop(OTHER)
-    left_side = props.points_px[other, 0] < grid.frame_width / 2.0
+    left_side = props.points_px[other, 0] < middle
     pools = [(slot, idx, 1) for slot, idx in groups.items()]
     pools += [(OTHER, other[left_side], settings.max_other),
               (OTHER, other[~left_side], settings.max_other)]
     out = []
     for slot, idx, tries in pools:
+        rng = np.random.default_rng([settings.seed, int(SLOTS[slot].startswith("next")),
+                                     int(slot == OTHER)])
         for _ in range(tries):
             if len(idx) < settings.min_points:
                 break

@@ -7,7 +7,7 @@ import pytest
 
 from lanekeep.cameras import CameraRig, RenderSettings
 from lanekeep.detectors.base import poly_eval
-from lanekeep.detectors.lanenet import LaneNetDetector
+from lanekeep.detectors.lanenet import LaneNetDetector, LaneNetSettings
 from lanekeep.ground_truth import lane_centre_at
 from lanekeep.render import place_on_road
 from lanekeep.scenario import load_scenario
@@ -49,3 +49,28 @@ def test_shipped_weights_are_deterministic_and_alpha_in_unit_interval(clear_fram
         assert np.array_equal(pa, pb) and np.array_equal(sa, sb)
     assert 0.0 <= detector.model.alpha.item() <= 1.0
     assert len(runs[0][0][0]) > 10  # a single frame (zero state) already gives proposals
+
+
+def _sorted_points(points: np.ndarray) -> np.ndarray:
+    return points[np.lexsort((points[:, 1], points[:, 0]))]
+
+
+def test_mirror_pass_makes_the_fit_mirror_symmetric(clear_frames):
+    """With `mirror` (the default) a frame and its mirror image give mirrored proposals and
+    opposite offsets: the fit no longer inherits the network's own left-right lean."""
+    frame, camera, _ = clear_frames[0]  # a centred camera: the image mirror is the world's
+    width = frame.shape[1]
+    detectors = [LaneNetDetector(camera), LaneNetDetector(camera)]
+    direct = detectors[0].detect(frame)
+    mirrored = detectors[1].detect(np.ascontiguousarray(frame[:, ::-1]))
+    assert direct.valid and mirrored.valid
+    points = [d.last.proposals.points_px.copy() for d in detectors]
+    points[1][:, 0] = width - 1 - points[1][:, 0]
+    assert len(points[0]) == len(points[1]) > 10
+    np.testing.assert_allclose(_sorted_points(points[0]), _sorted_points(points[1]), atol=1e-3)
+    assert abs(direct.offset_m + mirrored.offset_m) < 1e-6  # the fit is mirror-symmetric too
+    # the network's own proposals (AP's candidates) are the frame's pass only
+    single = LaneNetDetector(camera, settings=LaneNetSettings(mirror=False))
+    single.detect(frame)
+    assert np.array_equal(single.last.candidates.points_px, detectors[0].last.candidates.points_px)
+    assert len(single.last.proposals.points_px) < len(points[0])

@@ -15,7 +15,7 @@ of detections a tracker gate would reject with it, then the result as the TOML t
 estimators/closed_loop_tracker.toml: the pooled covariance as `measured_coefficient_covariance`
 (the R of a detector measured on its own nowhere, e.g. a plug-in) and each detector's own in
 `[measured_coefficient_covariance_by_detector]`. Detectors differ (at 4 m ahead the learned
-one's lateral std is 0.74 cm, the classical ones' 1.4-2.0; at 20 m it is the noisiest), and a
+one's lateral std is 0.64 cm, the classical ones' 1.3-2.1; at 20 m it is the noisiest), and a
 track whose R is its detector's follows a good detector without lag and smooths a noisy one. The
 truth is the least-squares quadratic of the exact road centre over the front detectors' own fit
 window (detectors/detectors.toml [profiles.front]), so that the errors are the detectors' and
