@@ -14,11 +14,12 @@ difference between consecutive thumbnails: what the GRU remembers of another roa
 
 With `mirror` (the default) each frame is also run mirrored left-right, in the same batch, and
 the boundaries are fitted to the proposals of both passes (the mirrored ones mapped back, their
-slots swapped). Why: the network is not exactly mirror-symmetric (its strided convolutions sample
-each cell off its centre; training flips make it learn to cancel that, not cancel it exactly), and
-it places far, faint markings a few pixels to the image's left. Seen from the rear camera, whose
-fits lean on few far points, a straight road read as a 1200 m radius bend and the reference 1 cm
-off. The pooled fit is mirror-symmetric by construction; it costs ~25% more time, not 2x.
+slots swapped). Why: though trained with mirrored frames, the network is not mirror-symmetric
+(likely because its stride-2 convolutions sample each cell off its centre, which training
+cancels only where the evidence is strong): it places far, faint markings 1-3 px to the image's
+left. Seen from the rear camera, whose fits lean on a few far points, a straight road read as a
+1200-1500 m radius bend and the reference 1 cm off. The pooled fit is mirror-symmetric by
+construction (so is the RANSAC, lanenet_decode.fit_boundaries); it costs ~25% more time, not 2x.
 """
 
 from __future__ import annotations

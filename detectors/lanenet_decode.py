@@ -291,7 +291,8 @@ def _fit_one(props: Proposals, idx: np.ndarray, slot: int, settings: DecodeSetti
         return None
     fit = ransac_fit(basis[ok], target[ok], scale[ok], settings.inlier_px, settings.iterations,
                      rng, prior)
-    if fit is None or fit[1].sum() < settings.min_points:
+    # evidence is counted in row bands, not points: a mirror pass reads the same rows again
+    if fit is None or len(np.unique(pts[ok][fit[1], 1])) < settings.min_points:
         return None
     coeffs, inl_ok = fit
     inliers = np.zeros(len(idx), bool)
