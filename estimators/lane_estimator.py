@@ -138,6 +138,7 @@ class EstimatorSettings:
     # track coasts (see `LaneEstimator._choose`); the paper takes the argmax.
     prefer_accepted: bool = True
     lane_width_prior_m: float = 3.7
+    reference_std_m: float = 0.05  # eq. 8's R: the reference's offset noise (MMAEConfig)
     lane_width_gain: float = 0.05  # weight of each two-boundary measurement in the mean
     lane_width_range_m: tuple[float, float] = (2.5, 5.0)  # plausible widths; others ignored
 
@@ -176,7 +177,8 @@ class LaneEstimator:
         # The alignment is done here, once: the MMAE compares what it is given ("same_step").
         self.aligned = OdometryAlignedHistory(len(self.names))
         mode = "same_step" if settings.residual_mode == "distance_aligned" else "one_step_delay"
-        self.mmae = MMAE(len(self.names), MMAEConfig(residual_mode=mode))
+        self.mmae = MMAE(len(self.names), MMAEConfig(residual_mode=mode,
+                                                     reference_std_m=settings.reference_std_m))
 
     def reset(self) -> None:
         self.lane_width_m = self.settings.lane_width_prior_m

@@ -325,6 +325,8 @@ class EstimationConfig:
     # its own detection when its track's gate accepts it ("detection", the paper's PID input).
     model_lane: str = "track"
     offset_lookahead_m: float = 4.0  # where offsets are compared and reported (front)
+    # Eq. 8's R: the rear reference's offset noise (m) in the MMAE's residual density.
+    reference_std_m: float = 0.05
     control_lookahead_m: float = 8.0  # where the PID reads the chosen lane
     # Body roll compensation (estimators/roll.py; default mode only): the car's roll per m/s^2
     # of lateral acceleration (a suspension constant; 0 turns it off) and each camera's offset
@@ -349,6 +351,9 @@ class EstimationConfig:
             raise InvalidValue("output", f"must be one of {OUTPUT_MODES}")
         if self.model_lane not in MODEL_LANES:
             raise InvalidValue("model_lane", f"must be one of {MODEL_LANES}")
+        if not 0.001 <= self.reference_std_m <= 1.0:
+            raise InvalidValue("reference_std_m",
+                               f"must be in [0.001, 1] m, got {self.reference_std_m}")
         for key in ("offset_lookahead_m", "control_lookahead_m"):
             if not 0.0 <= getattr(self, key) <= 40.0:
                 raise InvalidValue(key, f"must be in [0, 40] m, got {getattr(self, key)}")

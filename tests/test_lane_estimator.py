@@ -191,3 +191,20 @@ def test_precision_output_equals_a_direct_computation():
         plain = fused.update({n: _lane(c + jitter * (n == "hough")) for n, c in lanes.items()},
                              _lane(0.0), _ego(k))
     assert not np.allclose(plain.centre, out.centre)  # the variances change the weights
+
+
+def test_the_reference_noise_setting_reaches_the_mmae():
+    """Eq. 8's R comes from the scenario: a noisier reference moves the probabilities less."""
+    from lanekeep.paper_mode import estimator_settings
+    from lanekeep.scenario import EstimationConfig
+
+    spreads = []
+    for std in (0.02, 0.05):
+        settings = estimator_settings(EstimationConfig(reference_std_m=std))
+        assert settings.reference_std_m == std
+        estimator = LaneEstimator(NAMES, settings, -4.0)
+        assert estimator.mmae.config.reference_std_m == std
+        z = [0.0, 0.03]  # residuals of 0 and 3 cm against a reference at 0
+        out = estimator.mmae.step(0.0, z, [1e-4, 1e-4])
+        spreads.append(out.probabilities[0] - out.probabilities[1])
+    assert spreads[0] > spreads[1] > 0

@@ -49,7 +49,9 @@ def run_one(job: tuple[str, str, str]) -> tuple[str, str, float, float, str, flo
     from lanekeep.scenario import load_scenario
 
     scenario = load_scenario(path)
-    estimation = dataclasses.replace(scenario.estimation, **{key: value})
+    kind = type(getattr(scenario.estimation, key))  # a number key's value is a number
+    estimation = dataclasses.replace(scenario.estimation,
+                                     **{key: kind(value) if kind in (int, float) else value})
     with Episode(dataclasses.replace(scenario, estimation=estimation)) as episode:
         report = episode.run()
     tracks = {k: v.rmse_cm for k, v in report.sources.items() if k.endswith(":track")}
@@ -60,7 +62,7 @@ def run_one(job: tuple[str, str, str]) -> tuple[str, str, float, float, str, flo
 
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("setting", help="KEY=VALUE,VALUE... of [estimation] (string values)")
+    parser.add_argument("setting", help="KEY=VALUE,VALUE... of [estimation] (strings or numbers)")
     parser.add_argument("scenarios", nargs="*",
                         help="scenario names or files (default: every file in tools/tuning/)")
     parser.add_argument("--allow-scored", action="store_true",
