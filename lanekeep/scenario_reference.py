@@ -191,6 +191,9 @@ DESCRIPTIONS: dict[str, tuple[str, str]] = {
     "estimation.offset_lookahead_m": ("Where the front offsets are compared and reported.",
                                       "0..40"),
     "estimation.control_lookahead_m": ("Where the controller reads the chosen lane.", "0..40"),
+    "estimation.reference_std_m": ("The rear reference's offset noise in the MMAE's residual "
+                                   "density (eq. 8's R): smaller moves the probabilities "
+                                   "faster, and with the reference's own errors.", "0.001..1"),
     "control": ("The controller, by name.", ""),
     "control.controller": ("Controller turning the estimated lane into steer and throttle.",
                            '"pid", "stanley", package.module:Class, entry points'),
