@@ -379,10 +379,18 @@ def ego_estimate(boundaries: list[Boundary], camera: CameraModel | None, x_ref: 
         return LaneEstimate.invalid(f"ego pair not found ({missing} missing)", x_m=x_ref)
     pair = parallel_pair(left, right, camera, settings or DecodeSettings(), lane_width_m)
     c_left, c_right = pair if pair is not None else (left.coeffs, right.coeffs)
+    # Where the two sides are fitted on their own (the pair failed), they are a lane only if
+    # they keep its width over the stretch both are seen along, not at x_ref alone: an
+    # occluded side guessed by the network can cross the other within a few metres.
+    spans = [(b.points_xy[:, 0].min(), b.points_xy[:, 0].max()) for b in (left, right)]
+    lo, hi = max(s[0] for s in spans), min(s[1] for s in spans)
+    checks = [x_ref] if pair is not None or lo > hi else [x_ref, lo, hi]
+    for x in checks:
+        width = float(_poly(c_left, x) - _poly(c_right, x))
+        if abs(width - lane_width_m) > width_tolerance_m:
+            return LaneEstimate.invalid(f"ego pair {width:.2f} m apart at x = {x:.1f} m, "
+                                        "not a lane", x_m=x_ref)
     y_left, y_right = float(_poly(c_left, x_ref)), float(_poly(c_right, x_ref))
-    width = y_left - y_right
-    if abs(width - lane_width_m) > width_tolerance_m:
-        return LaneEstimate.invalid(f"ego pair {width:.2f} m apart, not a lane", x_m=x_ref)
     return LaneEstimate(
         valid=True,
         offset_m=-(y_left + y_right) / 2.0,

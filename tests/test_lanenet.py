@@ -387,6 +387,18 @@ def test_parallel_pair_needs_three_points_a_side():
     assert parallel_pair(left, right, camera, DecodeSettings()) is None
 
 
+def test_sides_fitted_alone_must_keep_the_lane_width_where_both_are_seen():
+    """Where the pair cannot be fitted (a side with two points), each side's own fit stands,
+    and is a lane only if it keeps the width along the stretch both sides are seen."""
+    camera, rng = _camera(), np.random.default_rng(0)
+    left = _ground_boundary(camera, 0, np.array([1.8, 0, 0]), np.linspace(5, 30, 10), 0.0, rng)
+    for slope, valid in ((0.0, True), (-0.08, False)):  # the second drifts 1.6 m off by 20 m
+        right = _ground_boundary(camera, 1, np.array([-1.9, slope, 0.0]), np.array([6.0, 20.0]),
+                                 0.0, rng)
+        est = ego_estimate([left, right], camera, 4.0, 3.7, 0.8, DecodeSettings())
+        assert est.valid is valid, est.reason
+
+
 def test_curvature_prior_holds_a_near_fit_straight_and_leaves_a_long_one():
     camera, rng = _camera(), np.random.default_rng(1)
     settings = DecodeSettings()
