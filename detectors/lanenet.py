@@ -19,7 +19,8 @@ slots swapped). Why: though trained with mirrored frames, the network is not mir
 cancels only where the evidence is strong): it places far, faint markings 1-3 px to the image's
 left. Seen from the rear camera, whose fits lean on a few far points, a straight road read as a
 1200-1500 m radius bend and the reference 1 cm off. The pooled fit is mirror-symmetric by
-construction (so is the RANSAC, lanenet_decode.fit_boundaries); it costs ~25% more time, not 2x.
+construction (so is the RANSAC, lanenet_decode.fit_boundaries); it costs 1.3-1.6x the time of
+one pass (one batch of two), not 2x.
 """
 
 from __future__ import annotations
