@@ -139,6 +139,10 @@ class EstimatorSettings:
     prefer_accepted: bool = True
     lane_width_prior_m: float = 3.7
     reference_std_m: float = 0.05  # eq. 8's R: the reference's offset noise (MMAEConfig)
+    # The MMAE's probabilities before the reference has spoken: "uniform" (the paper's) or
+    # "precision", each model's in proportion to the inverse of its measured offset variance
+    # at the output's look-ahead (its tracker's R), as the trackers already weigh it.
+    mmae_prior: str = "uniform"
     lane_width_gain: float = 0.05  # weight of each two-boundary measurement in the mean
     lane_width_range_m: tuple[float, float] = (2.5, 5.0)  # plausible widths; others ignored
 
@@ -178,7 +182,24 @@ class LaneEstimator:
         self.aligned = OdometryAlignedHistory(len(self.names))
         mode = "same_step" if settings.residual_mode == "distance_aligned" else "one_step_delay"
         self.mmae = MMAE(len(self.names), MMAEConfig(residual_mode=mode,
-                                                     reference_std_m=settings.reference_std_m))
+                                                     reference_std_m=settings.reference_std_m),
+                         prior=self._prior(settings))
+
+    def _prior(self, settings: EstimatorSettings) -> np.ndarray | None:
+        """The MMAE's starting probabilities (`EstimatorSettings.mmae_prior`)."""
+        if settings.mmae_prior == "uniform":
+            return None
+        x = settings.offset_lookahead_m
+        c = np.array([1.0, x, x * x])
+        variances = []
+        for name in self.names:
+            r = self.tracker_configs[name].coefficient_covariance
+            if r is None:  # a tracker with only the three stds
+                cfg = self.tracker_configs[name]
+                r = np.diag([cfg.c0_measurement_std_m, cfg.c1_measurement_std,
+                             cfg.c2_measurement_std_pm]) ** 2
+            variances.append(float(c @ np.asarray(r, dtype=float) @ c))
+        return 1.0 / np.asarray(variances)
 
     def reset(self) -> None:
         self.lane_width_m = self.settings.lane_width_prior_m

@@ -120,19 +120,28 @@ def log_density(residual_m: np.ndarray, psi_m2: np.ndarray) -> np.ndarray:
 class MMAE:
     """Model probabilities of N front models against the rear reference (paper 001 eq. 2-8)."""
 
-    def __init__(self, n_models: int, config: MMAEConfig | None = None) -> None:
+    def __init__(self, n_models: int, config: MMAEConfig | None = None,
+                 prior: Sequence[float] | None = None) -> None:
+        """`prior`: the probabilities before any reference is seen (None: equal, the
+        paper's); positive, normalised here."""
         self.config = config if config is not None else MMAEConfig()
         if n_models < 1:
             raise ValueError(f"n_models must be >= 1, got {n_models}")
         if self.config.probability_floor * n_models >= 1.0:
             raise ValueError("probability_floor * n_models must be < 1")
         self.n_models = n_models
+        if prior is None:
+            prior = np.ones(n_models)
+        prior = np.asarray(prior, dtype=float)
+        if prior.shape != (n_models,) or not np.all(np.isfinite(prior) & (prior > 0)):
+            raise ValueError(f"prior must be {n_models} positive numbers, got {prior}")
+        self._prior = apply_probability_floor(prior, self.config.probability_floor)
         self._repair = ReferenceRepair(self.config.jump_threshold_m, self.config.max_repair_steps)
         self.reset()
 
     def reset(self) -> None:
-        """Equal probabilities, no history."""
-        self._p = np.full(self.n_models, 1.0 / self.n_models)
+        """The prior probabilities, no history."""
+        self._p = self._prior.copy()
         self._previous: tuple[np.ndarray, np.ndarray] | None = None  # one_step_delay: z, var
         self._history: deque[tuple[float, np.ndarray, np.ndarray]] = deque(
             maxlen=self.config.history_steps

@@ -24,6 +24,7 @@ from lanekeep.roadside_config import SKYLINES
 from lanekeep.scenario import (
     CAMERAS,
     ESTIMATION_MODES,
+    MMAE_PRIORS,
     MODEL_LANES,
     OUTPUT_MODES,
     RESIDUAL_MODES,
@@ -191,6 +192,10 @@ DESCRIPTIONS: dict[str, tuple[str, str]] = {
     "estimation.offset_lookahead_m": ("Where the front offsets are compared and reported.",
                                       "0..40"),
     "estimation.control_lookahead_m": ("Where the controller reads the chosen lane.", "0..40"),
+    "estimation.mmae_prior": ("The MMAE's probabilities before the reference has spoken: "
+                              "uniform (the paper's; paper mode keeps it), or each model's in "
+                              "proportion to the inverse of its measured offset variance at "
+                              "offset_lookahead_m (its tracker's R).", _one_of(MMAE_PRIORS)),
     "estimation.reference_std_m": ("The rear reference's offset noise in the MMAE's residual "
                                    "density (eq. 8's R): smaller moves the probabilities "
                                    "faster, and with the reference's own errors.", "0.001..1"),

@@ -200,7 +200,7 @@ def test_the_reference_noise_setting_reaches_the_mmae():
 
     spreads = []
     for std in (0.02, 0.05):
-        settings = estimator_settings(EstimationConfig(reference_std_m=std))
+        settings = estimator_settings(EstimationConfig(reference_std_m=std, mmae_prior="uniform"))
         assert settings.reference_std_m == std
         estimator = LaneEstimator(NAMES, settings, -4.0)
         assert estimator.mmae.config.reference_std_m == std
@@ -208,3 +208,18 @@ def test_the_reference_noise_setting_reaches_the_mmae():
         out = estimator.mmae.step(0.0, z, [1e-4, 1e-4])
         spreads.append(out.probabilities[0] - out.probabilities[1])
     assert spreads[0] > spreads[1] > 0
+
+
+def test_the_precision_prior_weighs_each_model_by_its_measured_offset_variance():
+    """p_n(0) proportional to 1 / (C R_n C') at the output's look-ahead, from each detector's own
+    tracker R; "uniform" is the paper's equal start."""
+    names = ["hough", "sliding_window", "lanenet"]
+    settings = EstimatorSettings(lane_width_prior_m=WIDTH, mmae_prior="precision")
+    estimator = LaneEstimator(names, settings, -4.0)
+    c = np.array([1.0, 4.0, 16.0])
+    inverse = np.array([1.0 / (c @ np.asarray(estimator.tracker_configs[n].coefficient_covariance)
+                               @ c) for n in names])
+    np.testing.assert_allclose(estimator.mmae.probabilities, inverse / inverse.sum())
+    assert np.argmax(estimator.mmae.probabilities) == 2  # lanenet: the steadiest near offset
+    uniform = LaneEstimator(names, EstimatorSettings(lane_width_prior_m=WIDTH), -4.0)
+    np.testing.assert_allclose(uniform.mmae.probabilities, np.full(3, 1.0 / 3.0))

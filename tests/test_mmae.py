@@ -264,3 +264,16 @@ def test_same_step_mode_compares_the_offsets_it_is_given_now() -> None:
     out = mmae.step(0.10, [0.12, 0.40], [1e-4, 1e-4])
     np.testing.assert_allclose(out.residuals_m, [0.10 - 0.12, 0.10 - 0.40])
     assert out.updated and out.selected == 0
+
+
+def test_a_prior_sets_the_starting_probabilities_and_the_reset_returns_to_it() -> None:
+    mmae = MMAE(3, MMAEConfig(residual_mode="same_step"), prior=[6.0, 3.0, 1.0])
+    np.testing.assert_allclose(mmae.probabilities, [0.6, 0.3, 0.1])
+    mmae.step(0.0, [0.0, 0.05, 0.1], [1e-4] * 3)  # evidence moves them ...
+    assert not np.allclose(mmae.probabilities, [0.6, 0.3, 0.1])
+    mmae.reset()  # ... and a reset starts again from the prior
+    np.testing.assert_allclose(mmae.probabilities, [0.6, 0.3, 0.1])
+    np.testing.assert_allclose(MMAE(2).probabilities, [0.5, 0.5])  # no prior: equal
+    for bad in ([1.0, 1.0], [1.0, 0.0, 1.0], [1.0, np.nan, 1.0]):
+        with pytest.raises(ValueError, match="prior"):
+            MMAE(3, prior=bad)

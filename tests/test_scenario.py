@@ -130,6 +130,7 @@ def test_wrong_type_names_key(text, key, tmp_path):
         (MINIMAL + "[conditions]\nfog = 2", "conditions.fog"),
         (MINIMAL + "[camera]\nantialias_samples = 3", "camera.antialias_samples"),
         (MINIMAL + "[estimation]\nreference_std_m = 0", "estimation.reference_std_m"),
+        (MINIMAL + "[estimation]\nmmae_prior = 'flat'", "estimation.mmae_prior"),
         (MINIMAL.replace('name = "tiny"', ""), "name"),
     ],
 )
