@@ -302,7 +302,7 @@ class EstimationConfig:
     # "paper": the paper's own loop (lanekeep/paper_mode.py): one-step-delay residuals, the
     # selected model's detection at its nearest row into eq. 9 with Table 2's gain shape and no
     # feed-forward, model #1 long range and model #2 short range. It overrides residual_mode,
-    # model_lane and the front windows; "default" is our loop with its improvements.
+    # model_lane, mmae_prior and the front windows; "default" is our loop with its improvements.
     mode: str = "default"
     # None: the mode's own (DEFAULT_FRONT_DETECTORS), filled in at construction.
     front_detectors: tuple[str, ...] | None = None
