@@ -191,15 +191,8 @@ class LaneEstimator:
             return None
         x = settings.offset_lookahead_m
         c = np.array([1.0, x, x * x])
-        variances = []
-        for name in self.names:
-            r = self.tracker_configs[name].coefficient_covariance
-            if r is None:  # a tracker with only the three stds
-                cfg = self.tracker_configs[name]
-                r = np.diag([cfg.c0_measurement_std_m, cfg.c1_measurement_std,
-                             cfg.c2_measurement_std_pm]) ** 2
-            variances.append(float(c @ np.asarray(r, dtype=float) @ c))
-        return 1.0 / np.asarray(variances)
+        return np.array([1.0 / float(c @ self.tracker_configs[n].coefficient_r @ c)
+                         for n in self.names])
 
     def reset(self) -> None:
         self.lane_width_m = self.settings.lane_width_prior_m
