@@ -76,6 +76,9 @@ class StepResult:
     reference_m: float | None
     reference_x_m: float  # the look-ahead of reference_m
     reference_repaired: bool
+    # The MMAE's residuals r_n (eq. 2): the reference minus each model's offset carried to
+    # where the reference looked; NaN where a model was not compared or the MMAE did not run.
+    mmae_residuals_m: np.ndarray
     steer: float
     throttle: float
     truth_offset_m: float  # the car's true lateral offset after the period (at `pose`)
@@ -342,6 +345,7 @@ class Episode:
             output_centre=centre,
             reference_m=selection.reference_m, reference_x_m=x_ref,
             reference_repaired=selection.reference_repaired,
+            mmae_residuals_m=np.asarray(selection.residuals_m, dtype=float),
             steer=steer, throttle=throttle, truth_offset_m=car_offset_m,
             truth_output_m=true_offset(x_out),
             truth_centre=true_centre, pose=(x, y, yaw), sensed_pose=sensed_pose,

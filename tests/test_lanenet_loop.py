@@ -23,6 +23,12 @@ def test_three_front_models_and_the_learned_reference_keep_the_lane():
         report = episode.report()
     assert all(len(s.probabilities) == 3 for s in steps)
     assert all(abs(sum(s.probabilities) - 1.0) < 1e-9 for s in steps)
+    # Each step hands on the MMAE's residuals (tools/trace_estimation.py reads them): once the
+    # car has driven past the road its front models saw, every model is compared.
+    assert all(s.mmae_residuals_m.shape == (3,) for s in steps)
+    compared = [s for s in steps if np.isfinite(s.mmae_residuals_m).all()]
+    assert len(compared) > len(steps) // 2
+    assert max(np.abs(s.mmae_residuals_m).max() for s in compared) < 0.5
     assert report.lane_departures == 0
     assert report.sources["lanenet"].valid_share > 0.9
     assert report.sources["reference"].valid_share > 0.9

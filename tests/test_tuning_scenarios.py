@@ -7,6 +7,7 @@ scores; tools/measure_detector_noise.py refuses a shipped one unless told --allo
 import importlib.util
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from lanekeep.scenario import load_scenario, shipped_scenarios
@@ -81,3 +82,26 @@ def test_compare_tool_defaults_to_the_tuning_scenarios_and_refuses_scored_ones()
     with pytest.raises(SystemExit) as unknown:
         tool.parse_args(["no_such_key=1"])
     assert unknown.value.code == 2
+
+
+def test_trace_tool_tells_a_model_that_errs_with_the_reference_from_one_that_errs_against_it():
+    """The residual summary: a model whose carried offset errs with the reference keeps a
+    residual of its bias alone (correlation +1); one that errs against it pays for both
+    (correlation -1); steps the MMAE did not compare (NaN) are left out."""
+    tool = _tool("trace_estimation")
+    rng = np.random.default_rng(0)
+    reference_error = rng.normal(0.0, 0.01, 200)
+    bias = 0.01
+    with_it = reference_error + bias  # the carried offset's error
+    against_it = -reference_error
+    columns = {"reference": reference_error,
+               "with:residual": reference_error - with_it,
+               "against:residual": reference_error - against_it}
+    columns["against:residual"][:10] = np.nan
+    summary = tool.residual_summary(["with", "against"], columns)
+    assert summary["with"]["mean_m"] == pytest.approx(-bias)
+    assert summary["with"]["rms_m"] == pytest.approx(bias)
+    assert summary["with"]["correlation"] == pytest.approx(1.0)
+    assert summary["against"]["correlation"] == pytest.approx(-1.0)
+    assert summary["against"]["rms_m"] == pytest.approx(
+        2.0 * np.sqrt(np.mean(reference_error[10:] ** 2)))

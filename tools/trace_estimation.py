@@ -1,13 +1,22 @@
-"""Why the fused output beats or loses to a model: per-model bias, spread and MMAE weight.
+"""Why the fused output beats or loses to a model: per-model bias, spread, MMAE weight, and
+what the reference can see of them.
 
     MUJOCO_GL=egl .venv/bin/python tools/trace_estimation.py night [--output fused]
 
 Runs one episode (a shipped scenario's name or a scenario file) and prints, per front model,
 its own track's offset error at the output's look-ahead (RMSE, mean = bias, standard
 deviation), its curvature error, and its mean MMAE probability; then the same errors of the
-output and of the rear reference. A model whose track is biased but whose probability is high
-points at a reference that shares the model's error (the same detector on the rear camera); a
-small probability left to a biased model shows how much of its bias reaches the output.
+output and of the rear reference.
+
+Then what the MMAE was given to tell the models apart: per model, the mean and RMS of its
+residual (eq. 2: the reference minus the model's offset carried to where the reference looked),
+and the correlation between the reference's error and the carried offset's error. The residual
+is scored step by step, so a model whose errors rise and fall with the reference's (a positive
+correlation: the same network reading the same stretch of road from the other camera) keeps a
+small residual whatever its bias, and one whose errors run against the reference's pays for
+both. Last, each detection's left and right boundary error at the look-ahead: a bias on one
+side only is the detector's (a marking lit on one side), not the lane's.
+
 Truth is read here for scoring only, as in `lanekeep run`.
 """
 
@@ -19,19 +28,24 @@ import os
 
 import numpy as np
 
+SIDES = ("left", "right")
 
-def trace(scenario_arg: str, output: str | None) -> dict[str, np.ndarray]:
-    """Per step: each model's offset and curvature errors and probability, the output's and
-    the reference's errors (NaN where a source had nothing)."""
+
+def trace(scenario_arg: str, output: str | None) -> tuple[list[str], dict[str, np.ndarray]]:
+    """The front models' names and, per step: each model's offset and curvature errors,
+    probability, MMAE residual and boundary errors, the output's and the reference's errors
+    (NaN where a source had nothing)."""
     os.environ.setdefault("MUJOCO_GL", "egl")
+    from lanekeep.detectors.base import poly_eval
     from lanekeep.episode import Episode, track_source
-    from lanekeep.ground_truth import lane_offsets
+    from lanekeep.ground_truth import lane_offsets, line_points
     from lanekeep.scenario import load_scenario
 
     scenario = load_scenario(scenario_arg)
     if output is not None:
         scenario = dataclasses.replace(
             scenario, estimation=dataclasses.replace(scenario.estimation, output=output))
+    lane = scenario.road.ego_lane
     columns: dict[str, list[float]] = {}
 
     def add(key: str, value: float | None) -> None:
@@ -39,12 +53,17 @@ def trace(scenario_arg: str, output: str | None) -> dict[str, np.ndarray]:
 
     with Episode(scenario) as episode:
         road = episode.world.road
+        names = list(episode.front)
 
         def on_step(result, _total) -> None:
-            x, y, _ = result.sensed_pose
+            x, y, yaw = result.sensed_pose
             s, _ = road.local_coordinates(np.array([[x, y]]))
             curvature = float(road.curvature_at(float(np.ravel(s)[0])))
-            for i, name in enumerate(episode.front):
+            x_out = result.output_x_m
+            true_sides = {side: float(line_points(road, x, y, yaw, road.boundary_r(b),
+                                                  [x_out])[0, 1])
+                          for side, b in zip(SIDES, (lane + 1, lane), strict=True)}
+            for i, name in enumerate(names):
                 track = result.tracked[name]
                 offset = result.track_offsets_m[name]
                 add(track_source(name), None if offset is None
@@ -52,17 +71,52 @@ def trace(scenario_arg: str, output: str | None) -> dict[str, np.ndarray]:
                 add(f"{name}:curvature", None if track is None
                     else 2.0 * track[2] - curvature)
                 add(f"{name}:p", result.probabilities[i])
+                add(f"{name}:residual", result.mmae_residuals_m[i])
+                estimate = result.estimates[name]
+                for side in SIDES:
+                    coeffs = getattr(estimate, side) if estimate.valid else None
+                    add(f"{name}:{side}", None if coeffs is None
+                        else poly_eval(coeffs, x_out) - true_sides[side])
             centre = result.output_centre
             add("fused", None if result.output_offset_m is None
                 else result.output_offset_m - result.truth_output_m)
             add("fused:curvature", None if centre is None else 2.0 * centre[2] - curvature)
-            truth = lane_offsets(road, *result.sensed_pose, scenario.road.ego_lane,
-                                 [result.reference_x_m])[0]
+            truth = lane_offsets(road, x, y, yaw, lane, [result.reference_x_m])[0]
             add("reference", None if result.reference_m is None
                 else result.reference_m - float(truth))
 
         episode.run(on_step=on_step)
-    return {k: np.asarray(v) for k, v in columns.items()}
+    return names, {k: np.asarray(v) for k, v in columns.items()}
+
+
+def _correlation(a: np.ndarray, b: np.ndarray) -> float:
+    """Pearson correlation over the steps where both are finite (NaN with fewer than 3)."""
+    both = np.isfinite(a) & np.isfinite(b)
+    if both.sum() < 3 or np.std(a[both]) == 0 or np.std(b[both]) == 0:
+        return float("nan")
+    return float(np.corrcoef(a[both], b[both])[0, 1])
+
+
+def residual_summary(names: list[str], columns: dict[str, np.ndarray]
+                     ) -> dict[str, dict[str, float]]:
+    """Per model: its residual's mean and RMS (m), and the correlation between the reference's
+    error and the error of the model's offset where the reference looked (that offset is the
+    reference minus the residual, so its error is the reference's error minus the residual)."""
+    reference_error = columns["reference"]
+    summary = {}
+    for name in names:
+        residual = columns[f"{name}:residual"]
+        carried_error = reference_error - residual
+        summary[name] = {
+            "mean_m": float(np.nanmean(residual)),
+            "rms_m": float(np.sqrt(np.nanmean(residual**2))),
+            "correlation": _correlation(reference_error, carried_error),
+        }
+    return summary
+
+
+def _cm(values: np.ndarray) -> str:
+    return f"{100 * np.nanmean(values):+8.2f}{100 * np.nanstd(values):8.2f}"
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -71,7 +125,7 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--output", choices=("select", "fused", "precision"),
                         help="[estimation] output instead of the scenario's")
     args = parser.parse_args(argv)
-    columns = trace(args.scenario, args.output)
+    names, columns = trace(args.scenario, args.output)
     print(f"{'source':<24}{'RMSE cm':>9}{'bias cm':>9}{'std cm':>8}"
           f"{'curv. RMSE 1e-3/m':>19}{'mean p':>8}")
     sources = [k for k in columns if k.endswith(":track")] + ["fused", "reference"]
@@ -84,6 +138,15 @@ def main(argv: list[str] | None = None) -> None:
               f"{100 * np.nanmean(err):9.2f}{100 * np.nanstd(err):8.2f}"
               f"{'-' if curv is None else f'{1000 * np.sqrt(np.nanmean(curv ** 2)):.2f}':>19}"
               f"{'' if p is None else f'{np.mean(p):8.3f}'}")
+    print(f"\n{'MMAE residual':<24}{'mean cm':>9}{'RMS cm':>9}  corr(reference error, model's)")
+    for name, row in residual_summary(names, columns).items():
+        print(f"{name:<24}{100 * row['mean_m']:9.2f}{100 * row['rms_m']:9.2f}"
+              f"{row['correlation']:+9.2f}")
+    print(f"\n{'detection boundary':<24}{'left bias':>9}{'std':>8}{'right bias':>11}{'std':>8}"
+          "  cm, at the output's look-ahead")
+    for name in names:
+        left, right = _cm(columns[f"{name}:left"]), _cm(columns[f"{name}:right"])
+        print(f"{name:<24}{left} {right}")
 
 
 if __name__ == "__main__":
