@@ -28,6 +28,8 @@ y left are drawn in world coordinates):
     plots/offset/{truth,model...,reference,fused}  lateral offsets at each look-ahead (m)
     plots/error/{model...,reference,fused}  estimate - truth at the estimate's look-ahead (m)
     plots/probability/{model}             MMAE probabilities
+    plots/residual/{model}                MMAE residuals (eq. 2): the reference minus the model's
+                                          offset carried to where the reference looked (m)
     plots/car/{offset_m,steer,throttle}, plots/speed/speed_mps   (split by unit)
     events                                text: model switches, reference repairs, gated
                                           measurements, lanes lost/found, detector failures,
@@ -245,7 +247,8 @@ def car_footprint(pose: tuple[float, float, float], length: float, width: float)
 # -- the blueprint ------------------------------------------------------------------------------
 def blueprint(scenario):
     """Cameras side by side; then offsets and errors | the road map and the 3D follow view |
-    probabilities, car (offset, steer) and speed, each unit in its own plot; events below."""
+    probabilities, MMAE residuals, car (offset, steer) and speed, each unit in its own plot;
+    events below."""
     import rerun.blueprint as rrb
 
     x, y, yaw = scenario.start_pose()
@@ -281,6 +284,9 @@ def blueprint(scenario):
                 rrb.Vertical(
                     rrb.TimeSeriesView(origin="plots/probability", name="MMAE probabilities",
                                        axis_y=rrb.ScalarAxis(range=(0.0, 1.0)),
+                                       plot_legend=legend),
+                    rrb.TimeSeriesView(origin="plots/residual",
+                                       name="MMAE residuals (m, reference - model)",
                                        plot_legend=legend),
                     rrb.TimeSeriesView(origin="plots/car", name="car: offset (m), steer",
                                        plot_legend=legend),
@@ -492,7 +498,7 @@ class RerunRecorder:
                   f"plots/offset/{FUSED}": FUSED, f"plots/error/{REFERENCE}": REFERENCE,
                   f"plots/error/{FUSED}": FUSED}
         for name in view.models:
-            for group in ("offset", "error", "probability"):
+            for group in ("offset", "error", "probability", "residual"):
                 series[f"plots/{group}/{name}"] = name
             for group in ("offset", "error"):  # the model's own Kalman track
                 series[f"plots/{group}/{name}:track"] = name
@@ -530,6 +536,11 @@ class RerunRecorder:
                 step.output_offset_m - truth.offset_m(x_out)))
         for name, p in zip(self._view.models, np.asarray(step.probabilities), strict=False):
             rec.log(f"plots/probability/{name}", rr.Scalars(float(p)))
+        residuals = getattr(step, "mmae_residuals_m", None)  # NaN: that model not compared
+        for name, r in zip(self._view.models, [] if residuals is None else residuals,
+                           strict=False):
+            if np.isfinite(r):
+                rec.log(f"plots/residual/{name}", rr.Scalars(float(r)))
         rec.log("plots/car/offset_m", rr.Scalars(truth.offset_m(0.0)))
         rec.log("plots/speed/speed_mps", rr.Scalars(float(step.speed_mps)))
         rec.log("plots/car/steer", rr.Scalars(float(step.steer)))

@@ -102,7 +102,7 @@ def make_step(fake, index: int, **changes) -> SimpleNamespace:
         tracked={m: np.zeros(3) for m in MODELS}, probabilities=np.array([0.7, 0.3]),
         track_offsets_m={m: 0.05 for m in MODELS},
         selected=0, output_offset_m=0.05, output_x_m=4.0, output_centre=np.zeros(3),
-        reference_m=0.04, reference_x_m=6.0,
+        reference_m=0.04, reference_x_m=6.0, mmae_residuals_m=np.array([-0.01, np.nan]),
         reference_repaired=False, steer=0.01, throttle=0.2, truth_offset_m=0.0,
         truth_output_m=0.0,
         truth_centre=np.zeros(3), pose=fake.scenario.start_pose(fake.world.road),
@@ -135,6 +135,10 @@ def test_recording_verifies_and_holds_one_image_per_camera_per_recorded_step(fak
     for model in MODELS:
         assert len(data[f"/cameras/front/lanes/{model}/boundaries"]["LineStrips2D:strips"]) == 3
         assert steps_of(data, f"/plots/probability/{model}", "Scalars:scalars") == list(range(7))
+    # the MMAE's residuals: a model it did not compare (NaN) has none
+    assert steps_of(data, "/plots/residual/hough", "Scalars:scalars") == list(range(7))
+    assert value_at(data, "/plots/residual/hough", "Scalars:scalars", 3) == [pytest.approx(-0.01)]
+    assert not steps_of(data, "/plots/residual/sliding_window", "Scalars:scalars")
     assert len(data["/cameras/front/lanes/hough/points"]["Points2D:positions"]) == 3
     assert len(data["/cameras/rear/lanes/reference/boundaries"]["LineStrips2D:strips"]) == 3
     for entity in ("/plots/offset/truth", "/plots/offset/fused", "/plots/error/hough",
@@ -185,6 +189,7 @@ def test_blueprint_is_stored_with_the_recording(fake, tmp_path):
     assert views["offsets (m, + = car left)"] == ("TimeSeries", "plots/offset")
     assert views["errors (m, estimate - truth)"] == ("TimeSeries", "plots/error")
     assert views["MMAE probabilities"] == ("TimeSeries", "plots/probability")
+    assert views["MMAE residuals (m, reference - model)"] == ("TimeSeries", "plots/residual")
     assert views["follow view (3D)"] == ("3D", "world")
     assert views["road map (to scale, north up)"] == ("2D", "map")
     # one unit per plot: speed (m/s) apart from the car's offset (m) and steer

@@ -105,7 +105,7 @@ def _drawn_share(region: np.ndarray) -> float:
 
 # The blueprint's panels (lanekeep/record.py) as fractions of the window (x0, y0, x1, y1),
 # inset from their borders: cameras on top; offsets / errors, road map / 3D follow view,
-# probabilities / car / speed in the middle row; events below.
+# probabilities / MMAE residuals / car / speed in the middle row; events below.
 PANELS = {
     "front camera": (0.05, 0.08, 0.45, 0.30),
     "rear camera": (0.55, 0.08, 0.95, 0.30),
@@ -113,9 +113,10 @@ PANELS = {
     "errors": (0.03, 0.66, 0.32, 0.80),
     "road map": (0.36, 0.40, 0.64, 0.56),
     "follow view": (0.36, 0.66, 0.64, 0.80),
-    "probabilities": (0.70, 0.40, 0.98, 0.47),
-    "car": (0.70, 0.57, 0.98, 0.64),
-    "speed": (0.70, 0.74, 0.98, 0.80),
+    "probabilities": (0.70, 0.38, 0.98, 0.44),
+    "residuals": (0.70, 0.49, 0.98, 0.56),
+    "car": (0.70, 0.63, 0.98, 0.69),
+    "speed": (0.70, 0.76, 0.98, 0.81),
 }
 # Camera panels must show their image (most pixels drawn), not only the overlays; the map
 # draws thin lines on a wide area.
