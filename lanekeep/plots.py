@@ -49,6 +49,7 @@ class EpisodeTrace:
     reference_m: list[float] = field(default_factory=list)
     reference_truth_m: list[float] = field(default_factory=list)
     probabilities: list[np.ndarray] = field(default_factory=list)
+    residuals_m: list[np.ndarray] = field(default_factory=list)  # the MMAE's, NaN: not compared
     path_xy: list[tuple[float, float]] = field(default_factory=list)
 
     def add(self, step) -> None:
@@ -75,6 +76,9 @@ class EpisodeTrace:
         self.fused_m.append(nan if step.output_offset_m is None else step.output_offset_m)
         self.reference_m.append(nan if step.reference_m is None else step.reference_m)
         self.probabilities.append(np.asarray(step.probabilities))
+        residuals = getattr(step, "mmae_residuals_m", None)
+        self.residuals_m.append(np.full(len(self.model_names), nan) if residuals is None
+                                else np.asarray(residuals, dtype=float))
         self.path_xy.append(step.pose[:2])
 
     def errors_cm(self) -> dict[str, np.ndarray]:
@@ -158,13 +162,18 @@ def write_plots(trace: EpisodeTrace, road, out_dir: Path, title: str) -> list[Pa
                  fontsize=10)
     save(fig, "errors.png")
 
-    fig, ax = plt.subplots(figsize=(10, 3.5))
+    fig, (ax, ax_r) = plt.subplots(2, 1, figsize=(10, 6), sharex=True,
+                                   gridspec_kw={"height_ratios": [3, 2]})
     probs = np.asarray(trace.probabilities)
+    residuals = np.asarray(trace.residuals_m) * 100
     for i, name in enumerate(models):
         ax.plot(t, probs[:, i], lw=1.5, color=_rgb(name, models), label=f"p({name})")
-    ax.set(xlabel="time (s)", ylabel="model probability", ylim=(-0.02, 1.02))
-    ax.set_title(f"{title}\nMMAE probabilities", fontsize=10)
-    ax.grid(alpha=0.3)
+        ax_r.plot(t, residuals[:, i], lw=1.0, color=_rgb(name, models), label=name)
+    ax.set(ylabel="model probability", ylim=(-0.02, 1.02))
+    ax.set_title(f"{title}\nMMAE probabilities, and the residuals they come from", fontsize=10)
+    ax_r.set(xlabel="time (s)", ylabel="reference - model (cm)")
+    for a in (ax, ax_r):
+        a.grid(alpha=0.3)
     ax.legend(fontsize=8)
     save(fig, "probabilities.png")
 

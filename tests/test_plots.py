@@ -39,6 +39,7 @@ def _fake_step(i: int):
                            output_x_m=6.0, reference_x_m=-5.0, estimates=est,
                            track_offsets_m={"hough": 0.08, "sliding_window": None},
                            output_offset_m=0.09, reference_m=0.0, probabilities=[0.7, 0.3],
+                           mmae_residuals_m=np.array([-0.02, np.nan]),
                            pose=(10.0 + i, 0.0, 0.0), sensed_pose=(10.0 + i, 0.0, 0.0))
 
 
@@ -65,6 +66,9 @@ def test_errors_are_against_the_truth_at_each_estimates_own_look_ahead(tmp_path)
     assert errors["reference"][0] == pytest.approx((0.0 - truth_ref) * 100)
     assert errors["fused"][0] == pytest.approx((0.09 - 0.07) * 100)
     assert np.isnan(errors["sliding_window"]).all()  # never valid: no error to draw
+    residuals = np.asarray(trace.residuals_m)  # the MMAE's, drawn under its probabilities
+    assert residuals.shape == (5, 2) and np.allclose(residuals[:, 0], -0.02)
+    assert np.isnan(residuals[:, 1]).all()
     files = write_plots(trace, road, tmp_path, "clear_straight (seed 0, mode default)")
     assert [f.name for f in files] == ["offsets.png", "errors.png", "probabilities.png",
                                        "top_view.png"]
