@@ -41,6 +41,7 @@ from lanekeep.detectors.birds_eye import detector_view
 from lanekeep.detectors.config import DetectorsConfig, GroundWindow, load_config
 from lanekeep.detectors.lanenet_decode import (
     CURVATURE_PRIOR_PER_M,
+    SCORE_POWER,
     UNSEEN_WEIGHT,
     WIDTH_STD_M,
     Boundary,
@@ -149,12 +150,14 @@ class LaneNetSettings:
     curvature_prior_per_m: float = CURVATURE_PRIOR_PER_M  # lanenet_decode.DecodeSettings
     unseen_weight: float = UNSEEN_WEIGHT  # lanenet_decode.DecodeSettings
     width_std_m: float = WIDTH_STD_M  # lanenet_decode.DecodeSettings
+    score_power: float = SCORE_POWER  # lanenet_decode.DecodeSettings
 
     def decode(self) -> DecodeSettings:
         return DecodeSettings(score_threshold=self.score_threshold, inlier_px=self.inlier_px,
                               iterations=self.ransac_iterations, min_points=self.min_points,
                               seed=self.seed, curvature_prior_per_m=self.curvature_prior_per_m,
-                              unseen_weight=self.unseen_weight, width_std_m=self.width_std_m)
+                              unseen_weight=self.unseen_weight, width_std_m=self.width_std_m,
+                              score_power=self.score_power)
 
 
 @dataclass(frozen=True)

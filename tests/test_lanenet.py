@@ -445,6 +445,34 @@ def test_a_side_inferred_without_paint_leans_on_the_seen_side_and_the_lane_width
         DecodeSettings(unseen_weight=0.0)
 
 
+def test_the_ego_pair_weighs_a_point_by_the_networks_confidence_in_it():
+    """With `score_power`, points the network is unsure of (low objectness) count less: a side
+    whose near half is unsure and drawn 20 cm inward follows its sure far half instead."""
+    from dataclasses import replace
+
+    from lanekeep.detectors.lanenet_decode import parallel_pair
+
+    camera, rng = _camera(), np.random.default_rng(2)
+    right = _ground_boundary(camera, 1, np.array([-1.85, 0.0, 0.0]), np.linspace(5, 30, 20),
+                             0.0, rng)
+    x = np.linspace(5, 30, 20)
+    left = _ground_boundary(camera, 0, np.array([1.85, 0.0, 0.0]), x, 0.0, rng)
+    unsure = x < 12.0
+    xy = left.points_xy.copy()
+    xy[unsure, 1] -= 0.2
+    scores = np.where(unsure, 0.55, 0.98)
+    left = replace(left, points_xy=xy, scores=scores)
+    right = replace(right, scores=np.full(20, 0.98))
+    blind = DecodeSettings(score_power=0.0, width_std_m=0.0)
+    weighed = DecodeSettings(score_power=8.0, width_std_m=0.0)
+    c_blind, _ = parallel_pair(left, right, camera, blind)
+    c_weighed, _ = parallel_pair(left, right, camera, weighed)
+    assert abs(c_weighed[0] - 1.85) < 0.5 * abs(c_blind[0] - 1.85)
+    assert DecodeSettings().score_power > 0  # the shipped decoding weighs them
+    with pytest.raises(ValueError):
+        DecodeSettings(score_power=-1.0)
+
+
 def test_proposals_carry_the_paint_probability():
     grid = CellGrid(W, H, 4, 4)
     obj = np.full((4, 4), -10.0)

@@ -8,7 +8,8 @@ sequence from a reset state, frames upscaled to 1280x720 as `lanekeep eval` does
 sequences as rendered and on a copy with vehicle-sized occluders over 60% of their paint
 (`lanekeep/eval_sets.occlude`, seeded apart from `lanekeep eval`'s sets). Each combination of
 the decoding's priors (`DecodeSettings`: curvature prior, weight of points where no paint is
-seen, std of the ego pair's width about the lane's) then decodes the same network outputs,
+seen, std of the ego pair's width about the lane's, power of the objectness that weighs the
+ego pair's points) then decodes the same network outputs,
 and the ego lane is scored by `lanekeep/lane_eval.py`'s rules: ADE at 4-20 m and the offset
 error (cm), and the share of valid frames. The choice is the lowest mean of ADE + offset error
 over the two copies. Labels are read only to score. The validation worlds are disjoint from the
@@ -91,6 +92,9 @@ def main(argv: list[str] | None = None) -> int:
                         help="weights of points with no paint seen (1 = paint ignored)")
     parser.add_argument("--width-std", default="0,0.5,0.3,0.15",
                         help="std of the ego pair's width about the lane's (m; 0 = none)")
+    parser.add_argument("--score-power", default="0,2",
+                        help="powers of a point's objectness in the ego pair's weights (0 = "
+                             "objectness ignored)")
     parser.add_argument("--occlusion", type=float, default=0.6,
                         help="share of paint hidden in the occluded copy")
     parser.add_argument("--weights", default=None, help="LaneNet weights (default: shipped)")
@@ -99,20 +103,23 @@ def main(argv: list[str] | None = None) -> int:
     copies = {"as rendered": outputs(data, 0.0, args.weights),
               f"occluded {args.occlusion:.0%}": outputs(data, args.occlusion, args.weights)}
     rows = []
-    for curvature, unseen, width_std in itertools.product(
-            _floats(args.curvature), _floats(args.unseen), _floats(args.width_std)):
+    for curvature, unseen, width_std, power in itertools.product(
+            _floats(args.curvature), _floats(args.unseen), _floats(args.width_std),
+            _floats(args.score_power)):
         settings = replace(DecodeSettings(), curvature_prior_per_m=curvature,
-                           unseen_weight=unseen, width_std_m=width_std)
+                           unseen_weight=unseen, width_std_m=width_std, score_power=power)
         scores = {name: score(frames, settings) for name, frames in copies.items()}
         objective = float(np.mean([s["ade_cm"] + s["offset_err_cm"] for s in scores.values()]))
-        rows.append((objective, curvature, unseen, width_std))
+        rows.append((objective, curvature, unseen, width_std, power))
         print(f"curvature {curvature:<6g} unseen {unseen:<4g} width_std {width_std:<5g} "
+              f"score_power {power:<3g} "
               + "  ".join(f"{name}: ADE {s['ade_cm']:5.1f} offset {s['offset_err_cm']:5.1f} "
                           f"valid {s['valid']:.2f}" for name, s in scores.items())
               + f"  objective {objective:.2f}", flush=True)
     best = min(rows)
     print(f"chosen: curvature_prior_per_m {best[1]:g}, unseen_weight {best[2]:g}, "
-          f"width_std_m {best[3]:g} (objective {best[0]:.2f}) over {len(data['frames'])} "
+          f"width_std_m {best[3]:g}, score_power {best[4]:g} (objective {best[0]:.2f}) over "
+          f"{len(data['frames'])} "
           "validation sequences")
     return 0
 
