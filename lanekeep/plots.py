@@ -76,9 +76,7 @@ class EpisodeTrace:
         self.fused_m.append(nan if step.output_offset_m is None else step.output_offset_m)
         self.reference_m.append(nan if step.reference_m is None else step.reference_m)
         self.probabilities.append(np.asarray(step.probabilities))
-        residuals = getattr(step, "mmae_residuals_m", None)
-        self.residuals_m.append(np.full(len(self.model_names), nan) if residuals is None
-                                else np.asarray(residuals, dtype=float))
+        self.residuals_m.append(np.asarray(step.mmae_residuals_m, dtype=float))
         self.path_xy.append(step.pose[:2])
 
     def errors_cm(self) -> dict[str, np.ndarray]:

@@ -536,10 +536,8 @@ class RerunRecorder:
                 step.output_offset_m - truth.offset_m(x_out)))
         for name, p in zip(self._view.models, np.asarray(step.probabilities), strict=False):
             rec.log(f"plots/probability/{name}", rr.Scalars(float(p)))
-        residuals = getattr(step, "mmae_residuals_m", None)  # NaN: that model not compared
-        for name, r in zip(self._view.models, [] if residuals is None else residuals,
-                           strict=False):
-            if np.isfinite(r):
+        for name, r in zip(self._view.models, step.mmae_residuals_m, strict=False):
+            if np.isfinite(r):  # NaN: that model was not compared
                 rec.log(f"plots/residual/{name}", rr.Scalars(float(r)))
         rec.log("plots/car/offset_m", rr.Scalars(truth.offset_m(0.0)))
         rec.log("plots/speed/speed_mps", rr.Scalars(float(step.speed_mps)))
