@@ -41,6 +41,7 @@ from lanekeep.detectors.birds_eye import detector_view
 from lanekeep.detectors.config import DetectorsConfig, GroundWindow, load_config
 from lanekeep.detectors.lanenet_decode import (
     CURVATURE_PRIOR_PER_M,
+    MAX_RANGE_M,
     SCORE_POWER,
     UNSEEN_WEIGHT,
     WIDTH_STD_M,
@@ -151,13 +152,14 @@ class LaneNetSettings:
     unseen_weight: float = UNSEEN_WEIGHT  # lanenet_decode.DecodeSettings
     width_std_m: float = WIDTH_STD_M  # lanenet_decode.DecodeSettings
     score_power: float = SCORE_POWER  # lanenet_decode.DecodeSettings
+    max_range_m: float = MAX_RANGE_M  # lanenet_decode.DecodeSettings
 
     def decode(self) -> DecodeSettings:
         return DecodeSettings(score_threshold=self.score_threshold, inlier_px=self.inlier_px,
                               iterations=self.ransac_iterations, min_points=self.min_points,
                               seed=self.seed, curvature_prior_per_m=self.curvature_prior_per_m,
                               unseen_weight=self.unseen_weight, width_std_m=self.width_std_m,
-                              score_power=self.score_power)
+                              score_power=self.score_power, max_range_m=self.max_range_m)
 
 
 @dataclass(frozen=True)

@@ -483,3 +483,22 @@ def test_proposals_carry_the_paint_probability():
     assert props.paint.round(2).tolist() == [0.99, 0.01]
     assert proposals(obj, np.full((4, 4), 0.5), np.zeros((5, 4, 4)), grid, 0.5).paint.tolist() \
         == [1.0, 1.0]
+
+
+def test_ground_points_beyond_the_decoding_range_are_not_fitted():
+    from lanekeep.detectors.lanenet_decode import Proposals, _fit_one
+
+    camera = _camera()
+    x = np.linspace(5, 60, 30)
+    uv, _ = camera.project_ground(np.stack([x, np.full_like(x, 1.85)], -1))
+    n = len(x)
+    props = Proposals(points_px=uv, boxes_px=np.zeros((n, 4)), scores=np.ones(n),
+                      slots=np.zeros(n, int), slot_probs=np.ones(n), paint=np.ones(n))
+    rng = np.random.default_rng(0)
+    near = DecodeSettings(max_range_m=30.0)
+    boundary, _ = _fit_one(props, np.arange(n), 0, near, rng, camera, None)
+    assert boundary.points_xy[:, 0].max() < 30.0 + camera.position_m[0]
+    boundary, _ = _fit_one(props, np.arange(n), 0, DecodeSettings(), rng, camera, None)
+    assert boundary.points_xy[:, 0].max() > 55.0
+    with pytest.raises(ValueError):
+        DecodeSettings(max_range_m=0.0)

@@ -95,6 +95,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--score-power", default="0,2",
                         help="powers of a point's objectness in the ego pair's weights (0 = "
                              "objectness ignored)")
+    parser.add_argument("--max-range", default="150",
+                        help="furthest ground points fitted (m ahead of the camera)")
     parser.add_argument("--occlusion", type=float, default=0.6,
                         help="share of paint hidden in the occluded copy")
     parser.add_argument("--weights", default=None, help="LaneNet weights (default: shipped)")
@@ -103,22 +105,24 @@ def main(argv: list[str] | None = None) -> int:
     copies = {"as rendered": outputs(data, 0.0, args.weights),
               f"occluded {args.occlusion:.0%}": outputs(data, args.occlusion, args.weights)}
     rows = []
-    for curvature, unseen, width_std, power in itertools.product(
+    for curvature, unseen, width_std, power, max_range in itertools.product(
             _floats(args.curvature), _floats(args.unseen), _floats(args.width_std),
-            _floats(args.score_power)):
+            _floats(args.score_power), _floats(args.max_range)):
         settings = replace(DecodeSettings(), curvature_prior_per_m=curvature,
-                           unseen_weight=unseen, width_std_m=width_std, score_power=power)
+                           unseen_weight=unseen, width_std_m=width_std, score_power=power,
+                           max_range_m=max_range)
         scores = {name: score(frames, settings) for name, frames in copies.items()}
         objective = float(np.mean([s["ade_cm"] + s["offset_err_cm"] for s in scores.values()]))
-        rows.append((objective, curvature, unseen, width_std, power))
+        rows.append((objective, curvature, unseen, width_std, power, max_range))
         print(f"curvature {curvature:<6g} unseen {unseen:<4g} width_std {width_std:<5g} "
-              f"score_power {power:<3g} "
+              f"score_power {power:<3g} max_range {max_range:<4g} "
               + "  ".join(f"{name}: ADE {s['ade_cm']:5.1f} offset {s['offset_err_cm']:5.1f} "
                           f"valid {s['valid']:.2f}" for name, s in scores.items())
               + f"  objective {objective:.2f}", flush=True)
     best = min(rows)
     print(f"chosen: curvature_prior_per_m {best[1]:g}, unseen_weight {best[2]:g}, "
-          f"width_std_m {best[3]:g}, score_power {best[4]:g} (objective {best[0]:.2f}) over "
+          f"width_std_m {best[3]:g}, score_power {best[4]:g}, max_range_m {best[5]:g} "
+          f"(objective {best[0]:.2f}) over "
           f"{len(data['frames'])} "
           "validation sequences")
     return 0
