@@ -28,11 +28,14 @@ from lanekeep.camera_model import CameraModel
 from lanekeep.detectors.base import LaneEstimate
 from lanekeep.detectors.lanenet_targets import OTHER, SLOTS, CellGrid
 
-CURVATURE_PRIOR_PER_M = 0.003
+CURVATURE_PRIOR_PER_M = 0.002
 UNSEEN_WEIGHT = 0.3  # 1 = paint ignored
 WIDTH_STD_M = 0.15  # 0 = no width prior
 SCORE_POWER = 2.0  # 0 = objectness does not weigh the ego pair's points
 MAX_RANGE_M = 150.0  # ground points further ahead are not fitted
+PRIOR_SHAPES = ("gaussian", "cauchy")
+CURVATURE_PRIOR_SHAPE = "cauchy"
+PAIR_PASSES = 10  # the ego pair's refits: inlier gate and prior weight settle within a few
 
 
 @dataclass(frozen=True)
@@ -48,8 +51,17 @@ class DecodeSettings:
     # Prior of a ground boundary's curvature (std, 1/m; 0 = none), weighed against its points'
     # pixel noise: points that end 10 m ahead hardly fix a parabola's bend, and without a prior
     # its extrapolation to 20 m can miss by metres (LaneNet's night FDE was 63 cm, its median
-    # 6 cm). Chosen on the simulated validation split (tools/tune_lanenet_decode.py).
+    # 6 cm). Chosen with its shape on the simulated validation split
+    # (tools/tune_lanenet_decode.py --curvature 0.001,0.002,0.003 --score-power 2,4: Cauchy
+    # 0.002, objective 32.76 cm; Gaussian 0.003, the earlier choice, 32.85, and 33.06 with
+    # the ego pair's earlier three refits).
     curvature_prior_per_m: float = CURVATURE_PRIOR_PER_M
+    # Its shape in the ego pair's fit. "gaussian" pulls every bend toward straight in
+    # proportion to it, a sharp turn's most: points to 15-24 m fixed a 40 m radius turn's bend
+    # at half its value, and the car cut the turn. "cauchy" (a Student t with one degree of
+    # freedom, the same scale) pulls a bend within the scale as the Gaussian does and lets one
+    # the points show clearly stand: roads are mostly straight, but a turn is a turn.
+    curvature_prior_shape: str = CURVATURE_PRIOR_SHAPE
     pixel_noise_px: float = 2.0  # std of a proposal's x in frame pixels
     # A boundary point where the paint head sees no paint (behind a car, or guessed through the
     # dark) is inferred, not seen: its std is pixel_noise_px / max(paint, unseen_weight). The
@@ -67,7 +79,8 @@ class DecodeSettings:
     score_power: float = SCORE_POWER
     # Ground points further than this from the camera are not fitted (rows near the horizon
     # map to no usable ground beyond 150 m). Nearer limits were tried on the validation split
-    # and not kept (tools/tune_lanenet_decode.py --max-range 20,30,45,150: objective 34.74,
+    # and not kept (tools/tune_lanenet_decode.py --max-range 20,30,45,150, Gaussian prior
+    # 0.003, three refits: objective 34.74,
     # 34.40, 33.74, 33.06 cm; 30 m fits the rendered copy best, ADE 7.7 against 8.3 cm, but
     # occluded frames need the far points, 27.2 against 25.1).
     max_range_m: float = MAX_RANGE_M
@@ -85,6 +98,8 @@ class DecodeSettings:
             raise ValueError("score_power >= 0")
         if not self.max_range_m > 0.0:
             raise ValueError("max_range_m > 0")
+        if self.curvature_prior_shape not in PRIOR_SHAPES:
+            raise ValueError(f"curvature_prior_shape must be one of {PRIOR_SHAPES}")
 
     def curvature_prior_row(self, n_params: int) -> np.ndarray:
         """The prior as one more row of a fit weighted to pixels, the curvature term last:
@@ -337,9 +352,10 @@ def parallel_pair(left: Boundary, right: Boundary, camera: CameraModel,
                   ) -> tuple[np.ndarray, np.ndarray] | None:
     """The ego pair refitted as one lane: its own c0 per side, one heading c1 and one bend c2
     (the two lines of a lane are parallel), on both sides' inlier ground points weighted to
-    pixels, with the curvature prior; points off by more than `inlier_px` (over their own std)
-    are dropped and the fit repeated. A side seen only near the car (occluded, or short in the
-    dark) then bends with the side seen far. Points are weighted by how surely paint is seen
+    pixels, with the curvature prior (a Cauchy one by iteratively reweighted least squares,
+    `settings.curvature_prior_shape`); points off by more than `inlier_px` (over their own
+    std) are dropped and the fit repeated. A side seen only near the car (occluded, or short
+    in the dark) then bends with the side seen far. Points are weighted by how surely paint is seen
     there and by the network's objectness (`settings.score_power`), and with `lane_width_m`
     and `settings.width_std_m` the pair's width is held to the lane's, so that a side inferred
     through an occluder leans on the seen one. The inlier gate reads each point's std without
@@ -362,24 +378,31 @@ def parallel_pair(left: Boundary, right: Boundary, camera: CameraModel,
     w, side = np.concatenate(weights), np.concatenate(sides)
     fit_w = w * np.concatenate(confidence)  # the gate below keeps each point's own std
     prior = settings.curvature_prior_row(4)
+    bend_rows = len(prior)  # the curvature prior's row comes first (none without a prior)
     prior_target = np.zeros(len(prior))
     if lane_width_m is not None and settings.width_std_m > 0:
         # c0_left - c0_right = width (parallel lines: their distance, up to cos(heading))
         scale = settings.pixel_noise_px / settings.width_std_m
         prior = np.vstack([prior, [[scale, -scale, 0.0, 0.0]]])
         prior_target = np.append(prior_target, scale * lane_width_m)
-    keep = np.ones(len(target), bool)
-    for _ in range(3):
+    cauchy = settings.curvature_prior_shape == "cauchy" and bend_rows > 0
+    sigma_c2 = settings.curvature_prior_per_m / 2.0
+    keep, bend_weight = np.ones(len(target), bool), 1.0
+    for _ in range(PAIR_PASSES):
         if min(np.count_nonzero(keep & (side == k)) for k in (0, 1)) < 3:
             return None
-        c, *_ = np.linalg.lstsq(np.vstack([basis[keep] * fit_w[keep, None], prior]),
+        rows = prior.copy()
+        rows[:bend_rows] *= np.sqrt(bend_weight)
+        c, *_ = np.linalg.lstsq(np.vstack([basis[keep] * fit_w[keep, None], rows]),
                                 np.concatenate([target[keep] * fit_w[keep], prior_target]),
                                 rcond=None)
         # residual over each point's own std: an inferred point may stray further
         inliers = np.abs(basis @ c - target) * w < settings.inlier_px
-        if np.array_equal(inliers, keep):
+        # Cauchy prior, -log p = log(1 + (c2 / sigma)^2): its IRLS weight on (c2 / sigma)^2
+        weight = 1.0 / (1.0 + (c[3] / sigma_c2) ** 2) if cauchy else 1.0
+        if np.array_equal(inliers, keep) and abs(weight - bend_weight) < 1e-3:
             break
-        keep = inliers
+        keep, bend_weight = inliers, weight
     if min(np.count_nonzero(keep & (side == k)) for k in (0, 1)) < 3:
         return None
     return np.array([c[0], c[2], c[3]]), np.array([c[1], c[2], c[3]])

@@ -502,3 +502,36 @@ def test_ground_points_beyond_the_decoding_range_are_not_fitted():
     assert boundary.points_xy[:, 0].max() > 55.0
     with pytest.raises(ValueError):
         DecodeSettings(max_range_m=0.0)
+
+
+def test_a_cauchy_curvature_prior_damps_a_noisy_bend_and_lets_a_sharp_turn_stand():
+    """The ego pair's curvature prior: the Gaussian pulls a 40 m radius turn seen to 15 m
+    toward straight (the car then cut the turn); the Cauchy one of the same scale leaves it,
+    and still damps the bend that noise puts into a straight pair seen to 9 m."""
+    from dataclasses import replace
+
+    from lanekeep.detectors.lanenet_decode import parallel_pair
+
+    camera = _camera()
+    gaussian = DecodeSettings(curvature_prior_shape="gaussian", width_std_m=0.0)
+    cauchy = replace(gaussian, curvature_prior_shape="cauchy")
+    none = replace(gaussian, curvature_prior_per_m=0.0)
+    assert DecodeSettings().curvature_prior_shape == "cauchy"
+
+    def pair_c2(c2: float, x: np.ndarray, noise_px: float, settings, seed: int) -> float:
+        rng = np.random.default_rng(seed)
+        left = _ground_boundary(camera, 0, np.array([1.85, 0.0, c2]), x, noise_px, rng)
+        right = _ground_boundary(camera, 1, np.array([-1.85, 0.0, c2]), x, noise_px, rng)
+        left, right = (replace(b, paint=np.full(len(x), 0.3)) for b in (left, right))
+        return parallel_pair(left, right, camera, settings)[0][2]
+
+    turn, x = 0.5 / 40.0, np.linspace(4, 15, 16)
+    shrunk, kept = pair_c2(turn, x, 0.5, gaussian, 0), pair_c2(turn, x, 0.5, cauchy, 0)
+    assert abs(kept - turn) < 0.05 * turn
+    assert abs(shrunk - turn) > 3 * abs(kept - turn)
+    near = np.linspace(4, 9, 8)
+    bends = np.array([[abs(pair_c2(0.0, near, 2.0, s, seed)) for s in (cauchy, none)]
+                      for seed in range(20)])
+    assert bends[:, 0].mean() < 0.5 * bends[:, 1].mean()
+    with pytest.raises(ValueError):
+        DecodeSettings(curvature_prior_shape="laplace")

@@ -7,9 +7,9 @@ The shipped weights run once over every validation sequence (front and rear fram
 sequence from a reset state, frames upscaled to 1280x720 as `lanekeep eval` does), on the
 sequences as rendered and on a copy with vehicle-sized occluders over 60% of their paint
 (`lanekeep/eval_sets.occlude`, seeded apart from `lanekeep eval`'s sets). Each combination of
-the decoding's priors (`DecodeSettings`: curvature prior, weight of points where no paint is
-seen, std of the ego pair's width about the lane's, power of the objectness that weighs the
-ego pair's points) then decodes the same network outputs,
+the decoding's priors (`DecodeSettings`: curvature prior and its shape, weight of points where
+no paint is seen, std of the ego pair's width about the lane's, power of the objectness that
+weighs the ego pair's points, furthest point fitted) then decodes the same network outputs,
 and the ego lane is scored by `lanekeep/lane_eval.py`'s rules: ADE at 4-20 m and the offset
 error (cm), and the share of valid frames. The choice is the lowest mean of ADE + offset error
 over the two copies. Labels are read only to score. The validation worlds are disjoint from the
@@ -95,6 +95,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--score-power", default="0,2",
                         help="powers of a point's objectness in the ego pair's weights (0 = "
                              "objectness ignored)")
+    parser.add_argument("--prior-shape", default="gaussian,cauchy",
+                        help="shapes of the curvature prior in the ego pair's fit")
     parser.add_argument("--max-range", default="150",
                         help="furthest ground points fitted (m ahead of the camera)")
     parser.add_argument("--occlusion", type=float, default=0.6,
@@ -105,23 +107,24 @@ def main(argv: list[str] | None = None) -> int:
     copies = {"as rendered": outputs(data, 0.0, args.weights),
               f"occluded {args.occlusion:.0%}": outputs(data, args.occlusion, args.weights)}
     rows = []
-    for curvature, unseen, width_std, power, max_range in itertools.product(
-            _floats(args.curvature), _floats(args.unseen), _floats(args.width_std),
-            _floats(args.score_power), _floats(args.max_range)):
+    for curvature, shape, unseen, width_std, power, max_range in itertools.product(
+            _floats(args.curvature), args.prior_shape.split(","), _floats(args.unseen),
+            _floats(args.width_std), _floats(args.score_power), _floats(args.max_range)):
         settings = replace(DecodeSettings(), curvature_prior_per_m=curvature,
-                           unseen_weight=unseen, width_std_m=width_std, score_power=power,
-                           max_range_m=max_range)
+                           curvature_prior_shape=shape, unseen_weight=unseen,
+                           width_std_m=width_std, score_power=power, max_range_m=max_range)
         scores = {name: score(frames, settings) for name, frames in copies.items()}
         objective = float(np.mean([s["ade_cm"] + s["offset_err_cm"] for s in scores.values()]))
-        rows.append((objective, curvature, unseen, width_std, power, max_range))
-        print(f"curvature {curvature:<6g} unseen {unseen:<4g} width_std {width_std:<5g} "
-              f"score_power {power:<3g} max_range {max_range:<4g} "
+        rows.append((objective, curvature, unseen, width_std, power, max_range, shape))
+        print(f"curvature {curvature:<6g} {shape:<8} unseen {unseen:<4g} "
+              f"width_std {width_std:<5g} score_power {power:<3g} max_range {max_range:<4g} "
               + "  ".join(f"{name}: ADE {s['ade_cm']:5.1f} offset {s['offset_err_cm']:5.1f} "
                           f"valid {s['valid']:.2f}" for name, s in scores.items())
               + f"  objective {objective:.2f}", flush=True)
     best = min(rows)
     print(f"chosen: curvature_prior_per_m {best[1]:g}, unseen_weight {best[2]:g}, "
-          f"width_std_m {best[3]:g}, score_power {best[4]:g}, max_range_m {best[5]:g} "
+          f"width_std_m {best[3]:g}, score_power {best[4]:g}, max_range_m {best[5]:g}, "
+          f"curvature_prior_shape {best[6]} "
           f"(objective {best[0]:.2f}) over "
           f"{len(data['frames'])} "
           "validation sequences")
