@@ -256,13 +256,16 @@ class SteeringPID:
         return derive_gains(tau, t.zeta, speed_mps, self.lookahead_m, self.dt_s,
                             self.wheelbase_m, self.max_steer_rad, ti)
 
-    def __call__(self, offset_m: float | None, speed_mps: float, curvature_1pm: float = 0.0
-                 ) -> float:
+    def __call__(self, offset_m: float | None, speed_mps: float, curvature_1pm: float = 0.0,
+                 schedule_curvature_1pm: float | None = None) -> float:
+        """`curvature_1pm` feeds the feed-forward and, unless `schedule_curvature_1pm` is
+        given, the gain schedule."""
         if offset_m is None or not math.isfinite(offset_m):
             # No estimate: hold the wheel straight-ish, keep state (coasting is the tracker's job).
             return 0.0
         t = self.tuning
-        g = self.gains(speed_mps, curvature_1pm)
+        g = self.gains(speed_mps, curvature_1pm if schedule_curvature_1pm is None
+                       else schedule_curvature_1pm)
         error = -offset_m  # eq. 9: target offset 0
         delta = 0.0 if self.previous_error is None else error - self.previous_error
         self.previous_error = error

@@ -52,8 +52,9 @@ class PidController:
     """The default: the steering PID of paper eq. 9 (lanekeep/control.py) and the speed PI.
 
     Default mode: feedback on the lane's offset and heading projected `control_lookahead_m`
-    ahead, the lane's curvature there into the feed-forward. Paper mode: eq. 9 on the output
-    offset itself (the selected detection at its nearest row), Table 2's gains.
+    ahead, the lane's curvature there into the feed-forward, and the gains scheduled on the
+    larger of that curvature and the car's own (gyro). Paper mode: eq. 9 on the output offset
+    itself (the selected detection at its nearest row), Table 2's gains, the same schedule.
     """
 
     def __init__(self, context: ControlContext) -> None:
@@ -88,7 +89,12 @@ class PidController:
             x_ctrl = self.context.control_lookahead_m
             control_offset = -float(centre[0] + centre[1] * x_ctrl)
             curvature = lane_curvature(centre, x_ctrl)
-            steer = self.steering(control_offset, speed, curvature_1pm=curvature)
+            # The schedule, as in paper mode, also hears the gyro: a lane read straighter
+            # than it is (its far markings hidden by traffic) leaves the soft straight set in
+            # a curve the car is already turning through.
+            path = signals.yaw_rate_rps / max(abs(speed), 1.0)
+            steer = self.steering(control_offset, speed, curvature_1pm=curvature,
+                                  schedule_curvature_1pm=max(curvature, path, key=abs))
         return steer, self.speed(speed)
 
 

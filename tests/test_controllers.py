@@ -41,8 +41,9 @@ def signals(speed: float, yaw_rate: float = 0.0) -> VehicleSignals:
 
 
 class InlinePid:
-    """Episode._control as it was before the Controller interface, copied here unchanged:
-    the reference the default controller must reproduce number for number."""
+    """Episode._control as it was before the Controller interface, copied here, with one
+    later change (the default mode's gain schedule also hears the gyro, as paper mode's always
+    did): the reference the default controller must reproduce number for number."""
 
     def __init__(self, paper_mode: bool, lookahead_m: float = 8.0) -> None:
         self.paper_mode, self.lookahead_m = paper_mode, lookahead_m
@@ -61,9 +62,25 @@ class InlinePid:
                                   curvature_1pm=max(lane, path, key=abs))
         else:
             x_ctrl = self.lookahead_m
+            lane = lane_curvature(centre, x_ctrl)
+            path = signals.yaw_rate_rps / max(abs(speed), 1.0)
             steer = self.steering(-float(centre[0] + centre[1] * x_ctrl), speed,
-                                  curvature_1pm=lane_curvature(centre, x_ctrl))
+                                  curvature_1pm=lane,
+                                  schedule_curvature_1pm=max(lane, path, key=abs))
         return steer, self.speed(speed)
+
+
+def test_the_default_schedule_hears_the_gyro_and_the_feed_forward_does_not():
+    """A lane read straight (its far markings hidden) while the gyro says the car turns on a
+    200 m radius: the curvy (stiffer) gains, but no feed-forward from the car's own turning,
+    which would steer it further along whatever path it is on."""
+    straight_lane = SimpleNamespace(centre=np.array([0.0, 0.0, 0.0]), offset_x_m=4.0)
+    turning, level = PidController(context()), PidController(context())
+    turning.reset(), level.reset()
+    steer_turning, _ = turning.control(straight_lane, signals(15.0, 15.0 / 200.0))
+    steer_level, _ = level.control(straight_lane, signals(15.0, 0.0))
+    assert turning.steering.curvy and not level.steering.curvy
+    assert steer_turning == steer_level == 0.0  # on the lane: no feedback, no feed-forward
 
 
 @pytest.mark.parametrize("mode", ["default", "paper"])
