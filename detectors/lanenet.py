@@ -41,6 +41,7 @@ from lanekeep.detectors.birds_eye import detector_view
 from lanekeep.detectors.config import DetectorsConfig, GroundWindow, load_config
 from lanekeep.detectors.lanenet_decode import (
     CURVATURE_PRIOR_PER_M,
+    CURVATURE_PRIOR_SHAPE,
     MAX_RANGE_M,
     SCORE_POWER,
     UNSEEN_WEIGHT,
@@ -149,6 +150,7 @@ class LaneNetSettings:
     scene_change_grey: float = 30.0  # mean |grey difference| of thumbnails (0..255) = new scene
     mirror: bool = True  # also run the mirrored frame and fit to both passes' proposals
     curvature_prior_per_m: float = CURVATURE_PRIOR_PER_M  # lanenet_decode.DecodeSettings
+    curvature_prior_shape: str = CURVATURE_PRIOR_SHAPE  # lanenet_decode.DecodeSettings
     unseen_weight: float = UNSEEN_WEIGHT  # lanenet_decode.DecodeSettings
     width_std_m: float = WIDTH_STD_M  # lanenet_decode.DecodeSettings
     score_power: float = SCORE_POWER  # lanenet_decode.DecodeSettings
@@ -158,6 +160,7 @@ class LaneNetSettings:
         return DecodeSettings(score_threshold=self.score_threshold, inlier_px=self.inlier_px,
                               iterations=self.ransac_iterations, min_points=self.min_points,
                               seed=self.seed, curvature_prior_per_m=self.curvature_prior_per_m,
+                              curvature_prior_shape=self.curvature_prior_shape,
                               unseen_weight=self.unseen_weight, width_std_m=self.width_std_m,
                               score_power=self.score_power, max_range_m=self.max_range_m)
 

@@ -76,7 +76,8 @@ def test_the_default_schedule_hears_the_gyro_and_the_feed_forward_does_not():
     which would steer it further along whatever path it is on."""
     straight_lane = SimpleNamespace(centre=np.array([0.0, 0.0, 0.0]), offset_x_m=4.0)
     turning, level = PidController(context()), PidController(context())
-    turning.reset(), level.reset()
+    turning.reset()
+    level.reset()
     steer_turning, _ = turning.control(straight_lane, signals(15.0, 15.0 / 200.0))
     steer_level, _ = level.control(straight_lane, signals(15.0, 0.0))
     assert turning.steering.curvy and not level.steering.curvy

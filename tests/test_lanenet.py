@@ -9,7 +9,13 @@ import pytest
 import torch
 
 from lanekeep.camera_model import CameraModel
-from lanekeep.detectors.lanenet import LaneNetDetector, WeightsError, load_weights, save_weights
+from lanekeep.detectors.lanenet import (
+    LaneNetDetector,
+    LaneNetSettings,
+    WeightsError,
+    load_weights,
+    save_weights,
+)
 from lanekeep.detectors.lanenet_decode import (
     DecodeSettings,
     ego_estimate,
@@ -517,6 +523,8 @@ def test_a_cauchy_curvature_prior_damps_a_noisy_bend_and_lets_a_sharp_turn_stand
     cauchy = replace(gaussian, curvature_prior_shape="cauchy")
     none = replace(gaussian, curvature_prior_per_m=0.0)
     assert DecodeSettings().curvature_prior_shape == "cauchy"
+    assert LaneNetSettings(curvature_prior_shape="gaussian").decode().curvature_prior_shape \
+        == "gaussian"
 
     def pair_c2(c2: float, x: np.ndarray, noise_px: float, settings, seed: int) -> float:
         rng = np.random.default_rng(seed)
