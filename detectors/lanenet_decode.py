@@ -80,9 +80,9 @@ class DecodeSettings:
     # Ground points further than this from the camera are not fitted (rows near the horizon
     # map to no usable ground beyond 150 m). Nearer limits were tried on the validation split
     # and not kept (tools/tune_lanenet_decode.py --max-range 20,30,45,150, Gaussian prior
-    # 0.003, three refits: objective 34.74,
-    # 34.40, 33.74, 33.06 cm; 30 m fits the rendered copy best, ADE 7.7 against 8.3 cm, but
-    # occluded frames need the far points, 27.2 against 25.1).
+    # 0.003, three refits: objective 34.74, 34.40, 33.74, 33.06 cm; 30 m fits the rendered
+    # copy best, ADE 7.7 against 8.3 cm, but occluded frames need the far points, 27.2
+    # against 25.1).
     max_range_m: float = MAX_RANGE_M
 
     def __post_init__(self) -> None:
@@ -355,8 +355,8 @@ def parallel_pair(left: Boundary, right: Boundary, camera: CameraModel,
     pixels, with the curvature prior (a Cauchy one by iteratively reweighted least squares,
     `settings.curvature_prior_shape`); points off by more than `inlier_px` (over their own
     std) are dropped and the fit repeated. A side seen only near the car (occluded, or short
-    in the dark) then bends with the side seen far. Points are weighted by how surely paint is seen
-    there and by the network's objectness (`settings.score_power`), and with `lane_width_m`
+    in the dark) then bends with the side seen far. Points are weighted by how surely paint is
+    seen there and by the network's objectness (`settings.score_power`), and with `lane_width_m`
     and `settings.width_std_m` the pair's width is held to the lane's, so that a side inferred
     through an occluder leans on the seen one. The inlier gate reads each point's std without
     its objectness: a point the network is unsure of counts less, but is not let stray

@@ -72,6 +72,7 @@ class PidController:
     def control(self, estimate: EstimatorOutput, signals: VehicleSignals
                 ) -> tuple[float, float]:
         centre, speed = estimate.centre, signals.speed_mps
+        path = signals.yaw_rate_rps / max(abs(speed), 1.0)  # the car's own curvature (gyro)
         if centre is None:
             steer = self.steering(None, speed)
         elif self.paper_mode:
@@ -80,7 +81,6 @@ class PidController:
             # rate / wheel speed) picks the gains: a short-range model fits straight lines,
             # and once the car turns, the gyro knows.
             lane = lane_curvature(centre, estimate.offset_x_m)
-            path = signals.yaw_rate_rps / max(abs(speed), 1.0)
             curvature = max(lane, path, key=abs)
             steer = self.steering(estimate.offset_m, speed, curvature_1pm=curvature)
         else:
@@ -92,7 +92,6 @@ class PidController:
             # The schedule, as in paper mode, also hears the gyro: a lane read straighter
             # than it is (its far markings hidden by traffic) leaves the soft straight set in
             # a curve the car is already turning through.
-            path = signals.yaw_rate_rps / max(abs(speed), 1.0)
             steer = self.steering(control_offset, speed, curvature_1pm=curvature,
                                   schedule_curvature_1pm=max(curvature, path, key=abs))
         return steer, self.speed(speed)

@@ -124,10 +124,8 @@ def main(argv: list[str] | None = None) -> int:
     best = min(rows)
     print(f"chosen: curvature_prior_per_m {best[1]:g}, unseen_weight {best[2]:g}, "
           f"width_std_m {best[3]:g}, score_power {best[4]:g}, max_range_m {best[5]:g}, "
-          f"curvature_prior_shape {best[6]} "
-          f"(objective {best[0]:.2f}) over "
-          f"{len(data['frames'])} "
-          "validation sequences")
+          f"curvature_prior_shape {best[6]} (objective {best[0]:.2f}) over "
+          f"{len(data['frames'])} validation sequences")
     return 0
 
 
