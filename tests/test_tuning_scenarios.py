@@ -105,3 +105,24 @@ def test_trace_tool_tells_a_model_that_errs_with_the_reference_from_one_that_err
     assert summary["against"]["correlation"] == pytest.approx(-1.0)
     assert summary["against"]["rms_m"] == pytest.approx(
         2.0 * np.sqrt(np.mean(reference_error[10:] ** 2)))
+
+
+def test_trace_tool_shows_when_the_output_accrues_its_excess_over_a_track():
+    """Windows of the output's squared error minus a track's: a loss made in the first second
+    lands in the first window; steps where either is missing count for neither."""
+    tool = _tool("trace_estimation")
+    time = np.arange(1, 41) * 0.1  # 4 s of 0.1 s steps
+    track = np.full(40, 0.005)
+    fused = track.copy()
+    fused[:10] = 0.01  # the first second: 1 cm against 0.5 cm
+    fused[25] = np.nan
+    columns = {"time": time, "fused": fused, "a:track": track,
+               "a:p": np.full(40, 0.9), "b:p": np.full(40, 0.1)}
+    rows = tool.excess_by_window(["a", "b"], columns, "a:track", 2.0)
+    assert [r[0] for r in rows] == pytest.approx([0.1, 2.1])
+    assert rows[0][1] == pytest.approx(10 * (0.01**2 - 0.005**2))
+    assert rows[1][1] == pytest.approx(0.0)
+    np.testing.assert_allclose(rows[0][2], [0.9, 0.1])
+    with pytest.raises(SystemExit) as bad:
+        tool.main(["clear_curve", "--window", "0"])
+    assert bad.value.code == 2

@@ -14,8 +14,11 @@ and the correlation between the reference's error and the carried offset's error
 is scored step by step, so a model whose errors rise and fall with the reference's (a positive
 correlation: the same network reading the same stretch of road from the other camera) keeps a
 small residual whatever its bias, and one whose errors run against the reference's pays for
-both. Last, each detection's left and right boundary error at the look-ahead: a bias on one
-side only is the detector's (a marking lit on one side), not the lane's.
+both. Then each detection's left and right boundary error at the look-ahead: a bias on one
+side only is the detector's (a marking lit on one side), not the lane's. Last, when the output
+accrues its squared error beyond the best own track's, window by window (`--window`, s), with
+the models' mean probabilities there: a loss made in the first second, before the reference
+can see road the front models saw, is the prior's; one spread over the episode is the MMAE's.
 
 Truth is read here for scoring only, as in `lanekeep run`.
 """
@@ -56,6 +59,7 @@ def trace(scenario_arg: str, output: str | None) -> tuple[list[str], dict[str, n
         names = list(episode.front)
 
         def on_step(result, _total) -> None:
+            add("time", result.time_s)
             x, y, yaw = result.sensed_pose
             s, _ = road.local_coordinates(np.array([[x, y]]))
             curvature = float(road.curvature_at(float(np.ravel(s)[0])))
@@ -115,6 +119,24 @@ def residual_summary(names: list[str], columns: dict[str, np.ndarray]
     return summary
 
 
+def excess_by_window(names: list[str], columns: dict[str, np.ndarray], track: str,
+                     window_s: float) -> list[tuple[float, float, np.ndarray]]:
+    """Per window of `window_s` from the first step: its start (s), the output's squared
+    offset error summed over its steps minus the `track`'s (m^2; steps where either is missing
+    count for neither), and the models' mean probabilities there."""
+    time, fused, other = columns["time"], columns["fused"], columns[track]
+    both = np.isfinite(fused) & np.isfinite(other)
+    excess = np.zeros(len(time))
+    excess[both] = fused[both] ** 2 - other[both] ** 2
+    p = np.stack([columns[f"{name}:p"] for name in names], axis=1)
+    rows = []
+    start = float(time[0])
+    for t0 in np.arange(start, float(time[-1]) + 1e-9, window_s):
+        inside = (time >= t0) & (time < t0 + window_s)
+        rows.append((float(t0), float(excess[inside].sum()), p[inside].mean(axis=0)))
+    return rows
+
+
 def _cm(values: np.ndarray) -> str:
     return f"{100 * np.nanmean(values):+8.2f}{100 * np.nanstd(values):8.2f}"
 
@@ -124,7 +146,11 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("scenario", help="a shipped scenario's name or a scenario file")
     parser.add_argument("--output", choices=("select", "fused", "precision"),
                         help="[estimation] output instead of the scenario's")
+    parser.add_argument("--window", type=float, default=2.0,
+                        help="seconds per row of the output's excess over the best track")
     args = parser.parse_args(argv)
+    if not (np.isfinite(args.window) and args.window > 0):
+        parser.error(f"--window must be a positive number of seconds, got {args.window}")
     names, columns = trace(args.scenario, args.output)
     print(f"{'source':<24}{'RMSE cm':>9}{'bias cm':>9}{'std cm':>8}"
           f"{'curv. RMSE 1e-3/m':>19}{'mean p':>8}")
@@ -147,6 +173,12 @@ def main(argv: list[str] | None = None) -> None:
     for name in names:
         left, right = _cm(columns[f"{name}:left"]), _cm(columns[f"{name}:right"])
         print(f"{name:<24}{left} {right}")
+    tracks = [k for k in columns if k.endswith(":track")]
+    best = min(tracks, key=lambda k: np.nanmean(columns[k] ** 2))
+    print(f"\n{'from s':>6}{'excess cm2':>12}  output's squared error summed minus {best}'s;"
+          f" mean p of {', '.join(names)}")
+    for t0, excess, p in excess_by_window(names, columns, best, args.window):
+        print(f"{t0:6.1f}{1e4 * excess:+12.2f}  " + " ".join(f"{v:.3f}" for v in p))
 
 
 if __name__ == "__main__":
