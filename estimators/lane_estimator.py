@@ -139,6 +139,10 @@ class EstimatorSettings:
     prefer_accepted: bool = True
     lane_width_prior_m: float = 3.7
     reference_std_m: float = 0.05  # eq. 8's R: the reference's offset noise (MMAEConfig)
+    # A reference whose two boundaries are further than this from the lane width the front
+    # detectors measure has read a wrong line (a passing car's edge): it is taken as missed.
+    # None: every reading is compared (the paper's).
+    reference_width_tolerance_m: float | None = None
     # The MMAE's probabilities before the reference has spoken: "uniform" (the paper's) or
     # "precision", each model's in proportion to the inverse of its measured offset variance
     # at the output's look-ahead (its tracker's R), as the trackers already weigh it.
@@ -284,11 +288,25 @@ class LaneEstimator:
             offsets, variances = self.aligned.offsets_at(ego.pose, self.reference_x_m)
         reference_x = 0.0 if at_car else float(reference.x_m)
         reference_m = self._offset_of(reference, reference_x)
+        width = self._pair_width(reference, reference_x)
+        tolerance = self.settings.reference_width_tolerance_m
+        if reference_m is not None and width is not None and tolerance is not None \
+                and abs(width - self.lane_width_m) > tolerance:
+            events.append(f"reference ignored: its lane {width:.2f} m wide against "
+                          f"{self.lane_width_m:.2f} m measured in front")
+            reference_m = None  # a missed reference: the probabilities stay as they are
         selection = self.mmae.step(reference_m, offsets, variances, s_m=ego.travelled_m)
         if selection.reference_repaired and reference_m is not None:
             events.append(f"reference repaired: {reference_m:+.2f} m -> "
                           f"{selection.reference_m:+.2f} m")
         return selection, reference_x
+
+    @staticmethod
+    def _pair_width(detection: LaneEstimate, x_m: float) -> float | None:
+        """The width between a detection's two boundaries at x, None without both."""
+        if not detection.valid or detection.left is None or detection.right is None:
+            return None
+        return float(poly_eval(detection.left, x_m) - poly_eval(detection.right, x_m))
 
     def _offset_of(self, detection: LaneEstimate, x_m: float) -> float | None:
         """A detection's offset at x: its own where it reports it, else from its centre line."""

@@ -58,12 +58,14 @@ def estimator_settings(est: EstimationConfig) -> EstimatorSettings:
     """The estimator's settings of a scenario; paper mode overrides its choices."""
     settings = EstimatorSettings(est.offset_lookahead_m, est.residual_mode, est.output,
                                  est.model_lane, reference_std_m=est.reference_std_m,
-                                 mmae_prior=est.mmae_prior)
+                                 mmae_prior=est.mmae_prior,
+                                 reference_width_tolerance_m=est.reference_width_tolerance_m)
     if est.mode != "paper":
         return settings
     return replace(settings, residual_mode="one_step_delay", output="select",
                    model_lane="detection", output_at="nearest_row", mmae_input="detection",
-                   mmae_at_car=True, prefer_accepted=False, mmae_prior="uniform")
+                   mmae_at_car=True, prefer_accepted=False, mmae_prior="uniform",
+                   reference_width_tolerance_m=None)
 
 
 def roll_compensation(est: EstimationConfig) -> RollCompensation:

@@ -328,6 +328,12 @@ class EstimationConfig:
     offset_lookahead_m: float = 4.0  # where offsets are compared and reported (front)
     # Eq. 8's R: the rear reference's offset noise (m) in the MMAE's residual density.
     reference_std_m: float = 0.05
+    # A rear reading whose lane is further than this from the width the front detectors
+    # measure (the estimator's running width) has read a wrong line and is taken as missed
+    # (estimators/lane_estimator.py). On the tuning scenarios the rear pair stays within
+    # 16 cm of it except where it follows a passing car's edge (the lead van: 4.8% of steps
+    # beyond 30 cm). Paper mode compares every reading, as the paper does.
+    reference_width_tolerance_m: float = 0.2
     # The MMAE's probabilities before the reference has spoken: "uniform" (the paper's; paper
     # mode keeps it) or "precision" (each model's in proportion to its tracker R's inverse
     # offset variance at offset_lookahead_m). Chosen on the tuning scenarios
@@ -362,6 +368,9 @@ class EstimationConfig:
             raise InvalidValue("model_lane", f"must be one of {MODEL_LANES}")
         if self.mmae_prior not in MMAE_PRIORS:
             raise InvalidValue("mmae_prior", f"must be one of {MMAE_PRIORS}")
+        if not 0.01 <= self.reference_width_tolerance_m <= 10.0:
+            raise InvalidValue("reference_width_tolerance_m",
+                               f"must be in [0.01, 10] m, got {self.reference_width_tolerance_m}")
         if not 0.001 <= self.reference_std_m <= 1.0:
             raise InvalidValue("reference_std_m",
                                f"must be in [0.001, 1] m, got {self.reference_std_m}")

@@ -199,6 +199,10 @@ DESCRIPTIONS: dict[str, tuple[str, str]] = {
     "estimation.reference_std_m": ("The rear reference's offset noise in the MMAE's residual "
                                    "density (eq. 8's R): smaller moves the probabilities "
                                    "faster, and with the reference's own errors.", "0.001..1"),
+    "estimation.reference_width_tolerance_m": (
+        "A rear reading whose lane is further than this from the width the front detectors "
+        "measure is taken as missed (it read a wrong line); paper mode compares every "
+        "reading.", "0.01..10"),
     "control": ("The controller, by name.", ""),
     "control.controller": ("Controller turning the estimated lane into steer and throttle.",
                            '"pid", "stanley", package.module:Class, entry points'),

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from lanekeep.detectors.base import LaneEstimate
 from lanekeep.estimators.lane_estimator import EgoMotion, EstimatorSettings, LaneEstimator
@@ -223,3 +224,46 @@ def test_the_precision_prior_weighs_each_model_by_its_measured_offset_variance()
     assert np.argmax(estimator.mmae.probabilities) == 2  # lanenet: the steadiest near offset
     uniform = LaneEstimator(names, EstimatorSettings(lane_width_prior_m=WIDTH), -4.0)
     np.testing.assert_allclose(uniform.mmae.probabilities, np.full(3, 1.0 / 3.0))
+
+
+def _pair(c0: float, width: float) -> LaneEstimate:
+    """A straight lane centred at y = c0 whose two boundaries are `width` apart."""
+    return LaneEstimate(valid=True, offset_m=-c0, x_m=-4.0, left=np.array([c0 + width / 2, 0, 0]),
+                        right=np.array([c0 - width / 2, 0, 0]))
+
+
+def test_a_reference_that_reads_a_lane_of_the_wrong_width_is_taken_as_missed():
+    """A rear pair 0.5 m narrower than the lane the front detectors measure has read a wrong
+    line (a passing car's edge): the MMAE is not updated with it and an event says why. One
+    within the tolerance is compared; without a tolerance (the paper's) every one is."""
+    settings = EstimatorSettings(lane_width_prior_m=WIDTH, reference_width_tolerance_m=0.2)
+    estimator = LaneEstimator(NAMES, settings, reference_x_m=-4.0)
+    for k in range(10):  # 15 m: the models' history reaches where the reference looks
+        estimator.update({n: _lane(0.0) for n in NAMES}, _pair(0.0, WIDTH), _ego(k))
+    before = estimator.mmae.probabilities
+    out = estimator.update({"hough": _lane(0.0), "sliding_window": _lane(0.2)},
+                           _pair(0.25, WIDTH - 0.5), _ego(10))
+    assert not out.selection.updated and out.selection.reference_m is None
+    np.testing.assert_allclose(out.selection.probabilities, before)
+    assert any("reference ignored" in e and "3.20 m" in e for e in out.events)
+    out = estimator.update({"hough": _lane(0.0), "sliding_window": _lane(0.2)},
+                           _pair(0.0, WIDTH - 0.1), _ego(11))
+    assert out.selection.updated and not any("ignored" in e for e in out.events)
+    paper = LaneEstimator(NAMES, EstimatorSettings(lane_width_prior_m=WIDTH), -4.0)
+    for k in range(10):
+        paper.update({n: _lane(0.0) for n in NAMES}, _pair(0.0, WIDTH), _ego(k))
+    assert paper.update({n: _lane(0.0) for n in NAMES}, _pair(0.25, WIDTH - 0.5),
+                        _ego(10)).selection.updated
+
+
+def test_the_reference_width_tolerance_is_a_scenario_setting_paper_mode_leaves_out():
+    from lanekeep.paper_mode import estimator_settings
+    from lanekeep.scenario import EstimationConfig, InvalidValue
+
+    assert estimator_settings(EstimationConfig()).reference_width_tolerance_m == 0.2
+    chosen = EstimationConfig(reference_width_tolerance_m=0.3)
+    assert estimator_settings(chosen).reference_width_tolerance_m == 0.3
+    paper = EstimationConfig(mode="paper", reference_width_tolerance_m=0.3)
+    assert estimator_settings(paper).reference_width_tolerance_m is None
+    with pytest.raises(InvalidValue, match="reference_width_tolerance_m"):
+        EstimationConfig(reference_width_tolerance_m=0.0)
