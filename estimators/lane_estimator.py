@@ -230,10 +230,9 @@ class LaneEstimator:
         lo, hi = self.settings.lane_width_range_m
         gain = self.settings.lane_width_gain
         for estimate in detections:
-            if estimate.valid and estimate.left is not None and estimate.right is not None:
-                width = float(poly_eval(estimate.left, x) - poly_eval(estimate.right, x))
-                if lo <= width <= hi:
-                    self.lane_width_m += gain * (width - self.lane_width_m)
+            width = self._pair_width(estimate, x)
+            if width is not None and lo <= width <= hi:
+                self.lane_width_m += gain * (width - self.lane_width_m)
 
     def centre_of(self, estimate: LaneEstimate) -> np.ndarray | None:
         """Centre line of a detection; one boundary is shifted by half the measured lane

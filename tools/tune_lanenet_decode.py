@@ -103,16 +103,24 @@ def main(argv: list[str] | None = None) -> int:
                         help="share of paint hidden in the occluded copy")
     parser.add_argument("--weights", default=None, help="LaneNet weights (default: shipped)")
     args = parser.parse_args(argv)
+    try:  # every combination is checked before the network runs, so a typo costs nothing
+        grid = [replace(DecodeSettings(), curvature_prior_per_m=curvature,
+                        curvature_prior_shape=shape, unseen_weight=unseen,
+                        width_std_m=width_std, score_power=power, max_range_m=max_range)
+                for curvature, shape, unseen, width_std, power, max_range in itertools.product(
+                    _floats(args.curvature), args.prior_shape.split(","), _floats(args.unseen),
+                    _floats(args.width_std), _floats(args.score_power),
+                    _floats(args.max_range))]
+    except ValueError as err:
+        parser.error(str(err))
     data = load_split(Path(args.data), "val")
     copies = {"as rendered": outputs(data, 0.0, args.weights),
               f"occluded {args.occlusion:.0%}": outputs(data, args.occlusion, args.weights)}
     rows = []
-    for curvature, shape, unseen, width_std, power, max_range in itertools.product(
-            _floats(args.curvature), args.prior_shape.split(","), _floats(args.unseen),
-            _floats(args.width_std), _floats(args.score_power), _floats(args.max_range)):
-        settings = replace(DecodeSettings(), curvature_prior_per_m=curvature,
-                           curvature_prior_shape=shape, unseen_weight=unseen,
-                           width_std_m=width_std, score_power=power, max_range_m=max_range)
+    for settings in grid:
+        curvature, shape = settings.curvature_prior_per_m, settings.curvature_prior_shape
+        unseen, width_std = settings.unseen_weight, settings.width_std_m
+        power, max_range = settings.score_power, settings.max_range_m
         scores = {name: score(frames, settings) for name, frames in copies.items()}
         objective = float(np.mean([s["ade_cm"] + s["offset_err_cm"] for s in scores.values()]))
         rows.append((objective, curvature, unseen, width_std, power, max_range, shape))
