@@ -82,6 +82,11 @@ def test_compare_tool_defaults_to_the_tuning_scenarios_and_refuses_scored_ones()
     with pytest.raises(SystemExit) as unknown:
         tool.parse_args(["no_such_key=1"])
     assert unknown.value.code == 2
+    assert [tool.typed_value(bool, v) for v in ("true", "false")] == [True, False]
+    for bad in ("offset_lookahead_m=far", "reference_std_m=0.05,"):
+        with pytest.raises(SystemExit) as wrong:
+            tool.parse_args([bad])
+        assert wrong.value.code == 2
 
 
 def test_trace_tool_tells_a_model_that_errs_with_the_reference_from_one_that_errs_against_it():
@@ -126,3 +131,44 @@ def test_trace_tool_shows_when_the_output_accrues_its_excess_over_a_track():
     with pytest.raises(SystemExit) as bad:
         tool.main(["clear_curve", "--window", "0"])
     assert bad.value.code == 2
+
+
+def _synthetic_recording(steps: int = 60) -> dict:
+    """A straight drive at 15 m/s on the lane's centre: hough reads it exactly, sliding_window
+    5 cm to one side, the rear reference exactly."""
+    from lanekeep.detectors.base import LaneEstimate
+    from lanekeep.estimators.lane_estimator import EgoMotion, EstimatorSettings
+
+    def lane(c0: float, x_m: float) -> LaneEstimate:
+        return LaneEstimate(valid=True, offset_m=-c0, x_m=x_m, left=np.array([c0 + 1.85, 0, 0]),
+                            right=np.array([c0 - 1.85, 0, 0]))
+
+    rows = [{"detections": {"hough": lane(0.0, 4.0), "sliding_window": lane(0.05, 4.0)},
+             "reference": lane(0.0, -4.0),
+             "ego": EgoMotion(0.1, 15.0, 0.0, 0.0, (1.5 * k, 0.0, 0.0), 1.5 * (k + 1)),
+             "truth_m": 0.0} for k in range(steps)]
+    settings = EstimatorSettings(lane_width_prior_m=3.7, output="precision")
+    return {"scenario": "synthetic", "names": ["hough", "sliding_window"],
+            "settings": settings, "reference_x_m": -4.0, "steps": rows}
+
+
+def test_replay_tool_scores_estimator_settings_on_a_recorded_drive(tmp_path):
+    """Open-loop replay: the biased model's weight reaches the output until the reference
+    has taken it away, faster with a smaller eq. 8 noise; the exact model's track is the
+    best. Bad settings or an empty directory: one line, exit 2."""
+    import pickle
+
+    tool = _tool("replay_estimation")
+    rows = tool.compare([_synthetic_recording()], "reference_std_m", [0.05, 0.01])
+    (_, _, slow, best, model), (_, _, fast, best_again, _) = rows
+    assert model == "hough" and best == pytest.approx(best_again) and best < 0.05
+    assert best < fast < slow < 5.0
+    with (tmp_path / "synthetic.pkl").open("wb") as f:
+        pickle.dump(_synthetic_recording(10), f)
+    tool.main(["compare", str(tmp_path), "prefer_accepted=true,false"])
+    for bad in (["compare", str(tmp_path), "no_such_key=1"],
+                ["compare", str(tmp_path), "reference_std_m=small"],
+                ["compare", str(tmp_path / "none"), "reference_std_m=0.05"]):
+        with pytest.raises(SystemExit) as wrong:
+            tool.main(bad)
+        assert wrong.value.code == 2

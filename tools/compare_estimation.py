@@ -49,9 +49,8 @@ def run_one(job: tuple[str, str, str]) -> tuple[str, str, float, float, str, flo
     from lanekeep.scenario import load_scenario
 
     scenario = load_scenario(path)
-    kind = type(getattr(scenario.estimation, key))  # a number key's value is a number
-    estimation = dataclasses.replace(scenario.estimation,
-                                     **{key: kind(value) if kind in (int, float) else value})
+    typed = typed_value(type(getattr(scenario.estimation, key)), value)
+    estimation = dataclasses.replace(scenario.estimation, **{key: typed})
     with Episode(dataclasses.replace(scenario, estimation=estimation)) as episode:
         report = episode.run()
     tracks = {k: v.rmse_cm for k, v in report.sources.items() if k.endswith(":track")}
@@ -60,9 +59,21 @@ def run_one(job: tuple[str, str, str]) -> tuple[str, str, float, float, str, flo
             report.car_max_cm, report.sources["reference"].rmse_cm)
 
 
+BOOLEANS = {"true": True, "false": False}
+
+
+def typed_value(kind: type, value: str) -> object:
+    """A value of the command line as the key's type: a number key's is a number, a flag's
+    is true or false (`bool("false")` would be True)."""
+    if kind is bool:
+        return BOOLEANS[value]
+    return kind(value) if kind in (int, float) else value
+
+
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("setting", help="KEY=VALUE,VALUE... of [estimation] (strings or numbers)")
+    parser.add_argument("setting",
+                        help="KEY=VALUE,VALUE... of [estimation] (strings, numbers, true/false)")
     parser.add_argument("scenarios", nargs="*",
                         help="scenario names or files (default: every file in tools/tuning/)")
     parser.add_argument("--allow-scored", action="store_true",
@@ -75,6 +86,12 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     if key not in {f.name for f in dataclasses.fields(EstimationConfig)} or not values:
         parser.exit(2, f"error: {args.setting!r} is not KEY=VALUE,... of [estimation]\n")
     args.key, args.values = key, values.split(",")
+    kind = type(getattr(EstimationConfig(), key))
+    for value in args.values:
+        try:
+            typed_value(kind, value)
+        except (KeyError, ValueError):
+            parser.exit(2, f"error: {key} cannot be {value!r}\n")
     guard = ["--allow-scored"] if args.allow_scored else []
     args.scenarios = _noise_tool().parse_args([*args.scenarios, *guard]).scenarios
     return args
@@ -90,12 +107,12 @@ def main(argv: list[str] | None = None) -> None:
         for row in pool.map(run_one, jobs):
             rows.append(row)
             name, value, output, track, model, car_max, reference = row
-            print(f"{name:<36} {value:<10} output {output:6.2f}  best track {track:6.2f} "
+            print(f"{name:<36} {value:<10} output {output:6.3f}  best track {track:6.3f} "
                   f"({model})  car max {car_max:5.1f}  reference {reference:5.2f}", flush=True)
     print(f"\nper value of {args.key} over {len(args.scenarios)} scenarios (cm):")
     for value in args.values:
         mine = [r for r in rows if r[1] == value]
-        print(f"  {value:<10} output - best track: mean {mean(r[2] - r[3] for r in mine):+.2f}; "
+        print(f"  {value:<10} output - best track: mean {mean(r[2] - r[3] for r in mine):+.3f}; "
               f"car max: sum {sum(r[5] for r in mine):.1f}, worst {max(r[5] for r in mine):.1f}")
 
 
