@@ -172,3 +172,21 @@ def test_replay_tool_scores_estimator_settings_on_a_recorded_drive(tmp_path):
         with pytest.raises(SystemExit) as wrong:
             tool.main(bad)
         assert wrong.value.code == 2
+
+
+def test_replay_tool_records_a_shipped_scenario_only_at_a_seed_the_bench_does_not_score(
+        tmp_path):
+    """The bench scores each shipped scenario at its file's seed: recording it there is
+    refused (exit 2, before anything drives); another seed is unscored data, named apart."""
+    tool = _tool("replay_estimation")
+    own = tool._own_seed("fog")
+    assert isinstance(own, int)
+    with pytest.raises(SystemExit) as scored:
+        tool.main(["record", str(tmp_path), "fog", "--seed", str(own)])
+    assert scored.value.code == 2
+    with pytest.raises(SystemExit) as negative:
+        tool.main(["record", str(tmp_path), "fog", "--seed", "-1"])
+    assert negative.value.code == 2
+    assert not list(tmp_path.iterdir())
+    assert tool.path_stem("fog", own + 1) == f"fog_seed{own + 1}"
+    assert tool.path_stem("fog", None) == "fog"

@@ -2,12 +2,15 @@
 value where tools/compare_estimation.py needs minutes, for the estimator's choices only.
 
     MUJOCO_GL=egl .venv/bin/python tools/replay_estimation.py record DIR [SCENARIO ...]
+    MUJOCO_GL=egl .venv/bin/python tools/replay_estimation.py record DIR fog --seed 2
     .venv/bin/python tools/replay_estimation.py compare DIR reference_std_m=0.05,0.03
 
 `record` drives each scenario once in the closed loop (default: every tuning scenario; shipped
 ones only with --allow-scored, as compare_estimation) and keeps, per step, what the estimator
 was given (the front detections, the rear reference, the dead-reckoned ego-motion) and the true
 offset at the output's look-ahead, scoring only; one pickle per scenario in DIR (about 1 MB).
+`--seed` records another seed than the file's; the bench scores each shipped scenario at its
+file's seed only, so a shipped scenario at any other seed is unscored data and allowed.
 `compare` runs a fresh `LaneEstimator` over each recording once per value of one
 `EstimatorSettings` key and prints the output's RMSE against the best own track's, to 0.1 mm,
 and per value the mean and the count of episodes where the output is above its best track.
@@ -42,12 +45,19 @@ def _compare_tool():
     return module
 
 
-def record(scenario_arg: str, out: Path) -> Path:
-    """Drive one scenario; pickle its estimator's inputs and the truth per step."""
+def path_stem(name: str, seed: int | None) -> str:
+    return name if seed is None else f"{name}_seed{seed}"
+
+
+def record(scenario_arg: str, out: Path, seed: int | None = None) -> Path:
+    """Drive one scenario (at `seed`, None: the file's); pickle its estimator's inputs and
+    the truth per step."""
     from lanekeep.episode import Episode
     from lanekeep.scenario import load_scenario
 
     scenario = load_scenario(scenario_arg)
+    if seed is not None:
+        scenario = dataclasses.replace(scenario, seed=seed)
     steps: list[dict] = []
     with Episode(scenario) as episode:
         estimator = episode.estimator
@@ -60,13 +70,24 @@ def record(scenario_arg: str, out: Path) -> Path:
 
         estimator.update = recording_update
         episode.run(on_step=lambda result, _t: steps[-1].update(truth_m=result.truth_output_m))
-        data = {"scenario": scenario.name, "names": list(estimator.names),
+        data = {"scenario": path_stem(scenario.name, seed), "names": list(estimator.names),
                 "settings": estimator.settings, "reference_x_m": estimator.reference_x_m,
                 "steps": steps}
-    path = out / f"{scenario.name}.pkl"
+    path = out / f"{path_stem(scenario.name, seed)}.pkl"
     with path.open("wb") as f:
         pickle.dump(data, f)
     return path
+
+
+def _own_seed(scenario_arg: str) -> int | None:
+    """The seed a scenario's file gives it (the one the bench scores); None if it will not
+    load (the guard then says why)."""
+    from lanekeep.scenario import ScenarioError, load_scenario
+
+    try:
+        return load_scenario(scenario_arg).seed
+    except ScenarioError:
+        return None
 
 
 def replay(data: dict, **settings) -> tuple[np.ndarray, np.ndarray]:
@@ -113,18 +134,23 @@ def main(argv: list[str] | None = None) -> None:
     rec.add_argument("scenarios", nargs="*", help="default: every file in tools/tuning/")
     rec.add_argument("--allow-scored", action="store_true",
                      help="allow shipped scenarios, which `lanekeep bench` scores")
+    rec.add_argument("--seed", type=int, help="record this seed instead of the file's")
     cmp = sub.add_parser("compare", help="replay recordings with values of one setting")
     cmp.add_argument("recordings", type=Path, help="a directory of `record`'s pickles")
     cmp.add_argument("setting", help="KEY=VALUE,VALUE... of the estimator's settings")
     args = parser.parse_args(argv)
     if args.command == "record":
-        guard = ["--allow-scored"] if args.allow_scored else []
+        if args.seed is not None and args.seed < 0:
+            parser.exit(2, f"error: --seed must be >= 0, got {args.seed}\n")
+        unscored = args.seed is not None and all(
+            _own_seed(s) != args.seed for s in args.scenarios)
+        guard = ["--allow-scored"] if args.allow_scored or unscored else []
         tool = _compare_tool()
         scenarios = tool._noise_tool().parse_args([*args.scenarios, *guard]).scenarios
         args.out.mkdir(parents=True, exist_ok=True)
         os.environ.setdefault("MUJOCO_GL", "egl")
         for scenario in scenarios:
-            print(record(scenario, args.out), flush=True)
+            print(record(scenario, args.out, args.seed), flush=True)
         return
     from lanekeep.estimators.lane_estimator import EstimatorSettings
 
