@@ -111,6 +111,16 @@ def _no_lap(stage: str) -> None:
     """The default `lap`: no timing."""
 
 
+SETTING_CHOICES = {  # EstimatorSettings' string choices (see their comments)
+    "residual_mode": ("distance_aligned", "one_step_delay"),
+    "output": ("select", "fused", "precision"),
+    "model_lane": ("track", "detection"),
+    "output_at": ("lookahead", "nearest_row"),
+    "mmae_input": ("track", "detection"),
+    "mmae_prior": ("uniform", "precision"),
+}
+
+
 @dataclass(frozen=True)
 class EstimatorSettings:
     """The scenario's estimation choices the estimator needs (see lanekeep.scenario)."""
@@ -149,6 +159,12 @@ class EstimatorSettings:
     mmae_prior: str = "uniform"
     lane_width_gain: float = 0.05  # weight of each two-boundary measurement in the mean
     lane_width_range_m: tuple[float, float] = (2.5, 5.0)  # plausible widths; others ignored
+
+    def __post_init__(self) -> None:
+        """A misspelt choice would otherwise fall through to some other branch silently."""
+        for key, choices in SETTING_CHOICES.items():
+            if getattr(self, key) not in choices:
+                raise ValueError(f"{key} must be one of {choices}, got {getattr(self, key)!r}")
 
 
 @dataclass(frozen=True)

@@ -267,3 +267,11 @@ def test_the_reference_width_tolerance_is_a_scenario_setting_paper_mode_leaves_o
     assert estimator_settings(paper).reference_width_tolerance_m is None
     with pytest.raises(InvalidValue, match="reference_width_tolerance_m"):
         EstimationConfig(reference_width_tolerance_m=0.0)
+
+
+def test_a_misspelt_estimator_choice_is_refused_not_taken_for_another():
+    with pytest.raises(ValueError, match="residual_mode"):
+        EstimatorSettings(residual_mode="distance-aligned")
+    with pytest.raises(ValueError, match="output"):
+        EstimatorSettings(output="precise")
+    assert EstimatorSettings(output="fused", mmae_input="detection").output == "fused"

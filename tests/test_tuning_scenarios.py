@@ -155,7 +155,8 @@ def _synthetic_recording(steps: int = 60) -> dict:
 def test_replay_tool_scores_estimator_settings_on_a_recorded_drive(tmp_path):
     """Open-loop replay: the biased model's weight reaches the output until the reference
     has taken it away, faster with a smaller eq. 8 noise; the exact model's track is the
-    best. Bad settings or an empty directory: one line, exit 2."""
+    best. A bad key or value, a directory without recordings or with a file that is not one:
+    one line, exit 2."""
     import pickle
 
     tool = _tool("replay_estimation")
@@ -166,9 +167,15 @@ def test_replay_tool_scores_estimator_settings_on_a_recorded_drive(tmp_path):
     with (tmp_path / "synthetic.pkl").open("wb") as f:
         pickle.dump(_synthetic_recording(10), f)
     tool.main(["compare", str(tmp_path), "prefer_accepted=true,false"])
+    junk = tmp_path / "junk"
+    junk.mkdir()
+    (junk / "a.pkl").write_bytes(b"not a pickle")
     for bad in (["compare", str(tmp_path), "no_such_key=1"],
                 ["compare", str(tmp_path), "reference_std_m=small"],
-                ["compare", str(tmp_path / "none"), "reference_std_m=0.05"]):
+                ["compare", str(tmp_path), "residual_mode=distance-aligned"],
+                ["compare", str(tmp_path), "lane_width_range_m=3"],
+                ["compare", str(tmp_path / "none"), "reference_std_m=0.05"],
+                ["compare", str(junk), "reference_std_m=0.05"]):
         with pytest.raises(SystemExit) as wrong:
             tool.main(bad)
         assert wrong.value.code == 2

@@ -147,6 +147,8 @@ def main(argv: list[str] | None = None) -> None:
         guard = ["--allow-scored"] if args.allow_scored or unscored else []
         tool = _compare_tool()
         scenarios = tool._noise_tool().parse_args([*args.scenarios, *guard]).scenarios
+        if args.out.exists() and not args.out.is_dir():
+            parser.exit(2, f"error: {args.out} exists and is not a directory\n")
         args.out.mkdir(parents=True, exist_ok=True)
         os.environ.setdefault("MUJOCO_GL", "egl")
         for scenario in scenarios:
@@ -163,16 +165,27 @@ def main(argv: list[str] | None = None) -> None:
         parser.exit(2, f"error: no recordings (*.pkl) in {args.recordings}\n")
     recordings = []
     for path in paths:
-        with path.open("rb") as f:
-            recordings.append(pickle.load(f))
+        try:
+            with path.open("rb") as f:
+                data = pickle.load(f)
+            getattr(data["settings"], key)
+            data["steps"], data["names"], data["reference_x_m"]  # noqa: B018 - a recording's keys
+        except (OSError, pickle.UnpicklingError, EOFError, AttributeError, KeyError,
+                TypeError) as err:
+            parser.exit(2, f"error: {path} is not a recording of this tool ({err!r})\n")
+        recordings.append(data)
     kind = type(getattr(recordings[0]["settings"], key))  # as the recorded loop had it
-    if kind is type(None):
-        parser.exit(2, f"error: {key} is off (None) in the recordings; record with it set\n")
+    if kind not in (bool, int, float, str):
+        parser.exit(2, f"error: {key} is {getattr(recordings[0]['settings'], key)!r} in the "
+                       "recordings; only a number, a string or true/false is set here\n")
     try:
         values = [_compare_tool().typed_value(kind, v) for v in text.split(",")]
     except (KeyError, ValueError):
         parser.exit(2, f"error: {key} cannot be {text!r} (a {kind.__name__} here)\n")
-    rows = compare(recordings, key, values)
+    try:
+        rows = compare(recordings, key, values)
+    except ValueError as err:  # the estimator's own checks (an unknown mode, a bad number)
+        parser.exit(2, f"error: {key}: {err}\n")
     for name, value, output, track, model in rows:
         print(f"{name:<36} {value!s:<10} output {output:7.4f}  best track {track:7.4f} "
               f"({model})  {output - track:+.4f}")
