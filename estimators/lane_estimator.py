@@ -25,6 +25,14 @@ import numpy as np
 
 from lanekeep.config_io import ConfigError, from_dict
 from lanekeep.detectors.base import LaneEstimate, poly_eval
+from lanekeep.estimation_choices import (
+    MMAE_INPUTS,
+    MMAE_PRIORS,
+    MODEL_LANES,
+    OUTPUT_AT,
+    OUTPUT_MODES,
+    RESIDUAL_MODES,
+)
 from lanekeep.estimators.alignment import OdometryAlignedHistory
 from lanekeep.estimators.consensus import corroborated
 from lanekeep.estimators.kalman import LaneTracker, TrackerConfig, UpdateStatus
@@ -112,12 +120,12 @@ def _no_lap(stage: str) -> None:
 
 
 SETTING_CHOICES = {  # EstimatorSettings' string choices (see their comments)
-    "residual_mode": ("distance_aligned", "one_step_delay"),
-    "output": ("select", "fused", "precision"),
-    "model_lane": ("track", "detection"),
-    "output_at": ("lookahead", "nearest_row"),
-    "mmae_input": ("track", "detection"),
-    "mmae_prior": ("uniform", "precision"),
+    "residual_mode": RESIDUAL_MODES,
+    "output": OUTPUT_MODES,
+    "model_lane": MODEL_LANES,
+    "output_at": OUTPUT_AT,
+    "mmae_input": MMAE_INPUTS,
+    "mmae_prior": MMAE_PRIORS,
 }
 
 

@@ -21,6 +21,7 @@ from importlib import resources
 from pathlib import Path
 
 from lanekeep.config_io import ConfigError, InvalidValue, from_dict
+from lanekeep.estimation_choices import MMAE_PRIORS, MODEL_LANES, OUTPUT_MODES, RESIDUAL_MODES
 from lanekeep.markings import MarkingStyle
 from lanekeep.pavement import PavementStyle
 from lanekeep.road import MAX_LANES, MAX_ROAD_M, Road, SegmentSpec
@@ -275,11 +276,7 @@ class Conditions:
         return self.time_of_day != "day"
 
 
-RESIDUAL_MODES = ("distance_aligned", "one_step_delay")
-OUTPUT_MODES = ("select", "fused", "precision")
 ESTIMATION_MODES = ("default", "paper")
-MODEL_LANES = ("track", "detection")
-MMAE_PRIORS = ("uniform", "precision")
 CAMERAS = ("front", "rear")
 # The front models of each estimation mode when a scenario names none: our loop adds the
 # learned model (detectors/lanenet.py) to the paper's two classical ones; the paper's loop

@@ -179,7 +179,8 @@ def main(argv: list[str] | None = None) -> None:
         parser.exit(2, f"error: {key} is {getattr(recordings[0]['settings'], key)!r} in the "
                        "recordings; only a number, a string or true/false is set here\n")
     try:
-        values = [_compare_tool().typed_value(kind, v) for v in text.split(",")]
+        typed_value = _compare_tool().typed_value
+        values = [typed_value(kind, v) for v in text.split(",")]
     except (KeyError, ValueError):
         parser.exit(2, f"error: {key} cannot be {text!r} (a {kind.__name__} here)\n")
     try:
