@@ -17,8 +17,8 @@ from dataclasses import dataclass, replace
 import cv2
 import numpy as np
 
-from lanekeep.camera_model import CameraModel
 from lanekeep.detectors.config import GroundWindow
+from lanekeep.geometry.camera_model import CameraModel
 
 
 def ground_homography(camera: CameraModel) -> np.ndarray:

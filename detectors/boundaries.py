@@ -7,10 +7,10 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from lanekeep.camera_model import CameraModel
 from lanekeep.detectors.base import LaneEstimate, poly_eval
 from lanekeep.detectors.birds_eye import BirdsEye
 from lanekeep.detectors.config import LaneRules
+from lanekeep.geometry.camera_model import CameraModel
 
 
 @dataclass(frozen=True)

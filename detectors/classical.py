@@ -10,13 +10,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from lanekeep.camera_model import CameraModel
 from lanekeep.detectors.base import LaneEstimate
 from lanekeep.detectors.birds_eye import detector_view
 from lanekeep.detectors.boundaries import Boundary, assemble, support_confidence
 from lanekeep.detectors.config import DetectorsConfig, GroundWindow, load_config
 from lanekeep.detectors.image_stage import binary_bird_eye
 from lanekeep.detectors.vehicle_mask import VehicleFilter
+from lanekeep.geometry.camera_model import CameraModel
 
 
 class ClassicalDetector:

@@ -13,7 +13,7 @@ from dataclasses import dataclass, field, replace
 from importlib import resources
 from pathlib import Path
 
-from lanekeep.config_io import InvalidValue, from_dict
+from lanekeep.core.config_io import InvalidValue, from_dict
 
 
 @dataclass(frozen=True)

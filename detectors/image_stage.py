@@ -12,9 +12,9 @@ import functools
 import cv2
 import numpy as np
 
-from lanekeep.camera_model import CameraModel
 from lanekeep.detectors.birds_eye import BirdsEye
 from lanekeep.detectors.vehicle_mask import VehicleFilter
+from lanekeep.geometry.camera_model import CameraModel
 
 
 def check_frame(frame: np.ndarray, camera: CameraModel) -> None:

@@ -35,7 +35,6 @@ import cv2
 import numpy as np
 import torch
 
-from lanekeep.camera_model import CameraModel
 from lanekeep.detectors.base import LaneEstimate
 from lanekeep.detectors.birds_eye import detector_view
 from lanekeep.detectors.config import DetectorsConfig, GroundWindow, load_config
@@ -55,6 +54,7 @@ from lanekeep.detectors.lanenet_decode import (
 )
 from lanekeep.detectors.lanenet_model import LaneNet, LaneNetConfig, LaneNetState, prepare_frame
 from lanekeep.detectors.lanenet_targets import SLOTS, CellGrid
+from lanekeep.geometry.camera_model import CameraModel
 
 FORMAT = "lanekeep-lanenet/1"
 CANDIDATE_SCORE = 0.05  # the lowest objectness kept as a candidate proposal (for AP)

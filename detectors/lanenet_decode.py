@@ -24,9 +24,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from lanekeep.camera_model import CameraModel
 from lanekeep.detectors.base import LaneEstimate
 from lanekeep.detectors.lanenet_targets import OTHER, SLOTS, CellGrid
+from lanekeep.geometry.camera_model import CameraModel
 
 CURVATURE_PRIOR_PER_M = 0.002
 UNSEEN_WEIGHT = 0.3  # 1 = paint ignored

@@ -23,7 +23,7 @@ builds its detectors itself (an `Episode`).
 
 A detector outside this package needs no registration: every name taken here may also be an
 import path `package.module:Class`, or a name an installed distribution registers in the
-entry-point group `lanekeep.detectors` (lanekeep/plugins.py). Its constructor contract is the
+entry-point group `lanekeep.detectors` (lanekeep/core/plugins.py). Its constructor contract is the
 built-ins' one:
 
     Class(camera, config=DetectorsConfig | None, distortion=np.ndarray | None
@@ -47,13 +47,13 @@ from importlib import resources
 
 import numpy as np
 
-from lanekeep import plugins
-from lanekeep.camera_model import CameraModel
-from lanekeep.config_io import ConfigError, from_dict
+from lanekeep.core import plugins
+from lanekeep.core.config_io import ConfigError, from_dict
 from lanekeep.detectors.base import Detector
 from lanekeep.detectors.config import DetectorsConfig, load_config, register_table
 from lanekeep.detectors.hough import HoughDetector
 from lanekeep.detectors.sliding_window import SlidingWindowDetector
+from lanekeep.geometry.camera_model import CameraModel
 
 Factory = Callable[..., Detector]
 
@@ -107,7 +107,7 @@ def register_lazy_detector(name: str, module: str, factory: str,
 
 def _resolve(name: str, key: str = "") -> Factory:
     """The factory of `name`, importing a lazy detector's module (once) if needed; else an
-    entry point's or an import path's (lanekeep/plugins.py).
+    entry point's or an import path's (lanekeep/core/plugins.py).
 
     Raises:
       ConfigError: an unknown name or a bad import path, naming it (and `key`).

@@ -20,8 +20,8 @@ from typing import Protocol
 
 import numpy as np
 
-from lanekeep.camera_model import CameraModel
 from lanekeep.detectors.base import LaneEstimate, poly_eval
+from lanekeep.geometry.camera_model import CameraModel
 
 PIXEL_THRESHOLD = 20.0
 ABSENT = -2

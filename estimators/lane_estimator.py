@@ -23,9 +23,10 @@ from importlib import resources
 
 import numpy as np
 
-from lanekeep.config_io import ConfigError, from_dict
+from lanekeep.core.config_io import ConfigError, from_dict
 from lanekeep.detectors.base import LaneEstimate, poly_eval
-from lanekeep.estimation_choices import (
+from lanekeep.estimators.alignment import OdometryAlignedHistory
+from lanekeep.estimators.choices import (
     MMAE_INPUTS,
     MMAE_PRIORS,
     MODEL_LANES,
@@ -33,7 +34,6 @@ from lanekeep.estimation_choices import (
     OUTPUT_MODES,
     RESIDUAL_MODES,
 )
-from lanekeep.estimators.alignment import OdometryAlignedHistory
 from lanekeep.estimators.consensus import corroborated
 from lanekeep.estimators.kalman import LaneTracker, TrackerConfig, UpdateStatus
 from lanekeep.estimators.mmae import MMAE, MMAEConfig, MMAEOutput
@@ -131,7 +131,7 @@ SETTING_CHOICES = {  # EstimatorSettings' string choices (see their comments)
 
 @dataclass(frozen=True)
 class EstimatorSettings:
-    """The scenario's estimation choices the estimator needs (see lanekeep.scenario)."""
+    """The scenario's estimation choices the estimator needs (see lanekeep.scenario.schema)."""
 
     offset_lookahead_m: float = 4.0
     residual_mode: str = "distance_aligned"
@@ -234,7 +234,7 @@ class LaneEstimator:
         """One control step: the front models' detections and the reference's.
 
         `lap(stage)` is called after the trackers ("track") and after the MMAE and the output
-        ("mmae"), for a caller's stage timing (lanekeep.timing.StageClock.lap).
+        ("mmae"), for a caller's stage timing (lanekeep.core.timing.StageClock.lap).
         """
         events: list[str] = []
         self._measure_lane_width(detections.values())

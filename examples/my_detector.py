@@ -14,12 +14,12 @@ import dataclasses
 
 import numpy as np
 
-from lanekeep.camera_model import CameraModel
 from lanekeep.detectors.base import LaneEstimate, poly_eval
 from lanekeep.detectors.config import GroundWindow
 from lanekeep.detectors.registry import register_detector
-from lanekeep.episode import Episode
-from lanekeep.scenario import load_scenario
+from lanekeep.geometry.camera_model import CameraModel
+from lanekeep.loop.episode import Episode
+from lanekeep.scenario.schema import load_scenario
 
 
 class BrightPaintDetector:

@@ -7,8 +7,8 @@
 import argparse
 import dataclasses
 
-from lanekeep.episode import Episode
-from lanekeep.scenario import load_scenario
+from lanekeep.loop.episode import Episode
+from lanekeep.scenario.schema import load_scenario
 
 
 def main() -> None:

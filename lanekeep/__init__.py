@@ -20,6 +20,6 @@ if os.path.isfile(os.path.join(_checkout, "pyproject.toml")) and os.path.isfile(
     __path__.append(_checkout)  # noqa: F821 - a package's own __path__
 
 # gymnasium.make("lanekeep/LaneKeep-v0") after `import lanekeep`, gymnasium not imported here.
-from lanekeep import gym_registration as _gym_registration  # noqa: E402
+from lanekeep.envs import gym_registration as _gym_registration  # noqa: E402
 
 _gym_registration.install()

@@ -8,8 +8,8 @@ results do not depend on the order tests run in.
 import pytest
 
 import lanekeep  # noqa: F401
-from lanekeep.scenario import load_scenario
-from lanekeep.world import build
+from lanekeep.scenario.schema import load_scenario
+from lanekeep.world.build import build
 
 
 @pytest.fixture(scope="session")

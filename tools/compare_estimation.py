@@ -45,8 +45,8 @@ def _init_worker(threads: int) -> None:
 def run_one(job: tuple[str, str, str]) -> tuple[str, str, float, float, str, float, float]:
     """(scenario, value, output RMSE, best track RMSE, its model, car max, reference RMSE), cm."""
     path, key, value = job
-    from lanekeep.episode import Episode
-    from lanekeep.scenario import load_scenario
+    from lanekeep.loop.episode import Episode
+    from lanekeep.scenario.schema import load_scenario
 
     scenario = load_scenario(path)
     typed = typed_value(type(getattr(scenario.estimation, key)), value)
@@ -81,7 +81,7 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     parser.add_argument("--workers", type=int, default=2)
     args = parser.parse_args(argv)
     key, _, values = args.setting.partition("=")
-    from lanekeep.scenario import EstimationConfig
+    from lanekeep.scenario.schema import EstimationConfig
 
     if key not in {f.name for f in dataclasses.fields(EstimationConfig)} or not values:
         parser.exit(2, f"error: {args.setting!r} is not KEY=VALUE,... of [estimation]\n")

@@ -1,4 +1,4 @@
-"""Render the LaneNet dataset (lanekeep/dataset.py): random worlds, exact labels, by seed.
+"""Render the LaneNet dataset (lanekeep/evaluation/dataset.py): random worlds, exact labels, by seed.
 
     python tools/make_dataset.py --out data/lanenet --train 320 --val 24 --test 24 [--workers 2]
 
@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from lanekeep.dataset import DatasetRecipe, make_shard, shard_path, write_recipe
+from lanekeep.evaluation.dataset import DatasetRecipe, make_shard, shard_path, write_recipe
 
 
 def _one(job: tuple[DatasetRecipe, str, int, str]) -> tuple[str, int, float]:

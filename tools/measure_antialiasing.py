@@ -35,12 +35,12 @@ def _variant_frame(variant: str, rgb: np.ndarray) -> np.ndarray:
 def measure(name: str, seed_offset: int, every: int, seconds: float | None) -> dict:
     """{variant: {detector: (rmse_cm, valid_share)}, 'render_ms': {variant: ms}} of one run."""
     import lanekeep  # noqa: F401 - EGL before mujoco
-    from lanekeep.cameras import CameraRig, RenderSettings
     from lanekeep.detectors.registry import make_detector
-    from lanekeep.episode import Episode
-    from lanekeep.ground_truth import lane_truth
-    from lanekeep.render import make_effects
-    from lanekeep.scenario import load_scenario
+    from lanekeep.loop.episode import Episode
+    from lanekeep.scenario.schema import load_scenario
+    from lanekeep.scoring.truth import lane_truth
+    from lanekeep.sensing.cameras import CameraRig, RenderSettings
+    from lanekeep.sensing.snapshot import make_effects
 
     scenario = load_scenario(name)
     scenario = dataclasses.replace(scenario, seed=scenario.seed + seed_offset)
@@ -107,7 +107,7 @@ def measure(name: str, seed_offset: int, every: int, seconds: float | None) -> d
 
 
 def main() -> None:
-    from lanekeep.scenario import shipped_scenarios
+    from lanekeep.scenario.schema import shipped_scenarios
 
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("scenarios", nargs="*", help="default: every shipped scenario")

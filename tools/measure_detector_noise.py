@@ -3,7 +3,7 @@
     MUJOCO_GL=egl .venv/bin/python tools/measure_detector_noise.py
 
 Measures on the tuning scenarios, every file in tools/tuning/, which `lanekeep bench` does not
-score (it scores every shipped scenario, lanekeep/scenarios/*.toml): tuning the tracker on the
+score (it scores every shipped scenario, lanekeep/scenario/shipped/*.toml): tuning the tracker on the
 bench's scenarios would tune it on its test set. Scenario names or files may be given instead;
 a shipped scenario is refused unless --allow-scored is given.
 
@@ -34,7 +34,7 @@ from typing import NamedTuple
 import numpy as np
 from scipy.stats import chi2
 
-from lanekeep.scenario import ScenarioError, load_scenario, shipped_scenarios
+from lanekeep.scenario.schema import ScenarioError, load_scenario, shipped_scenarios
 
 TUNING_DIR = Path(__file__).resolve().parent / "tuning"
 
@@ -56,8 +56,8 @@ def coefficient_errors(name: str | Path, fit_range_m: tuple[float, float]
                        ) -> dict[str, list[np.ndarray]]:
     """Per front detector, detection minus truth, one row per valid detection of one
     episode."""
-    from lanekeep.episode import Episode
-    from lanekeep.ground_truth import lane_truth
+    from lanekeep.loop.episode import Episode
+    from lanekeep.scoring.truth import lane_truth
 
     scenario = load_scenario(name)
     errors: dict[str, list[np.ndarray]] = {}

@@ -41,10 +41,10 @@ def _noise_tool():
 def samples(path: str) -> dict[str, list[tuple[float, float, float]]]:
     """Per source: (offset error m, filtered lateral acceleration m/s^2, true roll rad) per
     step."""
-    from lanekeep.episode import Episode
     from lanekeep.estimators.roll import RollCompensation, RollFilter
-    from lanekeep.ground_truth import lane_offsets
-    from lanekeep.scenario import load_scenario
+    from lanekeep.loop.episode import Episode
+    from lanekeep.scenario.schema import load_scenario
+    from lanekeep.scoring.truth import lane_offsets
 
     scenario = load_scenario(path)
     est = dataclasses.replace(scenario.estimation, roll_gradient_deg_per_mps2=0.0)

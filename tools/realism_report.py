@@ -5,7 +5,7 @@
 
 Simulator side: each scenario's front camera at its start pose (or `--at S` metres along the
 road), WITH the scenario's image effects, i.e. the frame the car's camera delivers (the same
-frame `lanekeep.render.render_snapshot(..., effects=True)` writes as front.png), plus the
+frame `lanekeep.sensing.snapshot.render_snapshot(..., effects=True)` writes as front.png), plus the
 segmentation render's marking mask for the paint contrast. Real side: every *.jpg/*.jpeg/*.png
 in each image folder under `--real` (or `--real` itself); the photos are only read, never
 copied. Known folders have a horizon row given here; TuSimple label files (labels/N.txt) give
@@ -91,7 +91,7 @@ def split_row(horizon_row: float, height: int) -> int:
 
 
 def camera_horizon_row(camera) -> float:
-    """Horizon row of a simulated camera (`lanekeep.camera_model.CameraModel`) on flat ground.
+    """Horizon row of a simulated camera (`lanekeep.geometry.camera_model.CameraModel`) on flat ground.
 
     The vanishing line of the ground plane: where a ground point infinitely far straight ahead
     projects (`horizon_row()`; a point 10 km ahead lands within a fraction of a pixel of it).
@@ -325,9 +325,9 @@ def render_front(scenario, at_s: float | None = None
     order (both cameras' effects are made, then the front's are applied); the test checks it.
     Only the front camera is rendered, plus its segmentation for the marking mask.
     """
-    from lanekeep.cameras import CameraRig, RenderSettings
-    from lanekeep.render import camera_frame, make_effects, place_on_road
-    from lanekeep.world import build
+    from lanekeep.sensing.cameras import CameraRig, RenderSettings
+    from lanekeep.sensing.snapshot import camera_frame, make_effects, place_on_road
+    from lanekeep.world.build import build
 
     world = build(scenario)
     s = scenario.start.s_m if at_s is None else at_s
@@ -473,8 +473,8 @@ def run(args: argparse.Namespace) -> tuple[str, dict]:
         raise BadInput(f"--real {real}: no {'/'.join(IMAGE_SUFFIXES)} images in it or in its "
                        "subfolders")
     import lanekeep  # noqa: F401 - selects EGL before mujoco loads
-    from lanekeep.config_io import ConfigError
-    from lanekeep.scenario import load_scenario, shipped_scenarios
+    from lanekeep.core.config_io import ConfigError
+    from lanekeep.scenario.schema import load_scenario, shipped_scenarios
 
     rows: list[tuple[str, dict[str, float]]] = []
     doc: dict = {"sim": [], "real": []}

@@ -52,8 +52,8 @@ def path_stem(name: str, seed: int | None) -> str:
 def record(scenario_arg: str, out: Path, seed: int | None = None) -> Path:
     """Drive one scenario (at `seed`, None: the file's); pickle its estimator's inputs and
     the truth per step."""
-    from lanekeep.episode import Episode
-    from lanekeep.scenario import load_scenario
+    from lanekeep.loop.episode import Episode
+    from lanekeep.scenario.schema import load_scenario
 
     scenario = load_scenario(scenario_arg)
     if seed is not None:
@@ -82,7 +82,7 @@ def record(scenario_arg: str, out: Path, seed: int | None = None) -> Path:
 def _own_seed(scenario_arg: str) -> int | None:
     """The seed a scenario's file gives it (the one the bench scores); None if it will not
     load (the guard then says why)."""
-    from lanekeep.scenario import ScenarioError, load_scenario
+    from lanekeep.scenario.schema import ScenarioError, load_scenario
 
     try:
         return load_scenario(scenario_arg).seed

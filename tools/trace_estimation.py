@@ -40,9 +40,9 @@ def trace(scenario_arg: str, output: str | None) -> tuple[list[str], dict[str, n
     (NaN where a source had nothing)."""
     os.environ.setdefault("MUJOCO_GL", "egl")
     from lanekeep.detectors.base import poly_eval
-    from lanekeep.episode import Episode, track_source
-    from lanekeep.ground_truth import lane_offsets, line_points
-    from lanekeep.scenario import load_scenario
+    from lanekeep.loop.episode import Episode, track_source
+    from lanekeep.scenario.schema import load_scenario
+    from lanekeep.scoring.truth import lane_offsets, line_points
 
     scenario = load_scenario(scenario_arg)
     if output is not None:

@@ -37,7 +37,10 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from lanekeep.dataset import (
+from lanekeep.detectors.lanenet import save_weights
+from lanekeep.detectors.lanenet_model import LaneNet, LaneNetConfig, architecture_summary
+from lanekeep.detectors.lanenet_targets import CellGrid, LossWeights, Targets, encode, lanenet_loss
+from lanekeep.evaluation.dataset import (
     LABEL_HEIGHT,
     LABEL_WIDTH,
     camera_from_vector,
@@ -45,10 +48,7 @@ from lanekeep.dataset import (
     load_split,
     read_recipe,
 )
-from lanekeep.detectors.lanenet import save_weights
-from lanekeep.detectors.lanenet_model import LaneNet, LaneNetConfig, architecture_summary
-from lanekeep.detectors.lanenet_targets import CellGrid, LossWeights, Targets, encode, lanenet_loss
-from lanekeep.eval_sets import occlude
+from lanekeep.evaluation.eval_sets import occlude
 
 FLIP_SLOTS = np.array([1, 0, 3, 2, 4], np.int64)  # ego-left <-> ego-right, next-left <-> next-right
 

@@ -10,7 +10,7 @@ sequences as rendered and on a copy with vehicle-sized occluders over 60% of the
 the decoding's priors (`DecodeSettings`: curvature prior and its shape, weight of points where
 no paint is seen, std of the ego pair's width about the lane's, power of the objectness that
 weighs the ego pair's points, furthest point fitted) then decodes the same network outputs,
-and the ego lane is scored by `lanekeep/lane_eval.py`'s rules: ADE at 4-20 m and the offset
+and the ego lane is scored by `lanekeep/evaluation/lane_metrics.py`'s rules: ADE at 4-20 m and the offset
 error (cm), and the share of valid frames. The choice is the lowest mean of ADE + offset error
 over the two copies. Labels are read only to score. The validation worlds are disjoint from the
 training worlds and from `lanekeep eval`'s, so the choice is scored afresh there.
@@ -27,12 +27,12 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from lanekeep.dataset import LABEL_HEIGHT, LABEL_WIDTH, camera_from_vector, load_split
 from lanekeep.detectors.lanenet import LaneNetDetector
 from lanekeep.detectors.lanenet_decode import DecodeSettings, ego_estimate, fit_boundaries
 from lanekeep.detectors.lanenet_targets import CellGrid
-from lanekeep.eval_sets import occlude
-from lanekeep.lane_eval import ego_errors, offset_error
+from lanekeep.evaluation.dataset import LABEL_HEIGHT, LABEL_WIDTH, camera_from_vector, load_split
+from lanekeep.evaluation.eval_sets import occlude
+from lanekeep.evaluation.lane_metrics import ego_errors, offset_error
 
 OCCLUSION_SEED = 0x0CC1  # occluders of the validation copy (lanekeep eval's use their own)
 

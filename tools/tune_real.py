@@ -21,11 +21,11 @@ from pathlib import Path
 import numpy as np
 
 import lanekeep  # noqa: F401
-from lanekeep.calibration import read_image
-from lanekeep.camera_file import camera_for_image
 from lanekeep.detectors.config import load_config
 from lanekeep.detectors.registry import known_detectors, make_detector
 from lanekeep.detectors.tusimple import estimate_lanes, every_lane, h_samples_for, score_frame
+from lanekeep.realcam.calibration import read_image
+from lanekeep.realcam.camera_file import camera_for_image
 
 
 def read_labels(path: Path, h_samples: list[int]) -> list[list[int]]:

@@ -1,5 +1,5 @@
 """A user's own detector and controller, written as a user outside the package would: plain
-classes with the constructor contracts of lanekeep.detectors.registry and lanekeep.controllers,
+classes with the constructor contracts of lanekeep.detectors.registry and lanekeep.control.registry,
 no registration. tests/test_plugins_api.py copies this file under another module name into a
 temporary folder and names the classes by import path or through an entry point.
 """
@@ -11,7 +11,7 @@ from collections import deque
 
 import numpy as np
 
-from lanekeep.control import SpeedController
+from lanekeep.control.pid import SpeedController
 from lanekeep.detectors.base import LaneEstimate
 from lanekeep.detectors.hough import HoughDetector
 

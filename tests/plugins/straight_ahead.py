@@ -10,10 +10,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from lanekeep.camera_model import CameraModel
 from lanekeep.detectors.base import LaneEstimate
 from lanekeep.detectors.config import DetectorsConfig, GroundWindow
 from lanekeep.detectors.registry import register_detector
+from lanekeep.geometry.camera_model import CameraModel
 
 
 @dataclass(frozen=True)

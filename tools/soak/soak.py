@@ -2,7 +2,7 @@
 
     python tools/soak/soak.py [--seconds 3600] [--size 1280x720] [--json FILE]
 
-The episode is the product's own loop (lanekeep.episode.Episode) on tools/soak/loop_track.toml,
+The episode is the product's own loop (lanekeep.loop.episode.Episode) on tools/soak/loop_track.toml,
 a 1134 m track that closes on itself, so the car laps it for as long as the soak lasts. Every
 `--window-s` of simulated time it samples the process's resident memory (VmRSS), the median
 and 95th percentile of the wall time of a control step, and checks that every number the step
@@ -25,8 +25,8 @@ from pathlib import Path
 import numpy as np
 
 import lanekeep  # noqa: F401 - MUJOCO_GL before mujoco
-from lanekeep.episode import Episode, StepResult
-from lanekeep.scenario import load_scenario
+from lanekeep.loop.episode import Episode, StepResult
+from lanekeep.scenario.schema import load_scenario
 
 TRACK = Path(__file__).with_name("loop_track.toml")
 

@@ -36,9 +36,9 @@ JOBS = (("hough", "front"), ("sliding_window", "front"), ("sliding_window", "rea
 def record(scenario_path: str, out: Path, seconds: float | None, closed_loop: bool = False
            ) -> None:
     """Drive the scenario; save its frames and the true offsets per step."""
-    from lanekeep.episode import Episode
-    from lanekeep.ground_truth import lane_offsets
-    from lanekeep.scenario import load_scenario
+    from lanekeep.loop.episode import Episode
+    from lanekeep.scenario.schema import load_scenario
+    from lanekeep.scoring.truth import lane_offsets
 
     scenario = load_scenario(scenario_path)
     out.mkdir(parents=True, exist_ok=True)
@@ -66,7 +66,7 @@ def record(scenario_path: str, out: Path, seconds: float | None, closed_loop: bo
 
 def _truth_action(episode, pose, index: int) -> tuple[float, float]:
     """(steer, throttle) that follow the true lane centre, offset by the wander."""
-    from lanekeep.ground_truth import lane_centre_fit
+    from lanekeep.scoring.truth import lane_centre_fit
 
     centre, _ = lane_centre_fit(episode.world.road, *pose, episode.scenario.road.ego_lane)
     x_ctrl = episode.scenario.estimation.control_lookahead_m
@@ -86,10 +86,10 @@ def _x_refs(cameras) -> dict[str, float]:
 
 def score(folder: Path) -> dict[str, dict[str, float]]:
     """Per-detector error statistics over a recording (see the module docstring)."""
-    from lanekeep.cameras import CameraRig, RenderSettings
     from lanekeep.detectors.registry import make_detector
-    from lanekeep.scenario import load_scenario
-    from lanekeep.world import build
+    from lanekeep.scenario.schema import load_scenario
+    from lanekeep.sensing.cameras import CameraRig, RenderSettings
+    from lanekeep.world.build import build
 
     meta = json.loads((folder / "meta.json").read_text())
     scenario = load_scenario(meta["scenario"])

@@ -1,0 +1,181 @@
+"""`LaneKeepGymEnv`: a closed-loop scenario as a Gymnasium environment, "lanekeep/LaneKeep-v0".
+
+    import gymnasium, lanekeep
+    env = gymnasium.make("lanekeep/LaneKeep-v0", scenario="clear_straight",
+                         render_size=(320, 180), render_mode="rgb_array")
+
+Observation (a Dict; lanekeep/envs/agent_view.py has the sign conventions), for front models M:
+  front, rear       uint8 (height, width, 3): the camera frames, after the image effects
+  lanes[m]          for m in M and "fused": valid (0/1), offset_m, heading_rad, curvature_1pm of
+                    each model's own Kalman track and of the MMAE output, at the output's
+                    look-ahead (`[estimation] offset_lookahead_m`, 4 m by default)
+  detected[m]       0/1: the model's raw detection on this frame was valid
+  reference         valid (0/1), offset_m: the rear reference detector's offset
+  probabilities     float32 (len(M),): the MMAE's model probabilities; selected: its choice
+  vehicle           speed_mps, yaw_rate_rps, accel_long_mps2, accel_lat_mps2, steer_angle_rad:
+                    the car's sensor signals (noisy, as `[sensors]` says), not the truth
+Flags are Discrete(2) ints; every other number is float32 within agent_view.LIMITS (clipped:
+offsets +-20 m, headings +-pi/2 rad, curvatures +-1 1/m, ...); an invalid lane reads 0 with
+valid = 0, never NaN.
+Nothing of the simulator's truth is in the observation; `info` carries it for scoring
+(truth_offset_m, progress_m, events, time_s).
+
+Action: Box [-1, 1]^2 float32 = (steer, throttle): steer +1 = full left (35 deg road-wheel
+angle), throttle > 0 drives, < 0 brakes.
+
+Reward (truth, scoring only): progress along the road per step / (target speed x period),
+capped at 1, minus |true offset from the ego lane centre| / half a lane width, capped at 1.
+
+Termination: a wheel crosses an ego-lane boundary, the car leaves the road, or the physics goes
+unstable. Truncation: the scenario's `duration_s` is reached.
+
+Timing: the observation is what the car has at the start of a control period
+(`Episode.observe`); `step(a)` applies `a` for that period (`Episode.act`) and returns the
+observation of the next one, so an agent acts on the same period's frames as the built-in
+controller does. `reset()` returns the first period's observation, before any action.
+
+Seeds: `reset(seed=s)` runs the scenario with seed s (world details, image effects and sensor
+noise all follow it), so the same seed gives the same first observation; a later `reset()`
+without a seed draws the next seed from the environment's generator; the very first `reset()`
+without a seed keeps the scenario file's own seed, as `lanekeep run` does.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+
+from lanekeep.envs import agent_view
+from lanekeep.loop.episode import Episode, Percept, StepResult
+from lanekeep.scenario.schema import Scenario, load_scenario
+from lanekeep.world.build import SimulationError
+
+
+def _scalar(key: str) -> spaces.Box:
+    limit = agent_view.LIMITS[key]
+    return spaces.Box(-limit, limit, shape=(), dtype=np.float32)
+
+
+def _f32(value: float) -> np.ndarray:
+    return np.asarray(value, dtype=np.float32)
+
+
+class LaneKeepGymEnv(gym.Env):
+    """One scenario per environment; see the module docstring for spaces, reward and timing."""
+
+    metadata = {"render_modes": ["rgb_array"], "render_fps": 10}
+
+    def __init__(self, scenario: Scenario | str = "clear_straight",
+                 render_size: tuple[int, int] | None = None,
+                 render_mode: str | None = None, duration_s: float | None = None) -> None:
+        scenario = load_scenario(scenario) if isinstance(scenario, str) else scenario
+        if duration_s is not None:
+            scenario = dataclasses.replace(scenario, duration_s=duration_s)
+        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
+            raise ValueError(f"render_mode must be one of {self.metadata['render_modes']}, "
+                             f"got {render_mode!r}")
+        self.scenario = scenario
+        self.render_mode = render_mode
+        self.render_size = tuple(render_size or (scenario.camera.width, scenario.camera.height))
+        self.metadata = {**self.metadata,
+                         "render_fps": max(1, round(1.0 / scenario.control_period_s))}
+        self.models = list(scenario.estimation.front_detectors)
+        self.observation_space = self._observation_space()
+        self.action_space = spaces.Box(-1.0, 1.0, shape=(2,), dtype=np.float32)
+        self._slot = agent_view.EpisodeSlot(self)
+        self._seeded = False
+        self._last_obs: dict | None = None
+        self._last_front: np.ndarray | None = None
+
+    def _observation_space(self) -> spaces.Dict:
+        w, h = self.render_size
+        image = spaces.Box(0, 255, shape=(h, w, 3), dtype=np.uint8)
+        flag = spaces.Discrete(2)
+        lane = spaces.Dict({"valid": flag, **{k: _scalar(k) for k in agent_view.LANE_KEYS[1:]}})
+        n = len(self.models)
+        return spaces.Dict({
+            "front": image,
+            "rear": image,
+            "lanes": spaces.Dict({name: lane for name in agent_view.lane_names(self.models)}),
+            "detected": spaces.Dict({name: flag for name in self.models}),
+            "reference": spaces.Dict({"valid": flag, "offset_m": _scalar("offset_m")}),
+            "probabilities": spaces.Box(0.0, 1.0, shape=(n,), dtype=np.float32),
+            "selected": spaces.Discrete(n),
+            "vehicle": spaces.Dict({k: _scalar(k) for k in agent_view.SIGNAL_KEYS}),
+        })
+
+    # -- the API ---------------------------------------------------------------------------
+    def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
+        super().reset(seed=seed)
+        if seed is not None:
+            episode_seed = int(seed)
+        elif not self._seeded:
+            episode_seed = self.scenario.seed
+        else:
+            episode_seed = int(self.np_random.integers(2**31))
+        self._seeded = True
+        scenario = dataclasses.replace(self.scenario, seed=episode_seed)
+        self._slot.close()  # first: a renderer freed after another's creation can spoil it
+        episode = self._slot.replace(Episode(scenario, render_size=self.render_size))
+        percept = episode.observe()
+        info = {"time_s": percept.time_s, "truth_offset_m": None, "progress_m": 0.0,
+                "events": list(percept.events), "lookahead_m": percept.estimate.offset_x_m,
+                "status": "running", "seed": episode_seed}
+        return self._observe(percept), info
+
+    def step(self, action):
+        episode = self._slot.episode
+        if episode is None:
+            raise RuntimeError("call reset() before step()")
+        a = np.clip(np.asarray(action, dtype=np.float64).reshape(2), -1.0, 1.0)
+        try:
+            result = episode.act(action=(float(a[0]), float(a[1])))
+            percept = episode.observe()  # the next period's frames: what the agent acts on
+        except SimulationError as err:  # the physics blew up: the episode ends here
+            return self._last_obs, 0.0, True, False, {"status": "unstable", "events": [str(err)]}
+        reward, progress = agent_view.reward(episode, result)
+        terminated = agent_view.departed(result) or bool(result.off_road)
+        truncated = not terminated and episode.index >= episode.total_steps
+        return self._observe(percept), float(reward), terminated, truncated, \
+            self._info(result, progress)
+
+    def render(self) -> np.ndarray | None:
+        """The latest front frame (what the car saw), in "rgb_array" mode."""
+        if self.render_mode != "rgb_array" or self._last_front is None:
+            return None
+        return self._last_front.copy()
+
+    def close(self) -> None:
+        self._slot.close()
+        super().close()
+
+    # -- helpers ---------------------------------------------------------------------------
+    def _observe(self, percept: Percept) -> dict:
+        v = agent_view.view(percept, self.models)
+        obs = {
+            "front": percept.frames["front"].copy(),
+            "rear": percept.frames["rear"].copy(),
+            "lanes": {name: {"valid": int(lane["valid"]),
+                             **{k: _f32(lane[k]) for k in agent_view.LANE_KEYS[1:]}}
+                      for name, lane in v["lanes"].items()},
+            "detected": {name: int(d) for name, d in v["detected"].items()},
+            "reference": {"valid": int(v["reference"]["valid"]),
+                          "offset_m": _f32(v["reference"]["offset_m"])},
+            "probabilities": np.clip(np.asarray(v["probabilities"], dtype=np.float32), 0, 1),
+            "selected": int(v["selected"]),
+            "vehicle": {k: _f32(x) for k, x in v["vehicle"].items()},
+        }
+        self._last_obs, self._last_front = obs, obs["front"]
+        return obs
+
+    @staticmethod
+    def _info(result: StepResult, progress: float) -> dict:
+        """Truth, for scoring and logging only (never an input to the agent's policy)."""
+        return {"time_s": result.time_s, "truth_offset_m": result.truth_offset_m,
+                "progress_m": progress, "events": list(result.events),
+                "lookahead_m": result.output_x_m, "status": result.off_road or "running"}
+

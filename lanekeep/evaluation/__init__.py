@@ -1,0 +1,2 @@
+"""Open-loop evaluation of detectors: the LaneNet dataset, the fixed eval sets, lane metrics (AP,
+IoU, ADE, FDE)."""

@@ -1,0 +1,180 @@
+"""Lane-marking styles and their layout as strips of paint along a lane boundary.
+
+A strip is described in road (Frenet) coordinates only: from `s_start_m` to `s_end_m` at lateral
+position `r_m`, `width_m` wide. The mesh builder in world.py samples `Road.position(s, r)` along it,
+so a strip may follow a curve; solid lines are cut at segment joins and into pieces of at most
+`MAX_STRIP_M` so that each is a short ribbon. A raised pavement marker (Botts' dot) is a `dot`
+piece: a small dome of diameter `width_m` centred between `s_start_m` and `s_end_m`.
+
+Worn paint, as on real roads, is the line it was (solid, dashed, double) broken into chips:
+the paint flakes off in gaps a few decimetres long that grow with the wear, the chips left are
+narrower and ragged, and their brightness fades with a wear that varies slowly along the line.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from lanekeep.core.config_io import InvalidValue
+
+MARKING_KINDS = ("solid", "dashed", "double", "none", "worn", "dots")
+WORN_PATTERNS = ("solid", "dashed", "double", "dots")
+MAX_STRIP_M = 20.0  # longest solid strip; longer lines are cut into equal pieces
+WEAR_CORRELATION_M = 8.0  # the local wear of a worn line drifts over about this length
+WEAR_STEP_M = 0.05  # resolution of worn paint along the line
+
+
+@dataclass(frozen=True)
+class MarkingStyle:
+    """How one lane boundary is painted. Lengths in metres, colour RGB in 0..1."""
+
+    kind: str = "solid"
+    width_m: float = 0.15
+    dash_m: float = 3.0  # dashed: paint length
+    gap_m: float = 9.0  # dashed: gap length
+    double_gap_m: float = 0.12  # double: clear gap between the two lines
+    wear: float = 0.4  # worn: fraction of the line without paint, and how faded the rest is
+    pattern: str = "solid"  # worn: the line that wore (solid, dashed, double)
+    dot_diameter_m: float = 0.10  # dots: Botts' dots are 10 cm ceramic domes ...
+    dot_spacing_m: float = 0.9  # ... in rows `dash_m` long, 0.9 m apart, `gap_m` between rows
+    colour: tuple[float, float, float] = (0.95, 0.95, 0.92)  # yellow paint: 0.9, 0.7, 0.15
+
+    def __post_init__(self):
+        if self.kind not in MARKING_KINDS:
+            raise InvalidValue("kind", f"must be one of {MARKING_KINDS}, got {self.kind!r}")
+        if self.pattern not in WORN_PATTERNS[:3]:
+            raise InvalidValue("pattern", f"must be one of {WORN_PATTERNS[:3]}, "
+                                          f"got {self.pattern!r}")
+        for key in ("width_m", "dash_m", "gap_m", "dot_diameter_m", "dot_spacing_m"):
+            if not getattr(self, key) > 0:
+                raise InvalidValue(key, f"must be > 0, got {getattr(self, key)}")
+        if not self.double_gap_m >= 0:
+            raise InvalidValue("double_gap_m", f"must be >= 0, got {self.double_gap_m}")
+        if not 0.0 <= self.wear <= 1.0:
+            raise InvalidValue("wear", f"must be in [0, 1], got {self.wear}")
+        if len(self.colour) != 3 or not all(0.0 <= c <= 1.0 for c in self.colour):
+            raise InvalidValue("colour", f"must be 3 values in [0, 1], got {self.colour}")
+
+
+@dataclass(frozen=True)
+class MarkingPiece:
+    """One strip of paint, in road coordinates, for the mesh builder."""
+
+    boundary: int  # lane boundary index, 0 = rightmost
+    s_start_m: float
+    s_end_m: float
+    r_m: float  # lateral position of the strip's centre line (+ = left)
+    width_m: float
+    brightness: float  # 1 = fresh paint; lower = faded
+    dot: bool = False  # a raised marker (dome of diameter width_m), not a strip
+
+
+def default_markings(n_lanes: int) -> tuple[MarkingStyle, ...]:
+    """Solid outer edges, dashed lines between lanes."""
+    inner = MarkingStyle(kind="dashed")
+    return (MarkingStyle(),) + (inner,) * (n_lanes - 1) + (MarkingStyle(),)
+
+
+def _split(a: float, b: float, cuts: Sequence[float]) -> list[tuple[float, float]]:
+    """[a, b) cut at `cuts` and then into equal pieces no longer than MAX_STRIP_M."""
+    edges = [a] + [c for c in cuts if a < c < b] + [b]
+    out = []
+    for lo, hi in zip(edges[:-1], edges[1:], strict=True):
+        n = max(1, math.ceil((hi - lo) / MAX_STRIP_M - 1e-9))
+        ends = np.linspace(lo, hi, n + 1)
+        out += [(float(p), float(q)) for p, q in zip(ends[:-1], ends[1:], strict=True)]
+    return out
+
+
+def _pattern(style: MarkingStyle, kind: str, boundary: int, r_m: float, length_m: float,
+             joins: Sequence[float]) -> list[MarkingPiece]:
+    """Fresh pieces of a solid, dashed, double or dotted line."""
+
+    def piece(a: float, b: float, r: float = r_m) -> MarkingPiece:
+        return MarkingPiece(boundary, a, b, r, style.width_m, 1.0)
+
+    if kind == "solid":
+        return [piece(a, b) for a, b in _split(0.0, length_m, joins)]
+    if kind == "double":
+        half = 0.5 * (style.double_gap_m + style.width_m)
+        return [
+            piece(a, b, r)
+            for a, b in _split(0.0, length_m, joins)
+            for r in (r_m - half, r_m + half)
+        ]
+    starts = np.arange(0.0, length_m, style.dash_m + style.gap_m)
+    if kind == "dashed":
+        return [piece(float(a), min(float(a) + style.dash_m, length_m)) for a in starts]
+    # dots: rows of raised markers, each row dash_m long
+    d = style.dot_diameter_m
+    centres = [float(a) + k for a in starts
+               for k in np.arange(0.0, style.dash_m - 0.5 * d + 1e-9, style.dot_spacing_m)]
+    return [MarkingPiece(boundary, c, c + d, r_m, d, 1.0, dot=True)
+            for c in centres if c + d <= length_m]
+
+
+def _smooth(rng: np.random.Generator, n: int, sigma: float) -> np.ndarray:
+    """Unit-std noise of n samples, correlated over `sigma` samples."""
+    half = int(3 * sigma) + 1
+    kernel = np.exp(-0.5 * (np.arange(-half, half + 1) / sigma) ** 2)
+    noise = np.convolve(rng.standard_normal(n + 2 * half), kernel, mode="valid")
+    return (noise - noise.mean()) / max(float(noise.std()), 1e-9)
+
+
+def _wear(fresh: list[MarkingPiece], wear: float, rng: np.random.Generator) -> list[MarkingPiece]:
+    """Fresh paint after `wear`: where a multi-scale noise along the line falls below the local
+    wear the paint is gone, so holes of every size from pits to metres open up (mean painted
+    share 1 - wear); the chips left are narrower, off-centre and faded, and the local wear
+    drifts along the line, so some stretches are nearly whole and others nearly gone."""
+    if wear >= 1.0:
+        return []
+    out = []
+    for p in fresh:
+        n = max(int(math.ceil((p.s_end_m - p.s_start_m) / WEAR_STEP_M)), 1)
+        s = p.s_start_m + WEAR_STEP_M * np.arange(n + 1)
+        s[-1] = p.s_end_m
+        drift = _smooth(rng, n, WEAR_CORRELATION_M / WEAR_STEP_M)
+        local = np.clip(wear + 0.25 * drift, 0.0, 1.0)
+        texture = 0.6 * _smooth(rng, n, 0.5 / WEAR_STEP_M) + 0.8 * _smooth(rng, n, 1.5)
+        cdf = 0.5 * (1.0 + np.vectorize(math.erf)(texture / math.hypot(0.6, 0.8) / math.sqrt(2)))
+        painted = np.r_[False, cdf > local, False]  # uniform cdf: P(painted) = 1 - local
+        edges = np.flatnonzero(np.diff(painted.astype(np.int8)))
+        for a, b in zip(edges[0::2], edges[1::2], strict=True):
+            if b - a < 1:
+                continue
+            w = float(local[a:b].mean())
+            width = p.width_m * rng.uniform(1.0 - 0.5 * w, 1.0)
+            r = p.r_m + rng.uniform(-0.5, 0.5) * (p.width_m - width)
+            brightness = max(0.05, 1.0 - 0.8 * w * rng.uniform(0.6, 1.0))
+            out.append(MarkingPiece(p.boundary, float(s[a]), float(s[b]), r, width, brightness))
+    return out
+
+
+def layout(
+    style: MarkingStyle,
+    boundary: int,
+    r_m: float,
+    length_m: float,
+    joins: Sequence[float] = (),
+    rng_seed: int = 0,
+) -> list[MarkingPiece]:
+    """Strips of paint (or dots) of one boundary at lateral position `r_m`, ordered by s.
+
+    Args:
+      style: the marking style.
+      boundary: boundary index (stored in each piece; also offsets the seed of 'worn').
+      r_m: Frenet r of the boundary.
+      length_m: road length; paint covers [0, length_m].
+      joins: s of segment joins, where solid lines are cut.
+      rng_seed: seed of a worn line; the generator is `default_rng(rng_seed + boundary)`.
+    """
+    if style.kind == "none":
+        return []
+    if style.kind != "worn":
+        return _pattern(style, style.kind, boundary, r_m, length_m, joins)
+    fresh = _pattern(style, style.pattern, boundary, r_m, length_m, joins)
+    return _wear(fresh, style.wear, np.random.default_rng(rng_seed + boundary))

@@ -1,0 +1,451 @@
+"""One closed-loop episode: sense, detect, track, select, control, actuate, score, record.
+
+Each line of `Episode.step` is one call into one module (DESIGN.md's loop). The front
+detectors each feed a Kalman lane tracker; the rear detector is the MMAE's reference (the
+paper's "observer"); the MMAE selects (or fuses) the front models; the scenario's controller
+(lanekeep/control/registry.py; by default the PID on the chosen lane's offset at the control
+look-ahead, and the speed PI) steers and drives.
+
+What the car knows is what a car has: the camera frames and its sensor signals
+(lanekeep/sensing/vehicle_sensors.py: wheel odometry, IMU yaw rate, accelerations, steering angle), dead-reckoned
+into the estimator's ego-motion (estimators/odometry.py). The simulator's state (the car's
+true pose and speed, the road) is read only to score the step (`_true_pose`, `_score`,
+`_wheels_outside_lane`), to image the scene (`_sense`: motion blur follows the true motion) and
+by the recorder; tests/test_honest_loop.py makes any other read fail.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from lanekeep.control.registry import ControlContext, Controller, make_controller
+from lanekeep.core.interrupts import stop_point, stop_requested
+from lanekeep.core.timing import StageClock
+from lanekeep.detectors.base import Detector, LaneEstimate, poly_eval
+from lanekeep.detectors.registry import make_detector
+from lanekeep.estimators.lane_estimator import CLOSED_LOOP_TRACKER, EstimatorOutput, LaneEstimator
+from lanekeep.estimators.odometry import DeadReckoning
+from lanekeep.estimators.roll import RollFilter, corrected
+from lanekeep.loop.paper_mode import estimator_settings, front_detector_config, roll_compensation
+from lanekeep.report.record import EpisodeInfo, NullRecorder, Recorder
+from lanekeep.scenario.schema import Scenario
+from lanekeep.scoring.metrics import EpisodeReport, Metrics
+from lanekeep.scoring.truth import lane_centre_at, lane_centre_fit, lane_offsets
+from lanekeep.sensing.cameras import CameraRig, RenderSettings
+from lanekeep.sensing.paint_visibility import visible_paint
+from lanekeep.sensing.snapshot import make_effects
+from lanekeep.sensing.vehicle_sensors import VehicleSensors, VehicleSignals
+from lanekeep.world.build import SimulationError, World, build
+from lanekeep.world.parts import WorldLayout
+
+FUSED, REFERENCE = "fused", "reference"
+TRACK_SUFFIX = ":track"  # a front model's own Kalman track, scored like the fused output
+
+
+def track_source(model: str) -> str:
+    """The report column of a model's own track ("hough" -> "hough:track")."""
+    return model + TRACK_SUFFIX
+
+
+def source_names(models: list[str]) -> list[str]:
+    """Report columns in order: per model its raw detection and its own track, then the
+    fused output and the reference."""
+    return [n for m in models for n in (m, track_source(m))] + [FUSED, REFERENCE]
+
+TYRES = ("front_left_tyre", "front_right_tyre", "rear_left_tyre", "rear_right_tyre")
+
+@dataclass(frozen=True)
+class StepResult:
+    """Everything one control step produced (what the recorder and the dm_env wrapper see)."""
+
+    index: int
+    time_s: float
+    frames: dict[str, np.ndarray]
+    estimates: dict[str, LaneEstimate]
+    tracked: dict[str, np.ndarray | None]  # centre-line coefficients per front model
+    track_offsets_m: dict[str, float | None]  # each track's offset at the output's look-ahead
+    probabilities: np.ndarray
+    selected: int
+    output_offset_m: float | None
+    output_x_m: float  # the look-ahead of output_offset_m
+    output_centre: np.ndarray | None
+    reference_m: float | None
+    reference_x_m: float  # the look-ahead of reference_m
+    reference_repaired: bool
+    # The MMAE's residuals r_n (eq. 2): the reference minus each model's offset carried to
+    # where the reference looked; NaN where a model was not compared or the MMAE did not run.
+    mmae_residuals_m: np.ndarray
+    steer: float
+    throttle: float
+    truth_offset_m: float  # the car's true lateral offset after the period (at `pose`)
+    truth_output_m: float  # the true offset at the output's look-ahead, where frames were taken
+    truth_centre: np.ndarray  # true lane centre in the frame of `sensed_pose`
+    pose: tuple[float, float, float]  # after the control period
+    sensed_pose: tuple[float, float, float]  # where the frames were taken
+    speed_mps: float  # true speed (scoring, recording)
+    signals: VehicleSignals  # what the car's sensors said at the frames' time
+    events: list[str] = field(default_factory=list)
+    tracker_status: dict[str, str] = field(default_factory=dict)  # UpdateStatus value per model
+    # Marking masks (uint8, 1 = paint) per camera rendered from the state after this step, the
+    # state the next step's frames come from; only when the recorder asks (`wants_masks`).
+    marking_masks_after: dict[str, np.ndarray] | None = None
+    # Why the car is off the road after this period ("" while on it): `run()` ends there.
+    off_road: str = ""
+
+
+@dataclass
+class Percept:
+    """What the car has at the start of a control period, before it acts: its camera frames,
+    its sensor signals, the detections and the estimator's output. `sensed_pose` (the true pose
+    the frames were taken from) is for scoring only."""
+
+    index: int
+    time_s: float
+    frames: dict[str, np.ndarray]
+    signals: VehicleSignals
+    estimates: dict[str, LaneEstimate]
+    estimate: EstimatorOutput
+    events: list[str]
+    sensed_pose: tuple[float, float, float]
+
+
+class Episode:
+    """A closed-loop run of one scenario; `run()` steps it to the end and returns the report."""
+
+    def __init__(self, scenario: Scenario, recorder: Recorder | None = None,
+                 render_size: tuple[int, int] | None = None) -> None:
+        self.scenario = scenario
+        est = scenario.estimation
+        self.world: World = build(scenario)
+        width, height = render_size or (scenario.camera.width, scenario.camera.height)
+        self.rig = CameraRig(self.world.model,
+                             RenderSettings.of(scenario, width, height))
+        self.rng = np.random.default_rng(scenario.seed)
+        # One effects pipeline per camera: lens drops and the auto-exposure keep state.
+        self.effects = make_effects(scenario, self.world, self.rig, self.rng)
+        self.dt_s = scenario.control_period_s
+        self.front: dict[str, Detector] = {
+            name: make_detector(name, self.rig.cameras["front"],
+                                front_detector_config(name, est.mode),
+                                self.rig.distortion("front"))
+            for name in est.front_detectors
+        }
+        self.reference: Detector = make_detector(est.reference_detector,
+                                                   self.rig.cameras[est.reference_camera],
+                                                   distortion=self.rig.distortion(
+                                                       est.reference_camera))
+        self.roll = RollFilter(roll_compensation(est), self.dt_s)
+        self.estimator = LaneEstimator(
+            list(self.front),
+            estimator_settings(est),
+            reference_x_m=float(self.reference.x_ref),
+            tracker=CLOSED_LOOP_TRACKER,
+        )
+        geometry = self.world.car.geometry
+        # The sensors draw from their own stream of the episode's generator, so that they do
+        # not shift the image effects' draws (and a perfect-sensor run sees the same frames).
+        self.sensors = VehicleSensors(scenario.sensors, self.dt_s, self.rng.spawn(1)[0])
+        # The reference point is the middle of the wheelbase (lanekeep/world/vehicle.py).
+        self.odometry = DeadReckoning(self.dt_s, geometry.wheelbase_m / 2.0)
+        # [control] controller: "pid" (default), "stanley", an entry point or an import path
+        self.controller: Controller = make_controller(scenario.control.controller,
+                                                      ControlContext.of(scenario, geometry))
+        self.controller.reset()
+        self.metrics = Metrics(source_names(list(self.front)))
+        self.recorder: Recorder = recorder or NullRecorder()
+        geometry = self.world.car.geometry
+        self.recorder.start(EpisodeInfo(self.world.road, dict(self.rig.cameras), list(self.front),
+                                        float(self.dt_s),
+                                        (geometry.length_m, geometry.width_m)))
+        for detector in [*self.front.values(), self.reference]:
+            detector.reset()
+        self.index = 0
+        self._percept: Percept | None = None  # sensed, not yet acted on
+        self.detector_errors = 0
+        self.clock = StageClock()  # wall time per stage (`lanekeep perf`)
+        self._tyre_geoms = [self.world.model.geom(n).id for n in TYRES]
+        self._wall_start = time.perf_counter()
+
+    # -- the loop ------------------------------------------------------------------------------
+    def observe(self) -> Percept:
+        """The start of a control period: frames, sensor signals, detections and the estimate.
+
+        An agent outside (the Gymnasium and dm_env faces) calls this, decides, then `act`s on
+        it, so it acts on the frames of the same period as the built-in controller does. The
+        percept is kept until `act` uses it: calling `observe` twice senses once.
+        """
+        if self._percept is None:
+            self.clock.start()
+            events: list[str] = []
+            sensed_pose = self._true_pose()  # scoring: where the frames are taken from
+            frames = self._sense()
+            signals = self.sensors.sample(self.world.car)
+            estimates = self._roll_corrected(self._detect(frames, events), signals)
+            estimate = self._estimate(estimates, signals)  # laps "track" and "mmae"
+            events.extend(estimate.events)
+            self._percept = Percept(index=self.index, time_s=float(self.world.data.time),
+                                    frames=frames, signals=signals, estimates=estimates,
+                                    estimate=estimate, events=events, sensed_pose=sensed_pose)
+        return self._percept
+
+    def act(self, action: tuple[float, float] | None = None) -> StepResult:
+        """The rest of the control period: steer and throttle (the controller's, or `action`
+        = (steer, throttle) from outside) on the latest percept, physics, scoring, recording."""
+        percept = self.observe()
+        self._percept = None
+        clock = self.clock
+        estimate, signals = percept.estimate, percept.signals
+        steer, throttle = self._control(estimate, signals) if action is None else action
+        clock.lap("control")
+        self.world.step(steer, throttle, self.dt_s)
+        clock.lap("physics")
+        result = self._score(percept.sensed_pose, percept.frames, percept.estimates, estimate,
+                             signals, steer, throttle, percept.events)
+        clock.lap("score")
+        if self.recorder.wants_masks(self.index):
+            result = replace(result, marking_masks_after=self._marking_masks())
+        self.recorder.log_step(result)
+        clock.lap("record")
+        self.index += 1
+        return result
+
+    def step(self, action: tuple[float, float] | None = None) -> StepResult:
+        """One control period (`observe`, then `act`). `action` = (steer, throttle) overrides
+        the controller."""
+        return self.act(action)
+
+    def _sense(self) -> dict[str, np.ndarray]:
+        data = self.world.data
+        frames = {}
+        for name in self.rig.CAMERA_NAMES:
+            depth = None
+            if self.rig.settings.depth:
+                rgb, depth = self.rig.render_rgb_depth(data, name)
+            else:
+                rgb = self.rig.render_rgb(data, name)
+            self.clock.lap(f"render_{name}")
+            frames[name] = self.effects[name](rgb, self.rng, speed_mps=self.world.car.speed_mps(),
+                                              depth_m=depth)
+            self.clock.lap(f"effects_{name}")
+        return frames
+
+    def _safe_detect(self, name: str, detector: Detector, frame: np.ndarray,
+                     events: list[str]) -> LaneEstimate:
+        """A detector that raises or returns garbage counts as a miss, with an event."""
+        try:
+            estimate = detector.detect(frame)
+        except Exception as err:  # noqa: BLE001 - any detector fault is a miss, not a crash
+            self.detector_errors += 1
+            events.append(f"detector {name} failed: {err}")
+            return LaneEstimate.invalid(f"error: {err}")
+        if not isinstance(estimate, LaneEstimate):
+            self.detector_errors += 1
+            events.append(f"detector {name} returned {type(estimate).__name__}")
+            return LaneEstimate.invalid("not a LaneEstimate")
+        return estimate
+
+    def _detect(self, frames, events) -> dict[str, LaneEstimate]:
+        est = self.scenario.estimation
+        out = {}
+        for name, detector in self.front.items():
+            out[name] = self._safe_detect(name, detector, frames["front"], events)
+            self.clock.lap(f"detect_{name}")
+        out[REFERENCE] = self._safe_detect(REFERENCE, self.reference,
+                                           frames[est.reference_camera], events)
+        self.clock.lap("detect_reference")
+        return out
+
+    def _roll_corrected(self, estimates: dict[str, LaneEstimate], signals: VehicleSignals
+                        ) -> dict[str, LaneEstimate]:
+        """Each camera's lanes with the body roll's offset error taken out (estimators/roll.py),
+        from the lateral accelerometer."""
+        self.roll.update(signals.accel_lat_mps2)
+        camera = {REFERENCE: self.scenario.estimation.reference_camera}
+        return {name: corrected(e, self.roll.offset_error_m(camera.get(name, "front")))
+                for name, e in estimates.items()}
+
+    def _estimate(self, estimates: dict[str, LaneEstimate], signals: VehicleSignals
+                  ) -> EstimatorOutput:
+        front = {name: estimates[name] for name in self.front}
+        ego = self.odometry.update(signals.speed_mps, signals.yaw_rate_rps)
+        return self.estimator.update(front, estimates[REFERENCE], ego, lap=self.clock.lap)
+
+    def _control(self, estimate: EstimatorOutput, signals: VehicleSignals
+                 ) -> tuple[float, float]:
+        """The scenario's controller (lanekeep/control/registry.py): estimate and sensors only."""
+        steer, throttle = self.controller.control(estimate, signals)
+        return float(steer), float(throttle)
+
+    def _true_pose(self) -> tuple[float, float, float]:
+        """The car's true pose, for scoring only."""
+        return self.world.car.pose()
+
+    def _score(self, sensed_pose, frames, estimates, estimate: EstimatorOutput,
+               signals: VehicleSignals, steer, throttle, events) -> StepResult:
+        """Estimates against the truth of the pose their frames were taken from; the car's own
+        lateral error and lane departures at its pose after the control period.
+
+        Per front model two columns: its raw detection (at the detector's own look-ahead) and
+        its own Kalman track (at the output's look-ahead, like the fused output).
+        """
+        world = self.world
+        lane = self.scenario.road.ego_lane
+        tracked, selection = estimate.tracked, estimate.selection
+        centre, offset, x_out = estimate.centre, estimate.offset_m, estimate.offset_x_m
+        # One truth of the lane where the frames were taken, and its offsets at every
+        # look-ahead that an estimate reports at (one Newton solve for all of them).
+        true_centre, s_car = lane_centre_fit(world.road, *sensed_pose, lane)  # for drawing
+        true_y = lane_centre_at(world.road, *sensed_pose, lane, self.metrics.ade_points_m,
+                                s_car=s_car)  # exact, for ADE / FDE
+        x_ref = estimate.reference_x_m
+        lookaheads = sorted({round(e.x_m, 3) for e in estimates.values()}
+                            | {round(x_out, 3), round(x_ref, 3)})
+        offsets = dict(zip(lookaheads, lane_offsets(world.road, *sensed_pose, lane, lookaheads,
+                                                    s_car=s_car), strict=True))
+
+        def true_offset(x_m: float) -> float:
+            return float(offsets[round(x_m, 3)])
+
+        x, y, yaw = self._true_pose()
+        car_offset_m = float(lane_offsets(world.road, x, y, yaw, lane, [0.0])[0])
+
+        track_offsets: dict[str, float | None] = {}
+        for name in self.front:
+            e = estimates[name]
+            self.metrics.add_offset(name, e.offset_m if e.valid else None, true_offset(e.x_m))
+            self.metrics.add_lane(name, self.estimator.centre_of(e), true_y)
+            track = tracked[name]
+            track_offsets[name] = None if track is None else -float(poly_eval(track, x_out))
+            self.metrics.add_offset(track_source(name), track_offsets[name], true_offset(x_out))
+            self.metrics.add_lane(track_source(name), track, true_y)
+        ref = estimates[REFERENCE]
+        self.metrics.add_offset(REFERENCE, selection.reference_m if ref.valid else None,
+                                true_offset(x_ref))
+        self.metrics.add_offset(FUSED, offset, true_offset(x_out))
+        self.metrics.add_lane(FUSED, centre, true_y)
+        if centre is None:
+            self.metrics.add_no_estimate()
+        outside = self._wheels_outside_lane()
+        off_road = self._off_road(car_offset_m)
+        if off_road:
+            events.append(off_road)
+        if outside:
+            events.append("lane departure: a wheel crossed a lane boundary")
+        self.metrics.add_car(car_offset_m, outside)
+        self.metrics.add_selection(estimate.selected, selection.reference_repaired)
+        return StepResult(
+            index=self.index, time_s=float(world.data.time), frames=frames, estimates=estimates,
+            tracked=tracked, track_offsets_m=track_offsets,
+            probabilities=np.asarray(selection.probabilities),
+            selected=int(estimate.selected), output_offset_m=offset, output_x_m=x_out,
+            output_centre=centre,
+            reference_m=selection.reference_m, reference_x_m=x_ref,
+            reference_repaired=selection.reference_repaired,
+            mmae_residuals_m=np.asarray(selection.residuals_m, dtype=float),
+            steer=steer, throttle=throttle, truth_offset_m=car_offset_m,
+            truth_output_m=true_offset(x_out),
+            truth_centre=true_centre, pose=(x, y, yaw), sensed_pose=sensed_pose,
+            speed_mps=world.car.speed_mps(), signals=signals, events=events,
+            tracker_status=dict(estimate.tracker_status), off_road=off_road,
+        )
+
+    def _marking_masks(self) -> dict[str, np.ndarray]:
+        """Per camera, the paint the camera can see now (for the recording): the segmentation
+        render's paint, less what fog or darkness hides (lanekeep/sensing/paint_visibility.py)."""
+        data, masks = self.world.data, {}
+        for name in self.rig.CAMERA_NAMES:
+            paint = self.world.marking_mask(self.rig.render_segmentation(data, name))
+            bare, depth = self.rig.render_rgb_depth(data, name)
+            fx = self.effects[name]
+            weather = fx.weather
+            masks[name] = visible_paint(
+                paint, bare, weather.range_m(depth), weather.extinction_per_m,
+                float(weather.airlight.mean()), fx.sensor.gain).astype(np.uint8)
+        return masks
+
+    def _off_road(self, car_offset_m: float) -> str:
+        """Why the car has left the road ("" if it has not): all four wheels beyond the paved
+        surface (the lanes and the asphalt shoulders build() lays, or past the road's ends), or
+        its centre beyond [criteria] off_road_distance_m from the ego lane's. Truth, for
+        scoring and termination only: nothing of it reaches perception or control."""
+        road = self.world.road
+        s, r = road.local_coordinates(self.world.data.geom_xpos[self._tyre_geoms, :2])
+        s, r = np.asarray(s), np.asarray(r)
+        layout = WorldLayout()  # what build() laid (Episode builds with the default layout)
+        lo = road.boundary_r(0) - layout.shoulder_m
+        hi = road.boundary_r(road.n_lanes) + layout.shoulder_m
+        off = (r < lo) | (r > hi)
+        if not road.closed:
+            off |= (s < -layout.lead_m) | (s > road.length_m + layout.lead_m)
+        t = float(self.world.data.time)
+        if np.all(off):
+            return f"off road: all four wheels off the paved surface at t = {t:.1f} s"
+        limit = self.scenario.criteria.off_road_distance_m
+        if limit is not None and abs(car_offset_m) > limit:
+            return (f"off road: the car {abs(car_offset_m):.2f} m from the lane centre "
+                    f"(off_road_distance_m = {limit:g}) at t = {t:.1f} s")
+        return ""
+
+    def _wheels_outside_lane(self) -> bool:
+        world = self.world
+        xy = world.data.geom_xpos[self._tyre_geoms, :2]
+        _, r = world.road.local_coordinates(xy)
+        centre = world.road.lane_center_r(self.scenario.road.ego_lane)
+        return bool(np.any(np.abs(np.asarray(r) - centre) > world.road.lane_width_m / 2.0))
+
+    # -- whole episodes --------------------------------------------------------------------
+    @property
+    def total_steps(self) -> int:
+        return int(round(self.scenario.duration_s / self.dt_s))
+
+    def run(self, seconds: float | None = None,
+            on_step: Callable[[StepResult, int], None] | None = None) -> EpisodeReport:
+        """Step to the end (or `seconds`); an interrupt still returns a partial report.
+
+        `on_step(result, total_steps)` sees every step as it is made (a trace for plots, a
+        progress bar); the report says `completed = False`, its `status` and why
+        (`stop_reason`) after Ctrl-C ("interrupted"), when the physics went unstable
+        (lanekeep.world.build.SimulationError: "unstable") or once the car left the road
+        ("off_road": the step on which it left is scored, since its frames were taken on the
+        road and its end pose is the failure the criteria must see; no later step is).
+        """
+        steps = self.total_steps if seconds is None else int(round(seconds / self.dt_s))
+        status, reason = "completed", ""
+        try:
+            with stop_point():  # under the CLI a stop signal ends the loop between steps
+                for _ in range(steps):
+                    if stop_requested():
+                        status = reason = "interrupted"
+                        break
+                    result = self.step()
+                    if on_step is not None:
+                        on_step(result, steps)
+                    if result.off_road:
+                        status, reason = "off_road", result.off_road
+                        break
+        except KeyboardInterrupt:
+            status = reason = "interrupted"
+        except SimulationError as err:  # the steps so far stand; the recording is kept
+            status, reason = "unstable", str(err)
+        return self.report(status == "completed", reason, status=status)
+
+    def report(self, completed: bool = True, stop_reason: str = "",
+               status: str | None = None) -> EpisodeReport:
+        return self.metrics.report(self.scenario.name, self.scenario.seed, self.dt_s,
+                                   completed=completed,
+                                   wall_s=time.perf_counter() - self._wall_start,
+                                   stop_reason=stop_reason, status=status)
+
+    def close(self) -> None:
+        self.rig.close()
+        self.recorder.close()
+
+    def __enter__(self) -> Episode:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()

@@ -1,0 +1,1 @@
+"""Real cameras: camera files, OpenCV calibration from chessboard photos, strict image reading."""

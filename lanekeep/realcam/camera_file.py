@@ -1,0 +1,184 @@
+"""Real cameras for `lanekeep detect`: a camera TOML file, or defaults for an unknown dashcam.
+
+A camera file (written by `lanekeep calibrate`, mounting added by hand):
+
+    [camera]
+    width = 1280
+    height = 720
+    fx = 1156.9
+    fy = 1152.2
+    cx = 665.9
+    cy = 388.8
+    distortion = [-0.24, -0.05, -0.001, 0.0, 0.02]   # OpenCV k1 k2 p1 p2 k3
+    height_m = 1.5                                    # mounting height above the road
+    pitch_deg = -2.0                                  # optional, + = up; absent = per image
+
+Without a file (an unknown dashcam, e.g. TuSimple or Udacity highway frames at 1280x720) the
+camera is a pinhole with a 60 deg horizontal field of view, centred principal point, mounted
+1.5 m high, and its pitch follows from the horizon row found in each image: the vanishing
+point of the image's dominant converging line segments (lane lines, road edges), taken as
+pitch = atan((v_horizon - cy) / fy). When no vanishing point is found, the horizon is assumed
+at the image middle (a level camera). Numbers: detectors.toml [dashcam].
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from lanekeep.core.config_io import InvalidValue, from_dict
+from lanekeep.geometry.camera_model import CameraModel
+
+
+@dataclass(frozen=True)
+class CameraFile:
+    width: int
+    height: int
+    fx: float
+    fy: float
+    cx: float
+    cy: float
+    distortion: tuple[float, ...] = (0.0, 0.0, 0.0, 0.0, 0.0)
+    height_m: float = 1.5
+    pitch_deg: float | None = None
+
+    def __post_init__(self) -> None:
+        if self.width < 16 or self.height < 16:
+            raise InvalidValue("width", f"image size {self.width}x{self.height} is too small")
+        if not (self.fx > 0 and self.fy > 0):
+            raise InvalidValue("fx", "focal lengths must be > 0")
+        if not self.height_m > 0:
+            raise InvalidValue("height_m", f"must be > 0, got {self.height_m}")
+
+    @property
+    def K(self) -> np.ndarray:  # noqa: N802 - the textbook symbol
+        return np.array([[self.fx, 0.0, self.cx], [0.0, self.fy, self.cy], [0.0, 0.0, 1.0]])
+
+    def model(self, pitch_rad: float, name: str = "dashcam") -> CameraModel:
+        return CameraModel.from_mounting(name, self.K, self.width, self.height, self.height_m,
+                                         pitch_rad)
+
+    def scaled(self, width: int, height: int) -> CameraFile:
+        """The same camera at another image size (intrinsics scale with it)."""
+        sx, sy = width / self.width, height / self.height
+        return CameraFile(width, height, self.fx * sx, self.fy * sy, (self.cx + 0.5) * sx - 0.5,
+                          (self.cy + 0.5) * sy - 0.5, self.distortion, self.height_m,
+                          self.pitch_deg)
+
+
+def read_camera_file(path: str | Path) -> CameraFile:
+    data = tomllib.loads(Path(path).read_text())
+    if "camera" not in data:
+        raise ValueError(f"{path}: no [camera] table")
+    return from_dict(CameraFile, data["camera"], path="camera", source=str(path))
+
+
+def write_camera_file(path: str | Path, cam: CameraFile, comment: str = "") -> None:
+    lines = [f"# {line}" for line in comment.splitlines()]
+    lines += [
+        "[camera]",
+        f"width = {cam.width}",
+        f"height = {cam.height}",
+        f"fx = {cam.fx:.4f}",
+        f"fy = {cam.fy:.4f}",
+        f"cx = {cam.cx:.4f}",
+        f"cy = {cam.cy:.4f}",
+        "distortion = [" + ", ".join(f"{d:.6g}" for d in cam.distortion) + "]",
+        f"height_m = {cam.height_m}  # mounting height: measure it",
+    ]
+    if cam.pitch_deg is not None:
+        lines.append(f"pitch_deg = {cam.pitch_deg}")
+    else:
+        lines.append("# pitch_deg = 0.0  # + = up; absent: estimated from each image's horizon")
+    Path(path).write_text("\n".join(lines) + "\n")
+
+
+def default_camera(width: int, height: int, hfov_deg: float = 60.0, height_m: float = 1.5
+                   ) -> CameraFile:
+    """An unknown dashcam: pinhole, `hfov_deg` wide, principal point in the middle."""
+    f = (width / 2.0) / math.tan(math.radians(hfov_deg) / 2.0)
+    return CameraFile(width, height, f, f, (width - 1) / 2.0, (height - 1) / 2.0,
+                      height_m=height_m)
+
+
+def estimate_horizon_row(
+    image: np.ndarray, min_fraction: float = 0.2, max_fraction: float = 0.75
+) -> float | None:
+    """Row of the vanishing point of the image's converging line segments, or None.
+
+    Segments (Canny + probabilistic Hough, at 640 px width) slanted 15-75 deg from horizontal
+    are kept when they lean towards the image middle (left half rising to the right, right
+    half rising to the left), as lane lines and road edges do. The point nearest to all of
+    them (length-weighted least squares, twice re-weighted to drop outliers) is the vanishing
+    point. Both leanings must be present, else None.
+    """
+    h, w = image.shape[:2]
+    s = 640.0 / w
+    small = cv2.resize(image, (640, max(2, int(round(h * s)))), interpolation=cv2.INTER_AREA)
+    grey = cv2.cvtColor(small, cv2.COLOR_RGB2GRAY) if small.ndim == 3 else small
+    top = int(min_fraction * grey.shape[0])
+    edges = cv2.Canny(cv2.GaussianBlur(grey, (5, 5), 0), 40, 120)
+    edges[:top] = 0
+    lines = cv2.HoughLinesP(edges, 1, math.pi / 180, 30, minLineLength=20, maxLineGap=10)
+    if lines is None:
+        return None
+    seg = lines.reshape(-1, 4).astype(float)
+    dx, dy = seg[:, 2] - seg[:, 0], seg[:, 3] - seg[:, 1]
+    angle = np.degrees(np.arctan2(np.abs(dy), np.abs(dx)))
+    mid_u = (seg[:, 0] + seg[:, 2]) / 2.0
+    # In image coordinates (v down), a line rising to the right has dv/du < 0.
+    rising_right = (dx * dy) < 0
+    towards = np.where(mid_u < 320, rising_right, ~rising_right)
+    keep = (angle >= 15) & (angle <= 75) & towards
+    if (keep & (mid_u < 320)).sum() < 1 or (keep & (mid_u >= 320)).sum() < 1:
+        return None
+    seg, length = seg[keep], np.hypot(dx[keep], dy[keep])
+    # Line i: n_i . p = c_i with unit normal n_i.
+    normal = np.stack([seg[:, 3] - seg[:, 1], seg[:, 0] - seg[:, 2]], axis=1)
+    normal /= np.linalg.norm(normal, axis=1, keepdims=True)
+    c = np.sum(normal * seg[:, :2], axis=1)
+    weight = length.copy()
+    point = None
+    for _ in range(3):
+        a = normal * weight[:, None]
+        try:
+            point = np.linalg.solve(a.T @ normal + 1e-6 * np.eye(2), a.T @ c)
+        except np.linalg.LinAlgError:
+            return None
+        dist = np.abs(normal @ point - c)
+        weight = length * (dist < max(10.0, 2.0 * np.median(dist)))
+        if weight.sum() == 0:
+            return None
+    row = float(point[1]) / s
+    if not (min_fraction * h <= row <= max_fraction * h) or not math.isfinite(row):
+        return None
+    return row
+
+
+def camera_for_image(
+    image: np.ndarray,
+    camera_file: CameraFile | None,
+    hfov_deg: float = 60.0,
+    height_m: float = 1.5,
+    horizon_fraction: float = 0.5,
+    min_fraction: float = 0.2,
+    max_fraction: float = 0.75,
+) -> tuple[CameraModel, CameraFile, float]:
+    """The camera model for one real image: (model, intrinsics file, horizon row used)."""
+    h, w = image.shape[:2]
+    cam = camera_file or default_camera(w, h, hfov_deg, height_m)
+    if (cam.width, cam.height) != (w, h):
+        cam = cam.scaled(w, h)
+    if cam.pitch_deg is not None:
+        pitch = math.radians(cam.pitch_deg)
+        horizon = cam.cy + cam.fy * math.tan(pitch)
+    else:
+        found = estimate_horizon_row(image, min_fraction, max_fraction)
+        horizon = found if found is not None else horizon_fraction * h
+        pitch = math.atan((horizon - cam.cy) / cam.fy)
+    return cam.model(pitch), cam, horizon

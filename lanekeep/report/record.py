@@ -1,0 +1,656 @@
+"""Episode recording. `NullRecorder` costs nothing; `RerunRecorder` writes a rerun .rrd file.
+
+`rerun` is imported only when a `RerunRecorder` is made, so an episode without recording never
+loads it. Everything one control step logs is stamped with the time lines `step` (sequence:
+the control step index) and `sim_time` (the simulated time at which that step's camera frames
+were taken). The episode hands the recorder its static `EpisodeInfo` once and then one
+StepResult per step, nothing else; a step carries the pose the frames
+were taken from (`StepResult.sensed_pose`); ground truth is drawn from the latter so that it
+lines up with the images.
+
+Entity paths (metres; `world` is MuJoCo's frame, z up; lanes of the vehicle frame x forward,
+y left are drawn in world coordinates):
+
+    scenario                              static: TOML text, seed, command that reproduces it
+    cameras/{front,rear}/image            JPEG (OpenCV, quality configurable)
+    cameras/{cam}/segmentation            marking mask (optional layer)
+    cameras/{cam}/lanes/{model}/points    pixels each detector fitted (LaneEstimate.image_points)
+    cameras/{cam}/lanes/{model}/boundaries  its left/right polynomials projected by the camera
+    cameras/{cam}/lanes/truth             the true ego-lane boundaries projected (green)
+    cameras/front/lanes/output/centre     centre of the lane the controller follows (red)
+    world/road/boundaries                 static: every lane boundary
+    map/road, map/lane                    static: the whole road to scale (2D, x east, y flipped
+                                          so that north is up), the ego lane in green
+    map/car, map/car/marker, map/path     the car's footprint, a marker, the driven path
+    world/car, world/car/body             pose (Transform3D) and a box the car's size
+    world/path                            the driven path so far
+    world/lanes/{model}, world/lanes/output  lane estimates in world coordinates
+    plots/offset/{truth,model...,reference,fused}  lateral offsets at each look-ahead (m)
+    plots/error/{model...,reference,fused}  estimate - truth at the estimate's look-ahead (m)
+    plots/probability/{model}             MMAE probabilities
+    plots/residual/{model}                MMAE residuals (eq. 2): the reference minus the model's
+                                          offset carried to where the reference looked (m)
+    plots/car/{offset_m,steer,throttle}, plots/speed/speed_mps   (split by unit)
+    events                                text: model switches, reference repairs, gated
+                                          measurements, lanes lost/found, detector failures,
+                                          lane departures
+
+Scalars and events are logged every step; images, overlays and the 3D view every `every`-th.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+import queue
+import threading
+import uuid
+from collections.abc import Iterator
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Protocol
+
+import cv2
+import numpy as np
+
+from lanekeep.core.interrupts import stop_signals_held
+from lanekeep.detectors.base import poly_eval
+from lanekeep.scoring.truth import LanePolylines, lane_offsets
+from lanekeep.sensing.cameras import RENDERER_IDLE
+
+APPLICATION_ID = "lanekeep"
+REFERENCE, TRUTH, OUTPUT = "reference", "truth", "output"
+FUSED = "fused"  # the MMAE output: one name in the table, the JSON, the plots and here
+# Mid-tone colours, each readable on the viewer's light and dark themes (no white, no black);
+# the fused output gets the strongest one.
+COLOURS = {
+    TRUTH: (30, 170, 30),
+    OUTPUT: (220, 20, 20),
+    FUSED: (220, 20, 20),
+    REFERENCE: (120, 90, 230),
+    "hough": (255, 140, 0),
+    "sliding_window": (0, 140, 230),
+    "lanenet": (190, 50, 190),
+}
+_SPARE_COLOURS = ((200, 150, 0), (0, 160, 150), (150, 110, 60), (230, 90, 140))
+ROAD_COLOUR, PATH_COLOUR, CAR_COLOUR = (128, 128, 128), (140, 80, 30), (60, 60, 200)
+LANE_RANGE_M = (3.0, 30.0)  # |x| of the lane polylines drawn from each camera
+TRUTH_BEHIND_M, TRUTH_AHEAD_M, TRUTH_STEP_M = 25.0, 45.0, 0.5
+ROAD_STEP_M = 1.0
+MAX_POINTS_PER_SIDE = 400
+LINE_Z_M = 0.05  # lifted above the road in the 3D view
+BATCH_FLUSH_S, BATCH_BYTES = 2.0, 8 << 20  # rerun's chunk batcher (default 0.2 s, 2 MiB)
+
+
+@dataclass(frozen=True)
+class EpisodeInfo:
+    """What a recorder is told once, before the first step: nothing it could step with."""
+
+    road: Any  # lanekeep.geometry.road.Road
+    cameras: dict[str, Any]  # camera name -> lanekeep.sensing.cameras.CameraModel
+    models: list[str]  # the front models, in the MMAE's order
+    dt_s: float
+    car_size_m: tuple[float, float]  # length, width
+
+
+class Recorder(Protocol):
+    """Receives an episode's static information once, then each control step's result."""
+
+    def start(self, info: EpisodeInfo) -> None: ...
+
+    def wants_masks(self, step_index: int) -> bool:
+        """Whether the step with this index should carry the marking masks rendered after it
+        (`StepResult.marking_masks_after`)."""
+        ...
+
+    def log_step(self, step: Any) -> None: ...
+
+    def close(self) -> None: ...
+
+
+class NullRecorder:
+    """Recording off: every call returns at once."""
+
+    def start(self, info: EpisodeInfo) -> None:
+        return None
+
+    def wants_masks(self, step_index: int) -> bool:
+        return False
+
+    def log_step(self, step: Any) -> None:
+        return None
+
+    def close(self) -> None:
+        return None
+
+
+def colour(name: str, index: int = 0) -> tuple[int, int, int]:
+    """Fixed colour per source, so a model has the same colour in every view."""
+    return COLOURS.get(name, _SPARE_COLOURS[index % len(_SPARE_COLOURS)])
+
+
+# -- geometry -----------------------------------------------------------------------------------
+def vehicle_to_world(xy: np.ndarray, pose: tuple[float, float, float]) -> np.ndarray:
+    """Vehicle-frame XY (..., 2) of `pose` into world XY."""
+    x, y, yaw = pose
+    v = np.asarray(xy, dtype=float)
+    c, s = math.cos(yaw), math.sin(yaw)
+    return np.stack([x + v[..., 0] * c - v[..., 1] * s, y + v[..., 0] * s + v[..., 1] * c], -1)
+
+
+class _Truth:
+    """What the recording draws and plots as the truth, from lanekeep.scoring.truth: exact
+    offsets at the look-aheads it needs (as the metrics score them), and polylines to draw."""
+
+    def __init__(self, road, lane: int, pose: tuple[float, float, float],
+                 lookaheads_m: list[float]) -> None:
+        self._road, self._lane, self._pose = road, lane, pose
+        self._s_car, _ = road.local_coordinates(np.array(pose[:2], dtype=float))
+        offsets = lane_offsets(road, *pose, lane, lookaheads_m, s_car=self._s_car)
+        self._offsets = dict(zip(lookaheads_m, offsets.tolist(), strict=True))
+
+    @functools.cached_property
+    def lines(self) -> LanePolylines:
+        """Made only on steps whose images are logged."""
+        return LanePolylines(self._road, self._lane, self._pose, TRUTH_BEHIND_M,
+                             TRUTH_AHEAD_M, TRUTH_STEP_M, s_car=self._s_car)
+
+    def offset_m(self, x_m: float) -> float:
+        """True offset of the car from the lane centre at look-ahead x (+ = car left)."""
+        return self._offsets[float(x_m)]
+
+
+def _camera_x_range(camera) -> tuple[float, float]:
+    """Vehicle-frame x interval of the ground that a camera looks at (front: +, rear: -)."""
+    forward = -camera.rotation[0, 2]
+    lo, hi = LANE_RANGE_M
+    return (lo, hi) if forward >= 0 else (-hi, -lo)
+
+
+def _poly_points(coeffs, x_range: tuple[float, float], n: int = 28) -> np.ndarray:
+    xs = np.linspace(*x_range, n)
+    return np.column_stack([xs, poly_eval(coeffs, xs)])
+
+
+def _clip_segment(p: np.ndarray, q: np.ndarray, w: float, h: float):
+    """Liang-Barsky: the part of segment p-q inside [0, w] x [0, h], or None."""
+    d = q - p
+    t0, t1 = 0.0, 1.0
+    for num, den in ((p[0], -d[0]), (w - p[0], d[0]), (p[1], -d[1]), (h - p[1], d[1])):
+        if den == 0:
+            if num < 0:
+                return None
+            continue
+        t = num / den
+        if den < 0:
+            t0 = max(t0, t)
+        else:
+            t1 = min(t1, t)
+    return None if t0 > t1 else (p + t0 * d, p + t1 * d)
+
+
+def clip_polyline(uv: np.ndarray, w: float, h: float) -> list[np.ndarray]:
+    """A pixel polyline cut to the image: the runs of it inside [0, w] x [0, h], so that an
+    overlay never draws outside its camera image."""
+    runs: list[list[np.ndarray]] = []
+    current: list[np.ndarray] = []
+    for p, q in zip(uv[:-1], uv[1:], strict=True):
+        part = _clip_segment(np.asarray(p, float), np.asarray(q, float), w, h)
+        if part is None:
+            if current:
+                runs.append(current)
+            current = []
+            continue
+        a, b = part
+        if current and np.allclose(current[-1], a):
+            current.append(b)
+        else:
+            if current:
+                runs.append(current)
+            current = [a, b]
+    if current:
+        runs.append(current)
+    return [np.asarray(r) for r in runs if len(r) >= 2]
+
+
+def _pixel_strips(camera, ground_xy: np.ndarray) -> list[np.ndarray]:
+    """A ground polyline projected into the camera and clipped to its image (points behind the
+    camera dropped first)."""
+    if len(ground_xy) < 2:
+        return []
+    uv, in_front = camera.project_ground(ground_xy)
+    strips: list[np.ndarray] = []
+    start = 0
+    for i in range(len(uv) + 1):  # split where the line passes behind the camera
+        if i == len(uv) or not in_front[i]:
+            if i - start >= 2:
+                strips += clip_polyline(uv[start:i], camera.width, camera.height)
+            start = i + 1
+    return strips
+
+
+def _map_xy(xy: np.ndarray) -> np.ndarray:
+    """World XY to the 2D map's coordinates (image axes: y down, so flip y: north up)."""
+    xy = np.asarray(xy, dtype=np.float32)
+    return np.column_stack([xy[..., 0], -xy[..., 1]])
+
+
+def car_footprint(pose: tuple[float, float, float], length: float, width: float) -> np.ndarray:
+    """Closed polygon (5, 2) of the car's outline at `pose`, world XY (centred on the pose's
+    point, the recording's convention for `world/car/body`)."""
+    corners = np.array([[length / 2, width / 2], [length / 2, -width / 2],
+                        [-length / 2, -width / 2], [-length / 2, width / 2],
+                        [length / 2, width / 2]])
+    return vehicle_to_world(corners, pose)
+
+
+# -- the blueprint ------------------------------------------------------------------------------
+def blueprint(scenario):
+    """Cameras side by side; then offsets and errors | the road map and the 3D follow view |
+    probabilities, MMAE residuals, car (offset, steer) and speed, each unit in its own plot;
+    events below."""
+    import rerun.blueprint as rrb
+
+    x, y, yaw = scenario.start_pose()
+    eye = [x - 25.0 * math.cos(yaw), y - 25.0 * math.sin(yaw), 45.0]
+    top = rrb.Spatial3DView(
+        origin="world", name="follow view (3D)",
+        eye_controls=rrb.EyeControls3D(kind=rrb.Eye3DKind.Orbital, position=eye,
+                                       look_target=[x, y, 0.0], eye_up=[0.0, 0.0, 1.0],
+                                       tracking_entity="world/car"),
+    )
+    legend = rrb.PlotLegend(corner=rrb.Corner2D.LeftTop)
+    # Each model's own Kalman track is recorded too ("hough:track"), but left out of the default
+    # offsets / errors plots: it shares its model's colour and would double their legends (the
+    # selection panel adds it back).
+    hidden = [f"- $origin/{m}:track" for m in scenario.estimation.front_detectors]
+    return rrb.Blueprint(
+        rrb.Vertical(
+            rrb.Horizontal(
+                rrb.Spatial2DView(origin="cameras/front", name="front camera"),
+                rrb.Spatial2DView(origin="cameras/rear", name="rear camera"),
+            ),
+            rrb.Horizontal(
+                rrb.Vertical(
+                    rrb.TimeSeriesView(origin="plots/offset", name="offsets (m, + = car left)",
+                                       contents=["+ $origin/**", *hidden], plot_legend=legend),
+                    rrb.TimeSeriesView(origin="plots/error", name="errors (m, estimate - truth)",
+                                       contents=["+ $origin/**", *hidden], plot_legend=legend),
+                ),
+                rrb.Vertical(
+                    rrb.Spatial2DView(origin="map", name="road map (to scale, north up)"),
+                    top,
+                ),
+                rrb.Vertical(
+                    rrb.TimeSeriesView(origin="plots/probability", name="MMAE probabilities",
+                                       axis_y=rrb.ScalarAxis(range=(0.0, 1.0)),
+                                       plot_legend=legend),
+                    rrb.TimeSeriesView(origin="plots/residual",
+                                       name="MMAE residuals (m, reference - model)",
+                                       plot_legend=legend),
+                    rrb.TimeSeriesView(origin="plots/car", name="car: offset (m), steer",
+                                       plot_legend=legend),
+                    rrb.TimeSeriesView(origin="plots/speed", name="car: speed (m/s)",
+                                       plot_legend=legend),
+                ),
+                column_shares=[2, 2, 2],
+            ),
+            rrb.TextLogView(origin="events", name="events"),
+            row_shares=[4, 7, 1.8],
+        ),
+        rrb.BlueprintPanel(state="collapsed"),
+        rrb.SelectionPanel(state="collapsed"),
+        rrb.TimePanel(state="collapsed"),
+    )
+
+
+def scenario_document(scenario) -> str:
+    """Markdown that says how to reproduce the recording: command, seed, the scenario's TOML."""
+    from lanekeep.scenario.schema import shipped_scenarios
+
+    source = Path(scenario.source) if scenario.source else None
+    if source is not None and source.is_file():
+        toml = source.read_text(encoding="utf-8")
+        shipped = scenario.name in shipped_scenarios() and source.name == f"{scenario.name}.toml"
+        where = scenario.name if shipped else str(source)
+    else:
+        toml, where = f"# not read from a file; the parsed scenario:\n# {scenario!r}", "?"
+    return (f"# {scenario.name}\n\nreproduce: `lanekeep run {where} --seed {scenario.seed}`\n\n"
+            f"seed {scenario.seed}; duration {scenario.duration_s} s; control period "
+            f"{scenario.control_period_s} s\n\n```toml\n{toml}\n```\n")
+
+
+# -- the recorder -------------------------------------------------------------------------------
+class RerunRecorder:
+    """Streams every step of an episode to a rerun .rrd file, with a default blueprint.
+
+    `start` takes the episode's static information, `log_step` queues each step: a writer
+    thread JPEG-encodes, projects and logs, so the loop does not wait for it while the GIL is
+    free (physics, OpenCV; it never runs beside a render, see lanekeep.sensing.cameras). The queue is
+    bounded, so a slow writer slows the loop rather than filling memory. Steps are treated as
+    immutable once handed over.
+
+    Args:
+        path: the .rrd file (streamed as the episode runs; `close()` writes its footer).
+        scenario: the scenario being run; its TOML and seed are stored in the recording.
+        every: log images, overlays and the 3D view on every N-th step (scalars: every step).
+        jpeg_quality: quality of the camera images (rerun's JPEG encoder), 1..100.
+        segmentation: also log the marking mask of both cameras (the episode renders them,
+            two extra renders per recorded step, when `wants_masks` says so). They are rendered
+            from the state after a step, which is the state the next step's frames come from,
+            and logged at that next step: so from step `every` on (none at step 0), and one
+            past the last step.
+    """
+
+    QUEUE_STEPS = 4
+
+    def __init__(self, path: Path, scenario, every: int = 1, jpeg_quality: int = 75,
+                 segmentation: bool = False) -> None:
+        if every < 1:
+            raise ValueError(f"every must be >= 1, got {every}")
+        if not 1 <= jpeg_quality <= 100:
+            raise ValueError(f"jpeg_quality must be in 1..100, got {jpeg_quality}")
+        import rerun as rr
+
+        self._rr = rr
+        self.path = Path(path)
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        self.scenario = scenario
+        self.every = int(every)
+        self.jpeg_quality = int(jpeg_quality)
+        self.segmentation = segmentation
+        # Chunks of ~2 s per entity instead of one per step: 18 % smaller files, 6x fewer chunks.
+        batching = rr.ChunkBatcherConfig(flush_tick=BATCH_FLUSH_S, flush_num_bytes=BATCH_BYTES)
+        self._rec = rr.RecordingStream(APPLICATION_ID, recording_id=uuid.uuid4(),
+                                       batcher_config=batching)
+        self._rec.save(self.path, default_blueprint=blueprint(scenario))
+        self._rec.send_recording_name(f"{scenario.name} seed {scenario.seed}")
+        self._rec.send_property("scenario", rr.AnyValues(name=scenario.name, seed=scenario.seed,
+                                                         source=str(scenario.source)))
+        self._rec.log("scenario", rr.TextDocument(scenario_document(scenario),
+                                                  media_type=rr.MediaType.MARKDOWN), static=True)
+        self._view: EpisodeInfo | None = None
+        self._closed = False
+        self._error: BaseException | None = None
+        # Writer-thread state: the path so far.
+        self._path: list[tuple[float, float]] = []
+        self._selected: int | None = None
+        self._valid: dict[str, bool] = {}
+        self._queue: queue.Queue = queue.Queue(maxsize=self.QUEUE_STEPS)
+        self._writer = threading.Thread(target=self._write_loop, name="rerun-recorder",
+                                        daemon=True)
+        self._writer.start()
+
+    # -- the episode's thread ------------------------------------------------------------------
+    def start(self, info: EpisodeInfo) -> None:
+        """The episode's static information; logged once, before the first step."""
+        if self._view is not None:
+            raise RuntimeError("a RerunRecorder records one episode; start() came twice")
+        self._view = info
+        self._queue.put(("static", info, None))
+
+    def wants_masks(self, step_index: int) -> bool:
+        return self.segmentation and (step_index + 1) % self.every == 0
+
+    def log_step(self, step: Any) -> None:
+        if self._closed:
+            return
+        if self._view is None:
+            raise RuntimeError("RerunRecorder.start(info) must come before the first step")
+        self._raise_writer_error()
+        masks = getattr(step, "marking_masks_after", None)
+        self._queue.put(("step", step, masks))
+
+    def close(self) -> None:
+        """Drain the writer, flush and finalise the file (footer included); safe to repeat."""
+        if self._closed:
+            return
+        self._closed = True
+        with stop_signals_held():  # a second Ctrl-C or a SIGTERM would cut its footer
+            self._queue.put(None)
+            self._writer.join()
+            self._rec.flush()
+            self._rec.disconnect()
+        self._raise_writer_error()
+
+    def __enter__(self) -> RerunRecorder:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def _raise_writer_error(self) -> None:
+        if self._error is not None:
+            error, self._error = self._error, None
+            raise RuntimeError(f"recording to {self.path} failed: {error!r}") from error
+
+    # -- the writer thread ---------------------------------------------------------------------
+    def _write_loop(self) -> None:
+        while (item := self._queue.get()) is not None:
+            if self._error is not None:
+                continue  # keep draining so that the episode never blocks on a full queue
+            kind, payload, masks = item
+            RENDERER_IDLE.wait()  # see lanekeep.sensing.cameras: never beside a render
+            try:
+                if kind == "static":
+                    self._log_static(payload)
+                else:
+                    self._log_step(payload, masks)
+            except Exception as err:  # noqa: BLE001 - handed to the episode's thread
+                self._error = err
+
+    def _log_step(self, step, masks) -> None:
+        rr, rec, view = self._rr, self._rec, self._view
+        pose = tuple(step.sensed_pose)  # the pose the frames were taken from
+        self._path.append(pose[:2])
+        rec.set_time("step", sequence=int(step.index))
+        rec.set_time("sim_time", duration=max(0.0, float(step.time_s) - view.dt_s))
+        truth = _Truth(view.road, self.scenario.road.ego_lane, pose, self._truth_points(step))
+        self._log_scalars(step, truth)
+        self._log_events(step)
+        if step.index % self.every == 0:
+            self._log_cameras(step, truth)
+            self._log_world(step, pose)
+        if masks:
+            rec.set_time("step", sequence=int(step.index) + 1)
+            rec.set_time("sim_time", duration=float(step.time_s))
+            for name, mask in masks.items():
+                rec.log(f"cameras/{name}/segmentation", rr.SegmentationImage(mask, opacity=0.5))
+
+    def _truth_points(self, step) -> list[float]:
+        """The look-aheads whose true offsets this step's plots need."""
+        xs = {0.0, self.scenario.estimation.offset_lookahead_m, float(step.output_x_m),
+              float(step.reference_x_m)}
+        xs |= {float(e.x_m) for e in step.estimates.values()}
+        return sorted(xs)
+
+    def _sources(self) -> dict[str, str]:
+        """Estimate name -> the camera its frame came from."""
+        cams = {name: "front" for name in self._view.models}
+        cams[REFERENCE] = self.scenario.estimation.reference_camera
+        return cams
+
+    def _colour(self, name: str) -> tuple[int, int, int]:
+        models = self._view.models
+        return colour(name, models.index(name) if name in models else 0)
+
+    def _log_static(self, view: EpisodeInfo) -> None:
+        rr, rec, road = self._rr, self._rec, view.road
+        s = np.append(np.arange(0.0, road.length_m, ROAD_STEP_M), road.length_m)
+        strips = [_lifted(road.position(s, road.boundary_r(i))) for i in range(road.n_lanes + 1)]
+        rec.log("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
+        rec.log("world/road/boundaries",
+                rr.LineStrips3D(strips, colors=[ROAD_COLOUR], radii=0.08), static=True)
+        length, width = view.car_size_m
+        rec.log("world/car/body", rr.Boxes3D(centers=[[0.0, 0.0, 0.75]],
+                                             half_sizes=[[length / 2, width / 2, 0.75]],
+                                             colors=[CAR_COLOUR]), static=True)
+        lane = self.scenario.road.ego_lane
+        rec.log("map/road", rr.LineStrips2D([_map_xy(b[:, :2]) for b in strips],
+                                            colors=[ROAD_COLOUR], radii=0.4), static=True)
+        rec.log("map/lane", rr.LineStrips2D([_map_xy(strips[lane][:, :2]),
+                                             _map_xy(strips[lane + 1][:, :2])],
+                                            colors=[COLOURS[TRUTH]], radii=0.3), static=True)
+        rec.log("cameras", rr.AnnotationContext([(0, "road", (0, 0, 0, 0)),
+                                                 (1, "marking", (255, 0, 255, 160))]),
+                static=True)
+        series = {f"plots/offset/{TRUTH}": TRUTH, f"plots/offset/{REFERENCE}": REFERENCE,
+                  f"plots/offset/{FUSED}": FUSED, f"plots/error/{REFERENCE}": REFERENCE,
+                  f"plots/error/{FUSED}": FUSED}
+        for name in view.models:
+            for group in ("offset", "error", "probability", "residual"):
+                series[f"plots/{group}/{name}"] = name
+            for group in ("offset", "error"):  # the model's own Kalman track
+                series[f"plots/{group}/{name}:track"] = name
+        for path, name in series.items():
+            label = path.rsplit("/", 1)[-1]  # "hough:track" keeps its suffix in the legend
+            width = 3.0 if name == FUSED else 1.5
+            rec.log(path, rr.SeriesLines(colors=[self._colour(name)], names=[label],
+                                         widths=[width]), static=True)
+        car_series = {"plots/car/offset_m": ("offset (m)", (0, 140, 230)),
+                      "plots/car/steer": ("steer", (220, 20, 20)),
+                      "plots/car/throttle": ("throttle", (30, 170, 30)),
+                      "plots/speed/speed_mps": ("speed (m/s)", (190, 50, 190))}
+        for path, (label, rgb) in car_series.items():
+            rec.log(path, rr.SeriesLines(colors=[rgb], names=[label], widths=[1.5]), static=True)
+
+    def _log_scalars(self, step, truth: _Truth) -> None:
+        rr, rec = self._rr, self._rec
+        est = self.scenario.estimation
+        rec.log(f"plots/offset/{TRUTH}", rr.Scalars(truth.offset_m(est.offset_lookahead_m)))
+        for name, estimate in step.estimates.items():
+            value = step.reference_m if name == REFERENCE else estimate.offset_m
+            if not estimate.valid or value is None:
+                continue
+            x_m = step.reference_x_m if name == REFERENCE else estimate.x_m
+            rec.log(f"plots/offset/{name}", rr.Scalars(value))
+            rec.log(f"plots/error/{name}", rr.Scalars(value - truth.offset_m(x_m)))
+        x_out = step.output_x_m
+        for name, value in step.track_offsets_m.items():
+            if value is not None:
+                rec.log(f"plots/offset/{name}:track", rr.Scalars(value))
+                rec.log(f"plots/error/{name}:track", rr.Scalars(value - truth.offset_m(x_out)))
+        if step.output_offset_m is not None:
+            rec.log(f"plots/offset/{FUSED}", rr.Scalars(step.output_offset_m))
+            rec.log(f"plots/error/{FUSED}", rr.Scalars(
+                step.output_offset_m - truth.offset_m(x_out)))
+        for name, p in zip(self._view.models, np.asarray(step.probabilities), strict=False):
+            rec.log(f"plots/probability/{name}", rr.Scalars(float(p)))
+        for name, r in zip(self._view.models, step.mmae_residuals_m, strict=False):
+            if np.isfinite(r):  # NaN: that model was not compared
+                rec.log(f"plots/residual/{name}", rr.Scalars(float(r)))
+        rec.log("plots/car/offset_m", rr.Scalars(truth.offset_m(0.0)))
+        rec.log("plots/speed/speed_mps", rr.Scalars(float(step.speed_mps)))
+        rec.log("plots/car/steer", rr.Scalars(float(step.steer)))
+        signals = step.signals  # what the car's sensors told the estimator
+        rec.log("plots/sensors/speed_mps", rr.Scalars(float(signals.speed_mps)))
+        rec.log("plots/sensors/yaw_rate_rps", rr.Scalars(float(signals.yaw_rate_rps)))
+        rec.log("plots/sensors/accel_lat_mps2", rr.Scalars(float(signals.accel_lat_mps2)))
+        rec.log("plots/car/throttle", rr.Scalars(float(step.throttle)))
+
+    def _log_events(self, step) -> None:
+        names = self._view.models
+        lines: list[tuple[str, str]] = []
+        if self._selected is not None and step.selected != self._selected:
+            p = float(np.asarray(step.probabilities)[step.selected])
+            lines.append(("INFO", f"model switch: {names[self._selected]} -> "
+                                  f"{names[step.selected]} (p = {p:.2f})"))
+        self._selected = int(step.selected)
+        for name, status in getattr(step, "tracker_status", {}).items():
+            if status == "gated":
+                lines.append(("WARN", f"tracker {name}: measurement gated"))
+        for name, estimate in step.estimates.items():
+            was = self._valid.get(name)
+            if was is not None and was != estimate.valid:
+                text = "lane found" if estimate.valid else f"lane lost ({estimate.reason})"
+                lines.append(("INFO", f"detector {name}: {text}"))
+            self._valid[name] = estimate.valid
+        for text in step.events:
+            level = ("WARN" if "departure" in text else
+                     "ERROR" if "failed" in text or "returned" in text else "INFO")
+            lines.append((level, text))
+        for level, text in lines:
+            self._rec.log("events", self._rr.TextLog(text, level=level))
+
+    def _lanes(self, step) -> Iterator[tuple[str, str, list[np.ndarray] | None]]:
+        """(source, camera, vehicle-frame polylines or None when it has none) per estimate,
+        then the lane the controller follows (its centre)."""
+        cameras = self._view.cameras
+        for name, cam_name in self._sources().items():
+            e = step.estimates.get(name)
+            x_range = _camera_x_range(cameras[cam_name])
+            yield name, cam_name, (None if e is None or not e.valid else
+                                   [_poly_points(c, x_range) for c in (e.left, e.right)
+                                    if c is not None])
+        centre = step.output_centre
+        x_range = _camera_x_range(cameras["front"])
+        yield OUTPUT, "front", None if centre is None else [_poly_points(centre, x_range)]
+
+    def _log_cameras(self, step, truth: _Truth) -> None:
+        rr, rec, cameras = self._rr, self._rec, self._view.cameras
+        for cam_name, frame in step.frames.items():
+            RENDERER_IDLE.wait()
+            rec.log(f"cameras/{cam_name}/image", self._jpeg(frame))
+            x_range = _camera_x_range(cameras[cam_name])
+            strips = [strip for b in truth.lines.boundaries(*x_range)
+                      for strip in _pixel_strips(cameras[cam_name], b)]
+            rec.log(f"cameras/{cam_name}/lanes/{TRUTH}",
+                    rr.LineStrips2D(strips, colors=[colour(TRUTH)], radii=1.5))
+        for name, cam_name, lines in self._lanes(step):
+            base = f"cameras/{cam_name}/lanes/{name}"
+            if lines is None:
+                rec.log(base, rr.Clear(recursive=True))
+                continue
+            camera, rgb = cameras[cam_name], self._colour(name)
+            rec.log(f"{base}/{'centre' if name == OUTPUT else 'boundaries'}",
+                    rr.LineStrips2D([s for line in lines for s in _pixel_strips(camera, line)],
+                                    colors=[rgb],
+                                    radii=1.5 if name == OUTPUT else 2.0))
+            estimate = step.estimates.get(name)
+            points = [np.asarray(p, dtype=float).reshape(-1, 2)
+                      for p in (estimate.image_points.values() if estimate else ())]
+            points = [p[:: max(1, len(p) // MAX_POINTS_PER_SIDE)] for p in points]
+            points = [p[(p[:, 0] >= 0) & (p[:, 0] <= camera.width) & (p[:, 1] >= 0)
+                        & (p[:, 1] <= camera.height)] for p in points]
+            if points:
+                rec.log(f"{base}/points", rr.Points2D(np.concatenate(points), colors=[rgb],
+                                                      radii=2.0))
+
+    def _jpeg(self, frame: np.ndarray):
+        """The frame as a JPEG blob. OpenCV's libjpeg-turbo encodes a 1280x720 frame in about
+        3 ms, rerun's `Image.compress` (Pillow, which also decodes its result) in about 5: on
+        two cores the writer thread takes that time from the loop."""
+        ok, data = cv2.imencode(".jpg", cv2.cvtColor(frame, cv2.COLOR_RGB2BGR),
+                                [cv2.IMWRITE_JPEG_QUALITY, self.jpeg_quality])
+        if not ok:
+            raise RuntimeError("JPEG encoding of a camera frame failed")
+        return self._rr.EncodedImage(contents=data.tobytes(), media_type="image/jpeg")
+
+    def _log_world(self, step, pose) -> None:
+        rr, rec = self._rr, self._rec
+        x, y, yaw = pose
+        rec.log("world/car", rr.Transform3D(translation=[x, y, 0.0],
+                                            rotation=rr.RotationAxisAngle(axis=[0, 0, 1],
+                                                                          radians=yaw)))
+        path = np.asarray(self._path, dtype=np.float32)
+        rec.log("world/path", rr.LineStrips3D([_lifted(path)], colors=[PATH_COLOUR],
+                                              radii=0.12))
+        length, width = self._view.car_size_m
+        rec.log("map/path", rr.LineStrips2D([_map_xy(path)], colors=[PATH_COLOUR],
+                                            radii=rr.Radius.ui_points(1.5)))
+        rec.log("map/car", rr.LineStrips2D([_map_xy(car_footprint(pose, length, width))],
+                                           colors=[CAR_COLOUR], radii=0.25))
+        rec.log("map/car/marker", rr.Points2D(_map_xy(np.array([[x, y]])), colors=[CAR_COLOUR],
+                                              radii=rr.Radius.ui_points(5.0)))
+        for name, _, lines in self._lanes(step):
+            if lines is None:
+                rec.log(f"world/lanes/{name}", rr.Clear(recursive=False))
+                continue
+            strips = [_lifted(vehicle_to_world(line, pose)) for line in lines]
+            rec.log(f"world/lanes/{name}", rr.LineStrips3D(strips, colors=[self._colour(name)],
+                                                           radii=0.08))
+
+
+def _lifted(xy: np.ndarray) -> np.ndarray:
+    """Ground polyline (N, 2) to 3D points just above the road."""
+    return np.column_stack([xy, np.full(len(xy), LINE_Z_M, dtype=xy.dtype)])

@@ -1,0 +1,283 @@
+"""Episode metrics: per detector, for the reference (the paper's "observer") and the fused output.
+
+Definitions (all against ground truth from the road, never from images):
+  - offset RMSE / max error (cm): the estimate's offset vs the true offset at the same
+    look-ahead x_m, over the steps where the source had a valid estimate. A front model's is
+    its raw detection (the detector as the paper's Tables 3-4 score it) at the detector's own
+    look-ahead; "<model>:track" is that model's own Kalman track at the fused output's
+    look-ahead, so that the fused output (by default the selected model's track) is compared
+    like for like;
+  - the lane behind ADE / FDE is the source's lane centre line: a raw detection's centre (one
+    boundary shifted by the estimator's measured lane width), a model's track, the fused lane;
+  - ADE / FDE (cm) of a tracked lane centre line: at each step, the lateral error
+    |y_est(x) - y_true(x)| at look-ahead points x_1 < ... < x_N, default x = 4, 6, ..., 20 m
+    (ADE_POINTS_M: the front detectors' ground window, detectors.toml [profiles.front], so no
+    source is scored on extrapolation beyond what the cameras see). y_true is the road's exact
+    lane centre at each x (`ground_truth.lane_centre_at`), not a polynomial fitted to it. ADE is
+    the error's mean over the points and the steps, FDE its mean over the steps at the farthest
+    point x_N = 20 m (the trajectory-forecasting convention, with distance ahead in place of
+    time). A quadratic estimate cannot follow a tight arc exactly: on case2_sharp_turn's 40 m
+    radius even the best quadratic over 4-20 m scores ADE ~0.9 cm, FDE ~2.4 cm;
+  - valid share: the share of steps with a valid estimate (time with none is reported too);
+  - the car's own lateral error: RMS and max of the true offset at x = 0;
+  - lane departures: times a wheel's contact point crosses an ego-lane boundary (counted on
+    entry, not per step);
+  - MMAE switches: changes of the selected model.
+
+An episode ends with a status (STATUSES): "completed" (all its steps), "off_road" (the car left
+the road: lanekeep/loop/episode.py; the step on which it left is scored, the ones it never drove are
+not), "interrupted" (Ctrl-C, SIGTERM) or "unstable" (the physics blew up). `criteria` holds the
+pass/fail verdicts of lanekeep/scoring/criteria.py once a report has been judged.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, field
+
+import numpy as np
+
+from lanekeep.detectors.base import poly_eval
+
+# Look-ahead points (m) of ADE / FDE: the front detectors' window, 4-20 m, every 2 m.
+ADE_POINTS_M = (4.0, 6.0, 8.0, 10.0, 12.0, 14.0, 16.0, 18.0, 20.0)
+STATUSES = ("completed", "off_road", "interrupted", "unstable")
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """One pass/fail criterion of an episode: its limit, the episode's value and the outcome.
+    `value` is None where the episode has none (a fused RMSE with no valid estimate: fails)."""
+
+    name: str  # e.g. "lane_departures", "car_lateral_error_m", "status"
+    limit: float | int | str
+    value: float | int | str | None
+    passed: bool
+
+    def line(self) -> str:
+        """"lane_departures  2  (must be <= 0)  FAIL": one row of the report's table."""
+        value = "-" if self.value is None else (
+            f"{self.value:.3f}" if isinstance(self.value, float) else str(self.value))
+        limit = self.limit if isinstance(self.limit, str) else f"<= {self.limit:g}"
+        return (f"{self.name:<20}{value:>10}  (must be {limit})  "
+                f"{'ok' if self.passed else 'FAIL'}")
+
+
+@dataclass(frozen=True)
+class SourceReport:
+    """Accuracy of one offset source over an episode (cm).
+
+    `drift_cm` is paper 000's frame-to-frame drift: over consecutive steps where the source
+    has an offset, the RMS of its change from the last step minus the true offset's change
+    (the car's own motion is in both, so what is left is jitter and lag). NaN with fewer than
+    two consecutive offsets."""
+
+    rmse_cm: float
+    max_cm: float
+    ade_cm: float
+    fde_cm: float
+    valid_share: float
+    drift_cm: float = math.nan
+
+
+@dataclass(frozen=True)
+class EpisodeReport:
+    scenario: str
+    seed: int
+    duration_s: float
+    steps: int
+    sources: dict[str, SourceReport]
+    car_rms_cm: float
+    car_max_cm: float
+    lane_departures: int
+    mmae_switches: int
+    no_estimate_s: float
+    reference_repairs: int
+    completed: bool = True
+    wall_s: float = 0.0
+    stop_reason: str = ""  # why an incomplete episode stopped ("" when completed)
+    status: str = "completed"  # one of STATUSES; `completed` is status == "completed"
+    criteria: tuple[Verdict, ...] = ()  # pass/fail verdicts (lanekeep/scoring/criteria.py), if judged
+    # (nearest, farthest) look-ahead (m) of ADE / FDE, for the table's footer.
+    ade_range_m: tuple[float, float] = (ADE_POINTS_M[0], ADE_POINTS_M[-1])
+
+    def __post_init__(self) -> None:
+        # A report read back from JSON carries a list; keep reports equal after a round trip.
+        object.__setattr__(self, "ade_range_m", tuple(float(v) for v in self.ade_range_m))
+        object.__setattr__(self, "criteria", tuple(
+            v if isinstance(v, Verdict) else Verdict(**v) for v in self.criteria))
+        if self.status == "completed" and not self.completed:  # a document from before `status`
+            object.__setattr__(self, "status", "interrupted" if self.stop_reason in
+                               ("", "interrupted") else "unstable")
+        if self.status not in STATUSES:
+            raise ValueError(f"status must be one of {STATUSES}, got {self.status!r}")
+        if self.completed != (self.status == "completed"):
+            raise ValueError(f"completed = {self.completed} contradicts status {self.status!r}")
+
+    @property
+    def passed(self) -> bool:
+        """Every criterion met (True for a report not judged: no criteria)."""
+        return all(v.passed for v in self.criteria)
+
+    def failed_criteria(self) -> list[Verdict]:
+        return [v for v in self.criteria if not v.passed]
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+    def table(self) -> str:
+        """The paper's Table 3-4 layout: columns = sources, rows = metrics (cm)."""
+        names = list(self.sources)
+        width = max(10, *(len(n) for n in names))
+        rows = [("RMSE", "rmse_cm"), ("max error", "max_cm"), ("ADE", "ade_cm"),
+                ("FDE", "fde_cm"), ("drift", "drift_cm"), ("valid %", "valid_share")]
+        lines = [f"{'(cm)':<10}" + "".join(f"{n:>{width + 2}}" for n in names)]
+        for label, key in rows:
+            cells = []
+            for n in names:
+                value = getattr(self.sources[n], key)
+                value = value * 100.0 if key == "valid_share" else value
+                cells.append(f"{'-' if math.isnan(value) else f'{value:.2f}':>{width + 2}}")
+            lines.append(f"{label:<10}" + "".join(cells))
+        lines.append(
+            f"car: lateral RMS {self.car_rms_cm:.1f} cm, max {self.car_max_cm:.1f} cm; "
+            f"lane departures {self.lane_departures}; MMAE switches {self.mmae_switches}; "
+            f"reference repairs {self.reference_repairs}; no estimate {self.no_estimate_s:.1f} s"
+            + ("" if self.completed else f"  [STOPPED ({self.status.replace('_', ' ')}): "
+               f"partial episode: {self.stop_reason or self.status}]")
+        )
+        near, far = self.ade_range_m
+        lines.append(f"ADE/FDE: lane centre vs exact road geometry at x = {near:g}-{far:g} m "
+                     f"ahead; FDE at {far:g} m; drift: RMS of the offset's change between "
+                     "frames minus the true change")
+        if self.criteria:
+            lines.append(f"criteria: {'PASS' if self.passed else 'FAIL'}")
+            lines.extend("  " + v.line() for v in self.criteria)
+        return "\n".join(lines)
+
+
+@dataclass
+class _ErrorSums:
+    """Running sums of a signed error (m): what RMSE and max need, in constant memory, so an
+    hour-long episode (tools/soak) does not hold every step's value."""
+
+    count: int = 0
+    sum_sq: float = 0.0
+    max_abs: float = 0.0
+
+    def add(self, error_m: float) -> None:
+        self.count += 1
+        self.sum_sq += error_m * error_m
+        self.max_abs = max(self.max_abs, abs(error_m))
+
+    def rms_cm(self) -> float:
+        return math.sqrt(self.sum_sq / self.count) * 100 if self.count else math.nan
+
+    def max_cm(self) -> float:
+        return self.max_abs * 100 if self.count else math.nan
+
+
+@dataclass
+class _SourceAccumulator:
+    offsets: _ErrorSums = field(default_factory=_ErrorSums)
+    drift: _ErrorSums = field(default_factory=_ErrorSums)
+    last: tuple[float, float] | None = None  # (estimate, truth) of the previous step, if valid
+    lanes: int = 0               # steps with a lane centre line
+    lateral_sum_m: float = 0.0   # sum over those steps of the mean error over the ADE points
+    final_sum_m: float = 0.0     # sum over those steps of the error at the last ADE point
+    valid: int = 0
+    steps: int = 0
+
+
+class Metrics:
+    """Accumulates per-step errors; `report()` summarises them."""
+
+    def __init__(self, source_names: list[str], ade_points_m: tuple[float, ...] = ADE_POINTS_M
+                 ) -> None:
+        self.ade_points_m = np.asarray(ade_points_m, dtype=float)
+        if self.ade_points_m.ndim != 1 or not np.all(np.diff(self.ade_points_m) > 0):
+            raise ValueError(f"ade_points_m must increase (FDE is at the last), got {ade_points_m}")
+        self._sources = {name: _SourceAccumulator() for name in source_names}
+        self._car = _ErrorSums()
+        self._departed = False
+        self.lane_departures = 0
+        self.mmae_switches = 0
+        self.reference_repairs = 0
+        self._no_estimate_steps = 0
+        self._last_selected: int | None = None
+
+    def add_offset(self, name: str, estimate_m: float | None, truth_m: float) -> None:
+        acc = self._sources[name]
+        acc.steps += 1
+        if estimate_m is not None and math.isfinite(estimate_m):
+            acc.valid += 1
+            acc.offsets.add(estimate_m - truth_m)
+            if acc.last is not None:
+                acc.drift.add((estimate_m - acc.last[0]) - (truth_m - acc.last[1]))
+            acc.last = (estimate_m, truth_m)
+        else:
+            acc.last = None
+
+    def add_lane(self, name: str, centre: np.ndarray | None, truth_y: np.ndarray) -> None:
+        """Lateral errors of lane centre `centre` ([c0, c1, c2]; None = no lane this step)
+        against the true centre's y (m) at `self.ade_points_m` (`ground_truth.lane_centre_at`)."""
+        truth_y = np.asarray(truth_y, dtype=float)
+        if truth_y.shape != self.ade_points_m.shape:
+            raise ValueError(f"truth_y must hold y at the {len(self.ade_points_m)} ADE points, "
+                             f"got shape {truth_y.shape}")
+        if centre is None:
+            return
+        error = np.abs(poly_eval(centre, self.ade_points_m) - truth_y)
+        acc = self._sources[name]
+        acc.lanes += 1
+        acc.lateral_sum_m += float(error.mean())
+        acc.final_sum_m += float(error[-1])
+
+    def add_car(self, true_offset_m: float, wheels_outside_lane: bool) -> None:
+        self._car.add(true_offset_m)
+        if wheels_outside_lane and not self._departed:
+            self.lane_departures += 1
+        self._departed = wheels_outside_lane
+
+    def add_selection(self, selected: int, reference_repaired: bool) -> None:
+        if self._last_selected is not None and selected != self._last_selected:
+            self.mmae_switches += 1
+        self._last_selected = selected
+        self.reference_repairs += int(reference_repaired)
+
+    def add_no_estimate(self) -> None:
+        self._no_estimate_steps += 1
+
+    def report(self, scenario: str, seed: int, dt_s: float, completed: bool = True,
+               wall_s: float = 0.0, stop_reason: str = "", status: str | None = None
+               ) -> EpisodeReport:
+        """The report so far; `status` defaults to "completed" / "interrupted" by `completed`."""
+        sources = {}
+        for name, acc in self._sources.items():
+            sources[name] = SourceReport(
+                rmse_cm=acc.offsets.rms_cm(),
+                max_cm=acc.offsets.max_cm(),
+                ade_cm=acc.lateral_sum_m / acc.lanes * 100 if acc.lanes else math.nan,
+                fde_cm=acc.final_sum_m / acc.lanes * 100 if acc.lanes else math.nan,
+                valid_share=acc.valid / acc.steps if acc.steps else 0.0,
+                drift_cm=acc.drift.rms_cm(),
+            )
+        car = self._car
+        return EpisodeReport(
+            scenario=scenario,
+            seed=seed,
+            duration_s=car.count * dt_s,
+            steps=car.count,
+            sources=sources,
+            car_rms_cm=car.rms_cm(),
+            car_max_cm=car.max_cm(),
+            lane_departures=self.lane_departures,
+            mmae_switches=self.mmae_switches,
+            no_estimate_s=self._no_estimate_steps * dt_s,
+            reference_repairs=self.reference_repairs,
+            completed=completed,
+            wall_s=wall_s,
+            stop_reason=stop_reason,
+            status=status or ("completed" if completed else "interrupted"),
+            ade_range_m=(float(self.ade_points_m[0]), float(self.ade_points_m[-1])),
+        )

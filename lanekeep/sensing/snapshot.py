@@ -1,0 +1,103 @@
+"""Snapshots of a scenario: front/rear RGB and colourised segmentation PNGs at a road pose.
+
+The RGB frames are what the car's cameras deliver: the render with the scenario's weather (fog,
+rain, snow, motion blur, from the render's depth) and camera model (vignetting, exposure, noise,
+tone, JPEG), drawn from the scenario seed as an episode draws them, so the snapshot at the
+start pose is the episode's first frame; `effects=False` gives the bare render (without fog
+where the scenario's fog is done in image space).
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from lanekeep.core.config_io import ConfigError
+from lanekeep.scenario.schema import Scenario, ScenarioError
+from lanekeep.sensing.cameras import CameraRig, RenderSettings
+from lanekeep.sensing.image_effects import ImageEffects
+from lanekeep.world.build import World, build
+
+
+def place_on_road(world: World, s_m: float, offset_m: float = 0.0, heading_deg: float = 0.0,
+                  speed_mps: float = 0.0) -> tuple[float, float, float]:
+    """Put the car in the ego lane at arc length s with an offset and heading error."""
+    road, lane = world.road, world.scenario.road.ego_lane
+    x, y = road.position(s_m, road.lane_center_r(lane) + offset_m)
+    yaw = float(road.heading_at(s_m)) + math.radians(heading_deg)
+    world.car.place(float(x), float(y), yaw, speed_mps)
+    return float(x), float(y), yaw
+
+
+def colourise_segmentation(world: World, geom_ids: np.ndarray) -> np.ndarray:
+    """RGB image: markings coloured per boundary, other geoms in grey shades, sky black."""
+    palette = np.array(
+        [[255, 80, 80], [80, 255, 80], [80, 160, 255], [255, 220, 60], [220, 80, 255]], np.uint8
+    )
+    out = np.zeros(geom_ids.shape + (3,), np.uint8)
+    known = geom_ids >= 0
+    out[known] = (40 + (geom_ids[known] * 37) % 120)[:, None].astype(np.uint8)
+    boundaries = np.append(world.marking_boundary, -1)[geom_ids]
+    marked = boundaries >= 0
+    out[marked] = palette[boundaries[marked] % len(palette)]
+    return out
+
+
+def make_effects(scenario: Scenario, world: World, rig: CameraRig,
+                 rng: np.random.Generator) -> dict[str, ImageEffects]:
+    """The image effects of each camera, as `Episode` makes them (same draws from `rng`)."""
+    airlight = 255.0 * world.model.vis.rgba.fog[:3]
+    settings = rig.settings
+    return {cam: ImageEffects(scenario.conditions, settings.height, settings.width, rng,
+                              scenario.camera, rig.cameras[cam], airlight,
+                              scenario.control_period_s)
+            for cam in rig.CAMERA_NAMES}
+
+
+def camera_frame(rig: CameraRig, world: World, cam: str, effects: ImageEffects | None,
+                 rng: np.random.Generator, speed_mps: float) -> np.ndarray:
+    """What camera `cam` delivers now: the render (with its depth where the weather needs
+    it) through its effects; `effects=None` gives the bare render."""
+    if rig.settings.depth:
+        rgb, depth = rig.render_rgb_depth(world.data, cam)
+    else:
+        rgb, depth = rig.render_rgb(world.data, cam), None
+    return rgb if effects is None else effects(rgb, rng, speed_mps=speed_mps, depth_m=depth)
+
+
+def render_snapshot(scenario: Scenario, out_dir: Path, at_s: float | None = None,
+                    offset_m: float = 0.0, heading_deg: float = 0.0,
+                    effects: bool = True) -> list[Path]:
+    """Writes front.png, rear.png, front_seg.png, rear_seg.png; returns their paths.
+
+    Raises:
+      ConfigError: `at_s` is off the road (key "--at"); ScenarioError: the start is.
+    """
+    s = scenario.start.s_m if at_s is None else at_s
+    length = scenario.road.length_m
+    if not 0.0 <= s <= length:  # before the build (~1 s) and before any file is written
+        where = f"is outside the road (0..{length:g} m)"
+        if at_s is None:
+            raise ScenarioError(scenario.source or scenario.name, "start.s_m", f"{s:g} m {where}")
+        raise ConfigError("", "--at", f"{s:g} m {where}")
+    world = build(scenario)
+    place_on_road(world, s, offset_m, heading_deg)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    written = []
+    settings = RenderSettings.of(scenario)
+    speed = scenario.start.speed_mps
+    with CameraRig(world.model, settings) as rig:
+        rng = np.random.default_rng(scenario.seed)  # as Episode: one stream, cameras in order
+        camera_effects = make_effects(scenario, world, rig, rng)
+        for cam in rig.CAMERA_NAMES:
+            rgb = camera_frame(rig, world, cam, camera_effects[cam] if effects else None, rng,
+                               speed)
+            seg = colourise_segmentation(world, rig.render_segmentation(world.data, cam))
+            for name, image in ((f"{cam}.png", rgb), (f"{cam}_seg.png", seg)):
+                path = out_dir / name
+                cv2.imwrite(str(path), cv2.cvtColor(image, cv2.COLOR_RGB2BGR))
+                written.append(path)
+    return written

@@ -1,0 +1,297 @@
+"""Weather and motion between the scene and the lens: fog, falling rain, snowflakes, drops on
+the lens, motion blur. They use the render's depth (lanekeep/sensing/cameras.py reads it from the same
+pass as the colour) so that they sit in the scene, not on top of it.
+
+  - Fog: Koschmieder's law on the range of every pixel, I = I0 t + A (1 - t) with
+    t = exp(-3 d / V) (V: the meteorological visibility, 5% contrast left), A the airlight (the
+    fog colour the world gives the sky's horizon). It replaces MuJoCo's linear fog, which is a
+    wall at 0.6 V.
+  - Rain: streaks in three depth layers (0.8-2, 2-5, 5-12 m), each hidden where the scene is
+    nearer than its layer. A drop's image motion during the exposure is its fall plus the car's
+    motion: away from the focus of expansion on the front camera, towards the focus of
+    contraction on the rear one, longer the nearer the drop. A streak blends towards the
+    airlight (a drop refracts the sky), so it shows on the road and hardly on the sky.
+  - Wet road: a screen-space reflection. On ground pixels (the depth matches the flat ground's)
+    the scene above the horizon is mirrored about the horizon row (distant objects reflect
+    there on a flat wet surface), blurred vertically (a rough water film), and blended with
+    Schlick's Fresnel reflectance of water (R0 = 0.02) at the ray's grazing angle, times
+    WET_FILM * wet (the share of the surface under a water film).
+  - Headlights in fog (dawn, dusk, night; front camera): the fog scatters the beams back to the
+    camera, a veil over the lit cone that grows with the fog along the ray: HEADLIGHT_VEIL x
+    the beam's strength along the ray x (1 - exp(-3 min(d, HEADLIGHT_REACH_M) / V)). A low
+    beam is wide and cut off sharply above its axis: Gaussian in azimuth (HEADLIGHT_SPREAD_DEG)
+    and in elevation, narrow above the axis (HEADLIGHT_CUT_DEG) and wide below it.
+  - Motion blur: a zoom blur about the focus of expansion (the image flow of forward motion
+    grows with the distance from it), scaled by the speed.
+  - Snowflakes and lens drops as before (flakes of three sizes; drops that stay on the lens and
+    slide down).
+
+Every random choice per frame comes from the generator passed in; `Weather` is made once per
+camera and episode.
+"""
+
+from __future__ import annotations
+
+import math
+
+import cv2
+import numpy as np
+
+from lanekeep.geometry.camera_model import CameraModel
+from lanekeep.scenario.schema import Conditions
+from lanekeep.world.lighting import fog_visibility_m
+
+DEPTH_STEP_PX = 4  # the depth map is read at a quarter of the image resolution
+RAIN_LAYERS_M = ((0.8, 2.0), (2.0, 5.0), (5.0, 12.0))  # near and far edge of each layer
+RAIN_STREAKS_PER_LAYER = (350, 550, 700)  # at rain = 1 on a 1280x720 frame
+RAIN_FALL_MPS = 7.0  # terminal velocity of a rain drop
+EXPOSURE_S = 0.005  # the camera's exposure time: how long a drop's streak is
+WATER_R0 = 0.02  # Fresnel reflectance of water at normal incidence
+WET_FILM = 0.5  # share of the road under a mirror-like water film at wet = 1
+REFLECTION_BLUR = 15  # vertical blur of the reflection at 720 rows (a rough film)
+# The ego car's low beams (lanekeep/world_lighting.add_car_lights): their axis in the vehicle
+# frame, cone, and how far their light reaches into the fog; the veil's strength at full beam.
+HEADLIGHT_AXIS_DEG = -2.0  # elevation of the beams' axis
+HEADLIGHT_SPREAD_DEG = 18.0  # Gaussian width in azimuth and below the axis
+HEADLIGHT_CUT_DEG = 2.0  # ... and above it: the low beam's cut-off line
+HEADLIGHT_REACH_M = 40.0
+HEADLIGHT_VEIL = 0.25
+HEADLIGHT_RGB = (255.0, 247.0, 230.0)
+BLUR_SCALE_PER_MPS = 0.0022  # zoom-blur scale per m/s at motion_blur = 1 (9 px at the bottom)
+
+
+def needs_depth(conditions: Conditions) -> bool:
+    """Whether a scenario's weather needs the depth render (fog, rain or a wet road)."""
+    return conditions.fog > 0.0 or conditions.rain > 0.0 or conditions.wet > 0.0
+
+
+def focus_of_expansion(camera: CameraModel, forward: bool) -> np.ndarray:
+    """Pixel (u, v) where the car's straight-ahead (or straight-behind) direction projects."""
+    uv, _ = camera.project(camera.position_m + [1000.0 if forward else -1000.0, 0.0, 0.0])
+    return np.asarray(uv, dtype=float).reshape(2)
+
+
+def _enlarged(small: np.ndarray, factor: int, x0: int, x1: int, y0: int, y1: int
+              ) -> np.ndarray:
+    """Rows y0..y1 and columns x0..x1 of `small` enlarged `factor` times, sampled as
+    cv2.resize's bilinear enlargement samples it (pixel centres aligned)."""
+    xs = ((np.arange(x0, x1, dtype=np.float32) + 0.5) / factor - 0.5)[None, :]
+    ys = ((np.arange(y0, y1, dtype=np.float32) + 0.5) / factor - 0.5)[:, None]
+    map_x = np.broadcast_to(xs, (y1 - y0, x1 - x0))
+    map_y = np.broadcast_to(ys, (y1 - y0, x1 - x0))
+    return cv2.remap(small, np.ascontiguousarray(map_x), np.ascontiguousarray(map_y),
+                     cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+
+
+class Weather:
+    """The weather of one scenario for one camera (`camera`: its model at the frame size)."""
+
+    def __init__(self, conditions: Conditions, camera: CameraModel, airlight_rgb,
+                 rng: np.random.Generator) -> None:
+        self.conditions = c = conditions
+        self.camera = camera
+        self.height, self.width = h, w = camera.height, camera.width
+        self.scale = h / 720.0
+        self.forward = camera.rotation[0, 2] < 0.0  # optical axis (-z) points along +x
+        self.foe = focus_of_expansion(camera, self.forward)
+        self.airlight = np.asarray(airlight_rgb, dtype=float)
+        # Range per unit z-depth at the depth map's pixels (the ray's length to its z).
+        v, u = np.mgrid[DEPTH_STEP_PX // 2:h:DEPTH_STEP_PX, DEPTH_STEP_PX // 2:w:DEPTH_STEP_PX]
+        self.ray_factor = np.sqrt(1.0 + ((u - camera.cx) / camera.fx) ** 2
+                                  + ((v - camera.cy) / camera.fy) ** 2).astype(np.float32)
+        self.extinction_per_m = 3.0 / fog_visibility_m(c.fog) if c.fog > 0.0 else 0.0
+        air = np.clip(np.round(self.airlight), 0, 255).astype(np.uint8)
+        self.air_image = np.empty((h, w, 3), np.uint8)
+        self.air_image[:] = air
+        veil = 0.35 * c.snow
+        self.snow_veil = np.round(np.arange(256) * (1.0 - veil) + 235.0 * veil).astype(np.uint8)
+        self._init_reflection(camera, v, u)
+        lit = c.fog > 0.0 and c.time_of_day != "day" and self.forward
+        self.beam = self._beam(camera, v, u) if lit else None
+        # Lens drops: centre (x, y), radius in pixels; they stay and slide down.
+        n_drops = int(round(14 * c.rain))
+        r = rng.uniform(8.0, 30.0, n_drops) * self.scale
+        self.drops = np.c_[rng.uniform(0, w, n_drops), rng.uniform(0, h, n_drops), r]
+
+    @staticmethod
+    def _blend(image: np.ndarray, other: np.ndarray, alpha: np.ndarray) -> np.ndarray:
+        """image (1 - alpha) + other alpha, alpha uint8 (H, W) in 1/255."""
+        a3 = cv2.merge([alpha, alpha, alpha])
+        return cv2.add(cv2.multiply(image, 255 - a3, scale=1 / 255),
+                       cv2.multiply(other, a3, scale=1 / 255))
+
+    def _full(self, small: np.ndarray, interpolation=cv2.INTER_LINEAR) -> np.ndarray:
+        return cv2.resize(small, (self.width, self.height), interpolation=interpolation)
+
+    def _init_reflection(self, camera: CameraModel, v: np.ndarray, u: np.ndarray) -> None:
+        """The flat ground's z-depth at the depth map's pixels, the horizon row, and the
+        reflection's strength per row below it."""
+        xy, valid = camera.pixels_to_ground(np.stack([u, v], -1).astype(float))
+        ground = np.concatenate([xy, np.zeros(xy.shape[:-1] + (1,))], -1)
+        z = camera.to_opencv_frame(np.where(valid[..., None], ground, 0.0))[..., 2]
+        self.ground_z = np.where(valid, z, np.inf).astype(np.float32)
+        self.horizon = int(np.clip(round(camera.horizon_row()), 1, self.height - 1))
+        rows = np.arange(self.height, dtype=float)
+        below = np.arctan(np.maximum(rows - camera.horizon_row(), 0.0) / camera.fy)
+        fresnel = WATER_R0 + (1 - WATER_R0) * (1.0 - np.sin(below)) ** 5
+        share = np.where(rows >= self.horizon, WET_FILM * self.conditions.wet * fresnel, 0.0)
+        self.reflect_alpha = np.round(255 * share).astype(np.uint8)[:, None]
+        self.reflect_rows = int(min(np.count_nonzero(self.reflect_alpha >= 5),
+                                    self.horizon, self.height - self.horizon))
+
+    @staticmethod
+    def _beam(camera: CameraModel, v: np.ndarray, u: np.ndarray) -> np.ndarray:
+        """The low beams' strength (0..1) along each depth-map pixel's ray."""
+        rays = camera.pixel_rays(np.stack([u, v], -1).astype(float))
+        azimuth = np.degrees(np.arctan2(rays[..., 1], rays[..., 0]))
+        elevation = np.degrees(np.arctan2(rays[..., 2], np.hypot(rays[..., 0], rays[..., 1])))
+        above = elevation - HEADLIGHT_AXIS_DEG
+        width = np.where(above > 0.0, HEADLIGHT_CUT_DEG, HEADLIGHT_SPREAD_DEG)
+        ahead = rays[..., 0] > 0.0
+        return np.where(ahead, np.exp(-(azimuth / HEADLIGHT_SPREAD_DEG) ** 2
+                                      - (above / width) ** 2), 0.0).astype(np.float32)
+
+    def headlight_veil(self, image: np.ndarray, depth_m: np.ndarray) -> np.ndarray:
+        """The beams' light scattered back by the fog (see the module docstring)."""
+        reach = np.minimum(depth_m * self.ray_factor, HEADLIGHT_REACH_M)
+        share = HEADLIGHT_VEIL * self.beam * (1.0 - np.exp(-self.extinction_per_m * reach))
+        veil = self._full(share)[..., None] * np.asarray(HEADLIGHT_RGB, np.float32)
+        return cv2.add(image, np.round(veil).astype(np.uint8))
+
+    def wet_reflection(self, image: np.ndarray, depth_m: np.ndarray) -> np.ndarray:
+        """Mirror the view above the horizon onto the wet ground below it (Fresnel-weighted)."""
+        n, top = self.reflect_rows, self.horizon
+        if n < 2:
+            return image
+        ground = np.abs(depth_m - self.ground_z) < 0.04 * self.ground_z
+        mask = self._full(ground.astype(np.uint8) * 255, cv2.INTER_LINEAR)[top:top + n]
+        mirror = image[top - n:top][::-1]
+        k = max(3, int(REFLECTION_BLUR * self.scale) | 1)
+        mirror = cv2.blur(mirror, (3, k))
+        alpha = cv2.multiply(mask, np.broadcast_to(self.reflect_alpha[top:top + n], mask.shape),
+                             scale=1 / 255)
+        out = image.copy()
+        out[top:top + n] = self._blend(image[top:top + n], mirror, alpha)
+        return out
+
+    def range_m(self, depth_m: np.ndarray) -> np.ndarray:
+        """Full-resolution distance of every pixel from the quarter-resolution z-depth."""
+        return self._full(depth_m * self.ray_factor)
+
+    # -- effects ------------------------------------------------------------------------------
+    def fog_alpha(self, depth_m: np.ndarray) -> np.ndarray:
+        """Koschmieder: the airlight's share 1 - exp(-3 d / V) of every pixel (uint8, 1/255)."""
+        transmit = np.exp(-self.extinction_per_m * depth_m * self.ray_factor)
+        return self._full(np.round(255.0 * (1.0 - transmit)).astype(np.uint8))
+
+    def motion_blur(self, image: np.ndarray, speed_mps: float) -> np.ndarray:
+        """Zoom blur about the focus of expansion: the frame and two exposures scaled 1 + k/2
+        and 1 + k, the scaled ones made at half resolution (they are blurred anyway)."""
+        k = BLUR_SCALE_PER_MPS * self.conditions.motion_blur * abs(speed_mps)
+        if k * math.hypot(self.width, self.height) / 2 < 1.5:
+            return image
+        w2, h2 = self.width // 2, self.height // 2
+        half = cv2.resize(image, (w2, h2), interpolation=cv2.INTER_AREA)
+        fx, fy = self.foe / 2.0
+        taps = []
+        for s in (1.0 + k / 2.0, 1.0 + k):
+            m = np.array([[s, 0.0, fx * (1 - s)], [0.0, s, fy * (1 - s)]])
+            taps.append(cv2.warpAffine(half, m, (w2, h2), borderMode=cv2.BORDER_REPLICATE))
+        scaled = self._full(cv2.addWeighted(taps[0], 0.5, taps[1], 0.5, 0.0))
+        return cv2.addWeighted(image, 1.0 / 3.0, scaled, 2.0 / 3.0, 0.0)
+
+    def rain_alpha(self, depth_m: np.ndarray, rng: np.random.Generator,
+                   speed_mps: float) -> np.ndarray:
+        """Streaks in depth layers, hidden behind nearer scene: their share of the airlight
+        (uint8, 1/255). A streak is drawn when the scene lies beyond its layer at both its
+        ends and its middle (the depth map's pixels there): one test per streak instead of a
+        full-frame mask per layer; a streak may cross a pole thinner than itself."""
+        amount = self.conditions.rain
+        h, w = self.height, self.width
+        f = self.camera.fy
+        sign = 1.0 if self.forward else -1.0  # away from / towards the focus
+        alpha = np.zeros((h, w), np.uint8)
+        dh, dw = depth_m.shape
+        for (near, far), count in zip(RAIN_LAYERS_M, RAIN_STREAKS_PER_LAYER, strict=True):
+            n = int(count * amount * (w * h) / (1280 * 720))
+            z = rng.uniform(near, far, n)
+            p0 = np.c_[rng.uniform(0, w, n), rng.uniform(0, h, n)]
+            velocity = sign * (p0 - self.foe) * abs(speed_mps)
+            velocity[:, 1] += f * RAIN_FALL_MPS
+            p1 = p0 + velocity * (EXPOSURE_S / z)[:, None]
+            visible = np.ones(n, bool)
+            for t in (0.0, 0.5, 1.0):
+                q = p0 + t * (p1 - p0)
+                col = np.clip((q[:, 0] // DEPTH_STEP_PX).astype(int), 0, dw - 1)
+                row = np.clip((q[:, 1] // DEPTH_STEP_PX).astype(int), 0, dh - 1)
+                visible &= depth_m[row, col] > near  # the scene lies beyond the layer
+            lines = np.stack([p0, p1], 1)[visible].round().astype(np.int32)
+            bright = int(round(255 * (0.15 + 0.25 * amount) * 1.8 / (1.0 + near)))
+            cv2.polylines(alpha, list(lines), False, bright, 1, cv2.LINE_AA)
+        return cv2.GaussianBlur(alpha, (3, 5), 0)
+
+    def lens_drops(self, image: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+        """Water drops on the lens: soft discs showing a blurred, brightened view. The blurred
+        view (1/8 size) and the discs' mask (1/4 size) are enlarged only around each drop."""
+        if len(self.drops) == 0:
+            return image
+        self.drops[:, 1] += rng.uniform(0.0, 1.5, len(self.drops)) * self.scale  # slide down
+        gone = self.drops[:, 1] - self.drops[:, 2] > self.height
+        self.drops[gone, 1] = -self.drops[gone, 2]
+        small = cv2.blur(cv2.resize(image, (self.width // 8, self.height // 8),
+                                    interpolation=cv2.INTER_AREA), (3, 3))
+        mask = np.zeros((self.height // 4, self.width // 4), np.uint8)
+        for x, y, r in self.drops:
+            cv2.circle(mask, (int(x / 4), int(y / 4)), max(1, int(r / 4)), 255, -1, cv2.LINE_AA)
+        mask = cv2.blur(mask, (3, 3))
+        out = image.copy()
+        for x, y, r in self.drops:  # blend only around each drop
+            x0, y0 = max(0, int(x - r - 6)), max(0, int(y - r - 6))
+            x1, y1 = min(self.width, int(x + r + 7)), min(self.height, int(y + r + 7))
+            if x1 > x0 and y1 > y0:
+                blurred = cv2.convertScaleAbs(_enlarged(small, 8, x0, x1, y0, y1), alpha=1.1,
+                                              beta=12)
+                out[y0:y1, x0:x1] = self._blend(image[y0:y1, x0:x1], blurred,
+                                                _enlarged(mask, 4, x0, x1, y0, y1))
+        return out
+
+    def snow(self, image: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+        """Flakes of three sizes, soft-edged (near ones larger and blurrier)."""
+        amount = self.conditions.snow
+        h, w = self.height, self.width
+        layer = np.zeros((h, w), np.uint8)
+        for radius, count in ((1, 1800), (2, 500), (4, 90)):
+            n = int(count * amount * (w * h) / (1280 * 720))
+            rad = max(1, int(round(radius * self.scale)))
+            dots = np.zeros((h, w), np.uint8)
+            dots[rng.integers(0, h, n), rng.integers(0, w, n)] = 255
+            kernel = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * rad + 1, 2 * rad + 1))
+            layer = cv2.max(layer, cv2.dilate(dots, kernel))
+        out = self._blend(image, np.full_like(image, 245), cv2.GaussianBlur(layer, (5, 5), 0))
+        return cv2.LUT(out, self.snow_veil)  # falling snow whitens the whole view
+
+    def __call__(self, image: np.ndarray, depth_m: np.ndarray | None,
+                 rng: np.random.Generator, speed_mps: float = 0.0) -> np.ndarray:
+        """The weather on one RGB uint8 frame; `depth_m` is the z-depth at every
+        DEPTH_STEP_PX-th pixel (needed when `needs_depth`). Returns the input when no weather."""
+        c = self.conditions
+        out = image
+        if c.motion_blur > 0.0:
+            out = self.motion_blur(out, speed_mps)
+        if c.wet > 0.0:
+            out = self.wet_reflection(out, depth_m)
+        if c.fog > 0.0 or c.rain > 0.0:  # both veil the scene with the airlight: one blend
+            alpha = self.fog_alpha(depth_m) if c.fog > 0.0 else None
+            if c.rain > 0.0:
+                streaks = self.rain_alpha(depth_m, rng, speed_mps)
+                # the streaks' share of what the fog leaves: a + s (1 - a)
+                alpha = streaks if alpha is None else cv2.add(
+                    alpha, cv2.multiply(streaks, 255 - alpha, scale=1 / 255))
+            out = self._blend(out, self.air_image, alpha)
+        if self.beam is not None:
+            out = self.headlight_veil(out, depth_m)
+        if c.snow > 0.0:
+            out = self.snow(out, rng)
+        if c.rain > 0.0:
+            out = self.lens_drops(out, rng)
+        return out

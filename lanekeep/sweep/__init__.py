@@ -1,0 +1,1 @@
+"""Grids of episodes over scenario parameters (local processes or Ray), their store and plots."""

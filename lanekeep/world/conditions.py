@@ -1,0 +1,84 @@
+"""What a scenario's conditions add to the MuJoCo world: light, shadows, bumps, wet, fog, traffic.
+
+Called by `world.build_spec` (`add_conditions`) after the road and markings exist; their look,
+the sky, sun and fog are decided from the scenario before the build (world_appearance.py).
+Everything is seeded from the scenario seed, so one scenario always builds the same world. The
+work is split by concern: lanekeep/world/lighting.py (car lights), world_roadside.py
+(shadows and casters, bumps, wet, snow), world_traffic.py (other vehicles).
+
+  - Sun and time of day: the sun's direction comes from `Conditions.sun_*`; dawn, dusk and night
+    dim the sun, the ambient light and the sky (decided before the build, world_appearance.py)
+    and switch on the car's headlights (two white spot lights, lit road ~35 m ahead) and a dim
+    red tail light (the rear camera sees ~8 m of road). MuJoCo lights per vertex, so with
+    headlights world.py meshes the asphalt as a 0.5 m grid.
+  - Hard shadows: shadow maps double the render cost on a CPU, so a building's or tree's shadow is
+    its silhouette cast along the sun onto the ground: a convex polygon drawn as a black
+    translucent overlay (group GROUP_SHADOW, hidden from the segmentation render so the marking
+    masks stay exact). The casters (boxes, trees) stand beside the road and are rendered too.
+  - Speed bumps: cylinders across the road sunk into the ground (a circular cap ~0.6 m long and
+    `speed_bump_height_m` high) that the tyres collide with; yellow with black stripes.
+  - Wet road: darker, glossier asphalt (a material tint, world_appearance.py) and puddles as
+    dark glossy overlays (group GROUP_SHADOW).
+  - Fog: MuJoCo's linear fog up to the visibility distance, in the sky's horizon colour.
+    Scenes without fog put it beyond the far clip plane, so the render flag can stay on.
+  - Snow: white verges (the grass and gravel materials use the snow texture made here) and snow
+    drifts over the asphalt shoulders.
+  - Other vehicles: cars, vans and trucks built from primitives (lanekeep/world/vehicle_assets.py:
+    wheels on the ground, windows, lights, contact and cast shadows) on mocap bodies moved
+    along their lanes by `update_dynamic(world, t_s)`; `occluded_marking_share` measures how
+    much paint they hide.
+"""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+
+from lanekeep.geometry.road import Road
+from lanekeep.scenario.schema import Scenario
+from lanekeep.world.lighting import (
+    LIGHTING,
+    add_car_lights,
+    fog_visibility_m,
+    sun_direction,
+)
+from lanekeep.world.parts import ConditionsInfo, WorldLayout
+from lanekeep.world.props import add_props
+from lanekeep.world.roadside import add_bumps, add_shadow_zone, add_snow, add_wet, overlay_alpha
+from lanekeep.world.traffic import add_vehicle
+
+
+def add_conditions(spec: mujoco.MjSpec, scenario: Scenario, road: Road,
+                   layout: WorldLayout | None = None) -> ConditionsInfo:
+    """Add the scenario's conditions to a spec that already holds the car, road and markings
+    (laid out by `layout`: shoulders, gravel, texture period)."""
+    layout = layout or WorldLayout()
+    cond = scenario.conditions
+    rng = np.random.default_rng([scenario.seed, 0xC0D])
+    info = ConditionsInfo(headlights=cond.headlights)
+    if cond.fog > 0.0:
+        info.fog_visibility_m = fog_visibility_m(cond.fog)
+    if cond.headlights:
+        add_car_lights(spec)
+    to_sun = sun_direction(cond, road)
+    for i, zone in enumerate(cond.shadows):
+        spec.add_material(name=f"cond_shadow_{i}",
+                          rgba=[0.0, 0.0, 0.0, overlay_alpha(zone.darkness)],
+                          specular=0.0, shininess=0.0)
+        add_shadow_zone(spec, road, zone, i, to_sun, rng, info, layout)
+    add_props(spec, scenario, road, to_sun, info, layout)  # after the zones: their shadows
+    if cond.speed_bumps_m:
+        spec.add_material(name="cond_bump", rgba=[0.95, 0.75, 0.1, 1.0], specular=0.2)
+        add_bumps(spec, road, cond, info, layout)
+    if cond.wet > 0.0:
+        # At a camera's grazing angle water mirrors the sky: sky-coloured, self-lit, glossy.
+        horizon = LIGHTING[cond.time_of_day][3][1]
+        spec.add_material(name="cond_puddle",
+                          rgba=[*(0.4 * np.array(horizon)), overlay_alpha(0.55)],
+                          emission=0.3, specular=0.9, shininess=1.0)
+        add_wet(spec, road, cond, rng, info, layout)
+    if cond.snow > 0.0:
+        add_snow(spec, road, cond, rng, layout)
+    for i, vehicle in enumerate(cond.vehicles):
+        info.vehicles.append(add_vehicle(spec, road, vehicle, i))
+    return info

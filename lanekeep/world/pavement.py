@@ -1,0 +1,148 @@
+"""The pavement texture: asphalt or concrete lanes with joints, cracks, patches and tyre marks.
+
+One texture is an atlas of one lane beside one shoulder: columns [0, LANE_U) hold a lane from
+its right boundary to its left one, columns [LANE_U, 1) a shoulder from the edge line outwards;
+rows run along the road over `period_m`. world.py maps each lane and each shoulder of the road
+onto its part, so wheel paths lie in every lane (not on the shoulders), concrete's longitudinal
+joints fall on the lane lines and its transverse joints every SLAB_M across the whole road.
+The period (9 m) is longer than a dash plus its gap is short, and each lane starts the texture
+at a different row, so the eye finds no seam running down the road (the old 4 m asphalt tile
+had two tar seams that ran the road's whole length).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from lanekeep.core.config_io import InvalidValue
+from lanekeep.world.textures import periodic_blur, tiled_noise, to_rgb8
+
+SURFACES = ("asphalt", "concrete")
+LANE_U = 0.75  # share of the atlas' width that holds the lane
+SLAB_M = 4.5  # concrete slab length between transverse joints
+WHEEL_TRACK_M = 1.7  # distance between a car's wheel paths
+ASPHALT_TINT = (1.0, 1.0, 1.02)
+CONCRETE_TINT = (1.0, 0.99, 0.95)
+
+
+@dataclass(frozen=True)
+class PavementStyle:
+    """How the carriageway is surfaced. Densities are 0 (none) .. 1 (a road overdue for repair)."""
+
+    surface: str = "asphalt"  # "asphalt" | "concrete" (light grey slabs with joints)
+    asphalt_tone: float = 0.5  # 0 fresh black asphalt .. 1 old, sun-bleached grey
+    cracks: float = 0.3
+    patches: float = 0.2
+    tyre_marks: float = 0.4  # darkness of the wheel paths and the oil strip between them
+
+    def __post_init__(self):
+        if self.surface not in SURFACES:
+            raise InvalidValue("surface", f"must be one of {SURFACES}, got {self.surface!r}")
+        for key in ("asphalt_tone", "cracks", "patches", "tyre_marks"):
+            if not 0.0 <= getattr(self, key) <= 1.0:
+                raise InvalidValue(key, f"must be in [0, 1], got {getattr(self, key)}")
+
+
+def _fold(canvas: np.ndarray, rows: int) -> np.ndarray:
+    """A canvas three periods tall (drawn in the middle one) folded onto one period, so that
+    what crosses the top or bottom edge comes back on the other side: the texture tiles."""
+    return canvas[:rows] + canvas[rows:2 * rows] + canvas[2 * rows:]
+
+
+def _crack_map(rng: np.random.Generator, shape: tuple[int, int], count: int, px_per_m: float,
+               concrete: bool) -> np.ndarray:
+    """Darkening (0..1) of meandering cracks: on asphalt mostly lengthwise and often sealed
+    (a wide band of black sealant), on concrete thin and mostly across the slab."""
+    rows, cols = shape
+    canvas = np.zeros((3 * rows, cols), np.uint8)
+    for _ in range(count):
+        lengthwise = rng.random() < (0.25 if concrete else 0.65)
+        length_px = rng.uniform(0.8, 4.0) * px_per_m
+        heading = (0.0 if lengthwise else np.pi / 2) + rng.normal(0.0, 0.25)
+        steps = max(int(length_px / 6.0), 2)
+        turn = np.cumsum(rng.normal(0.0, 0.35, steps))
+        xy = np.cumsum(6.0 * np.stack([np.sin(heading + turn), np.cos(heading + turn)], 1), 0)
+        xy += [rng.uniform(0, cols), rows + rng.uniform(0, rows)]
+        sealed = not concrete and rng.random() < 0.6
+        width = int(rng.uniform(0.015, 0.03) * px_per_m) if sealed else 1
+        shade = int(rng.uniform(150, 230) if sealed else rng.uniform(120, 200))
+        cv2.polylines(canvas, [np.round(xy).astype(np.int32)], False, shade, max(width, 1),
+                      cv2.LINE_AA)
+    return np.clip(_fold(canvas.astype(np.float32) / 255.0, rows), 0.0, 1.0)
+
+
+def _patch_map(rng: np.random.Generator, shape: tuple[int, int], count: int,
+               px_per_m: float) -> tuple[np.ndarray, np.ndarray]:
+    """Repairs: rectangles of newer, darker asphalt (value) and their sealed outlines."""
+    rows, cols = shape
+    fill = np.zeros((3 * rows, cols), np.float32)
+    edge = np.zeros((3 * rows, cols), np.uint8)
+    for _ in range(count):
+        w, h = rng.uniform(0.5, 2.2) * px_per_m, rng.uniform(0.8, 4.0) * px_per_m
+        x, y = rng.uniform(0, max(cols - w, 1)), rows + rng.uniform(0, rows)
+        p0, p1 = (int(x), int(y)), (int(x + w), int(y + h))
+        cv2.rectangle(fill, p0, p1, float(rng.uniform(0.6, 1.0)), -1)
+        cv2.rectangle(edge, p0, p1, 255, 2)
+    return np.clip(_fold(fill, rows), 0, 1), np.clip(_fold(edge / 255.0, rows), 0, 1)
+
+
+def _lane_profile(cols: int, lane_width_m: float, sigma_m: float) -> tuple[np.ndarray, ...]:
+    """Across one lane: the two wheel paths and the oil strip between them (0..1)."""
+    r = (np.arange(cols) + 0.5) / cols * lane_width_m - 0.5 * lane_width_m
+    paths = sum(np.exp(-0.5 * ((r - c) / sigma_m) ** 2)
+                for c in (-0.5 * WHEEL_TRACK_M, 0.5 * WHEEL_TRACK_M))
+    oil = np.exp(-0.5 * (r / 0.3) ** 2)
+    return paths.astype(np.float32), oil.astype(np.float32)
+
+
+def _part(rng: np.random.Generator, style: PavementStyle, rows: int, cols: int,
+          width_m: float, period_m: float, lane: bool) -> np.ndarray:
+    """Grey (rows, cols) of the lane or the shoulder part of the atlas."""
+    concrete = style.surface == "concrete"
+    px_per_m = rows / period_m
+    shape = (rows, cols)
+    base = 0.62 if concrete else 0.24 + 0.16 * style.asphalt_tone
+    grey = np.full(shape, base, np.float32)
+    grey += (0.02 if concrete else 0.05) * tiled_noise(rng, shape, 0.6)  # aggregate grain
+    stones = rng.random(shape)
+    grey += np.where(stones > 0.985, 0.10, 0.0) - np.where(stones < 0.01, 0.06, 0.0)
+    grey += 0.012 * tiled_noise(rng, shape, 12.0) + 0.025 * tiled_noise(rng, shape, 80.0)
+    if lane and style.tyre_marks > 0.0:
+        paths, oil = _lane_profile(cols, width_m, 0.28)
+        along = 0.7 + 0.3 * tiled_noise(rng, shape, 40.0)
+        blotch = np.clip(0.6 + 0.6 * tiled_noise(rng, shape, 8.0), 0.0, 1.0)
+        k = style.tyre_marks * (2.0 if concrete else 1.0)
+        grey -= k * (0.09 * paths[None, :] * along + 0.07 * oil[None, :] * blotch)
+    n_patches = rng.poisson(style.patches * (2.0 if lane else 0.7))
+    if n_patches:
+        fill, outline = _patch_map(rng, shape, n_patches, px_per_m)
+        patch_grey = (0.30 if concrete else base - 0.07) + 0.04 * tiled_noise(rng, shape, 0.6)
+        grey = grey * (1 - fill) + patch_grey * fill - 0.06 * outline
+    n_cracks = rng.poisson(style.cracks * (12.0 if lane else 3.0))
+    if n_cracks:
+        grey -= (0.25 if concrete else 0.18) * _crack_map(rng, shape, n_cracks, px_per_m,
+                                                          concrete)
+    if concrete:
+        joints = np.zeros(shape, np.float32)
+        for s_m in np.arange(0.0, period_m - 1e-6, SLAB_M):  # transverse joints
+            joints[int(round(s_m * px_per_m)) % rows, :] = 1.0
+            slab = slice(int(round(s_m * px_per_m)), int(round((s_m + SLAB_M) * px_per_m)))
+            grey[slab] += rng.normal(0.0, 0.02)  # each slab's own shade
+        if lane:
+            joints[:, 0] = joints[:, -1] = 1.0  # longitudinal joints under the lane lines
+        grey -= 0.22 * np.clip(periodic_blur(joints, 0.7) * 2.0, 0.0, 1.0)
+    return grey
+
+
+def pavement(rng: np.random.Generator, style: PavementStyle, lane_width_m: float,
+             shoulder_m: float, period_m: float, rows: int = 1024) -> np.ndarray:
+    """The atlas RGB (rows, rows // 2, 3) uint8: one lane, then one shoulder (see the module)."""
+    cols = rows // 2
+    lane_cols = int(round(LANE_U * cols))
+    lane = _part(rng, style, rows, lane_cols, lane_width_m, period_m, lane=True)
+    shoulder = _part(rng, style, rows, cols - lane_cols, shoulder_m, period_m, lane=False)
+    grey = np.clip(np.concatenate([lane, shoulder], axis=1), 0.02, 1.0)
+    return to_rgb8(grey, CONCRETE_TINT if style.surface == "concrete" else ASPHALT_TINT)

@@ -1,0 +1,193 @@
+"""Roadside props from a scenario's `[roadside]` table (lanekeep/scenario/roadside.py) put into
+the world: guard rails, barriers, poles, signs, gantries, overpasses (lanekeep/world/prop_assets.py),
+scenery trees and buildings placed by the seed, and hills or a city at the horizon.
+
+Real frames are full of edges above the horizon (2-14% edge pixels) where ours had none. Each
+material's pieces are merged into one mesh geom (a geom costs render time, triangles hardly
+do), all visual only (contype 0) in GROUP_WORLD: the segmentation render shows them as
+non-marking pixels that hide the paint behind them. Everything the sun reaches casts its
+silhouette on the ground as one translucent overlay (GROUP_SHADOW, like the shadow zones in
+world_roadside.py, cut so that no ground point is shaded twice, also where a shadow zone's
+shadow lies). At night there is no sun to cast them.
+"""
+
+from __future__ import annotations
+
+import math
+
+import mujoco
+import numpy as np
+
+from lanekeep.geometry.road import Road
+from lanekeep.geometry.road_mesh import Ribbon
+from lanekeep.scenario.roadside import SIDES, Roadside
+from lanekeep.scenario.schema import Scenario
+from lanekeep.sensing.cameras import GROUP_SHADOW, GROUP_WORLD
+from lanekeep.world import prop_assets as assets
+from lanekeep.world.lighting import direct_sun_share
+from lanekeep.world.parts import OVERLAY_Z_M, ConditionsInfo, WorldLayout, add_mesh_geom
+from lanekeep.world.prop_meshes import hill_ring, tree_belt
+from lanekeep.world.roadside import _polygon_mesh, cast_shadow, disjoint_pieces, overlay_alpha
+
+TREE_OFFSET_M = (4.0, 40.0)  # scenery trees: from the gravel's outer edge (m)
+BUILDING_OFFSET_M = (15.0, 60.0)
+HILL_WIDTH_M = 200.0
+
+
+def add_props(spec: mujoco.MjSpec, scenario: Scenario, road: Road, to_sun: np.ndarray,
+              info: ConditionsInfo, layout: WorldLayout) -> None:
+    """Add the scenario's roadside props and their shadows (after the shadow zones, whose
+    casters use the props' materials and whose shadows the props' shadows leave out)."""
+    cfg = scenario.roadside
+    assets.add_prop_materials(spec, scenario.seed)
+    for key in ("signs_m", "gantries_m", "overpasses_m"):
+        assets.check_s(road, key, getattr(cfg, key))
+    rng = np.random.default_rng([scenario.seed, 0x9205])
+    props = assets.Props()
+    for side in cfg.guard_rail_sides:
+        assets.guard_rail(props, road, side, layout)
+    for side in cfg.barrier_sides:
+        assets.jersey_barrier(props, road, side, layout)
+    for side in cfg.pole_sides if cfg.pole_spacing_m > 0.0 else ():
+        assets.light_poles(props, road, side, cfg.pole_spacing_m, layout)
+    for s in cfg.signs_m:
+        assets.roadside_sign(props, rng, road, s, layout)
+    for s in cfg.gantries_m:
+        assets.gantry(props, rng, road, s, layout)
+    for s in cfg.overpasses_m:
+        assets.overpass(props, road, s, layout)
+    _scenery(props, rng, road, scenario, layout, to_sun)
+    _skyline(props, rng, road, cfg.skyline, layout)
+    for material, meshes in sorted(props.meshes.items()):
+        add_mesh_geom(spec, material.replace("prop_", "props_", 1), Ribbon.concatenate(meshes),
+                      material, GROUP_WORLD)
+    if props.casters and scenario.conditions.time_of_day != "night":
+        _add_shadows(spec, props, to_sun, info, cfg, direct_sun_share(scenario.conditions))
+
+
+def _add_shadows(spec: mujoco.MjSpec, props: assets.Props, to_sun: np.ndarray,
+                 info: ConditionsInfo, cfg: Roadside, direct_share: float) -> None:
+    """The props' cast shadows, as dark as the sun's direct light makes them (fog scatters it:
+    world_lighting.direct_sun_share)."""
+    polygons = [cast_shadow(points, to_sun) for points in props.casters]
+    polygons = [p for p in polygons if len(p) >= 3]
+    earlier = list(info.shadow_polygons)
+    pieces = disjoint_pieces(earlier + polygons)[len(disjoint_pieces(earlier)):]
+    if not pieces:
+        return
+    alpha = overlay_alpha(cfg.shadow_darkness * direct_share)
+    spec.add_material(name="props_shadow", rgba=[0.0, 0.0, 0.0, alpha], specular=0.0,
+                      shininess=0.0)
+    add_mesh_geom(spec, "props_shadow", _polygon_mesh(pieces, OVERLAY_Z_M), "props_shadow",
+                  GROUP_SHADOW)
+    info.shadow_polygons.extend(polygons)
+
+
+def _clear_of_road(road: Road, xy: np.ndarray, margin_m: float) -> bool:
+    """Whether world points (n, 2) all lie further than margin_m from the reference line
+    (on a curve a point beside one stretch of road can lie near another)."""
+    _, r = road.local_coordinates(np.atleast_2d(xy))
+    return bool(np.all(np.abs(r) > margin_m))
+
+
+def _keep_out(scenario: Scenario, side: str) -> list[tuple[float, float, float]]:
+    """(s_from, s_to, offset_m) boxes beside the gravel that other props already occupy."""
+    cfg = scenario.roadside
+    boxes = [(z.s_start_m - 5.0, z.s_end_m + 5.0, 20.0)
+             for z in scenario.conditions.shadows if z.side == side]
+    boxes += [(s - 20.0, s + 20.0, 16.0) for s in cfg.overpasses_m]
+    boxes += [(s - 6.0, s + 6.0, 6.0) for s in (*cfg.gantries_m, *cfg.signs_m)]
+    return boxes
+
+
+def _towards_road(road: Road, s: float, sign: float, to_sun: np.ndarray) -> float:
+    """How far (m) a shadow reaches towards the road per metre of its caster's height, beside
+    the road at s on the side `sign` (+1 left); <= 0 when shadows fall away from it."""
+    th = float(road.heading_at(s))
+    normal = np.array([-math.sin(th), math.cos(th)])
+    return float(to_sun[:2] @ normal) / float(to_sun[2]) * sign
+
+
+def _scenery(props: assets.Props, rng: np.random.Generator, road: Road, scenario: Scenario,
+             layout: WorldLayout, to_sun: np.ndarray) -> None:
+    """Trees and buildings beside the road, Poisson numbers per side, places and looks drawn
+    from the seed; none inside another prop's place, none nearer any stretch of road. Their
+    shadows stop 1 m short of the gravel (lower buildings, no tree where it would shade the
+    road): shade on the road is what a scenario's `conditions.shadows` zones decide."""
+    cfg = scenario.roadside
+    for side in SIDES:
+        sign = 1.0 if side == "left" else -1.0
+        verge = assets.verge_r(road, side, layout)
+        blocked = _keep_out(scenario, side)
+        n_trees = rng.poisson(cfg.trees_per_100m * road.length_m / 100.0)
+        for _ in range(n_trees):
+            s = rng.uniform(0.0, road.length_m)
+            off = min(TREE_OFFSET_M[0] + rng.exponential(10.0), TREE_OFFSET_M[1])
+            radius = rng.uniform(2.0, 4.0)  # crowns 4-8 m across on 2-3 m of bare trunk
+            crown_z = 0.75 * radius + rng.uniform(2.0, 3.0)
+            xy = road.position(s, verge + sign * (off + radius))
+            reach = _towards_road(road, s, sign, to_sun) * (crown_z + radius)
+            if any(a <= s <= b and off < o for a, b, o in blocked) or reach > off - 1.0:
+                continue
+            if _clear_of_road(road, xy, abs(verge) + radius + 1.0):
+                assets.tree(props, rng, xy, crown_z, radius)
+        placed: list[tuple[np.ndarray, float]] = []
+        n_buildings = rng.poisson(cfg.buildings_per_100m * road.length_m / 100.0)
+        for _ in range(n_buildings):
+            s = rng.uniform(0.0, road.length_m)
+            off = rng.uniform(*BUILDING_OFFSET_M)
+            length, depth = rng.uniform(10.0, 30.0), rng.uniform(10.0, 20.0)
+            height = float(np.clip(rng.lognormal(math.log(12.0), 0.5), 5.0, 45.0))
+            towards = _towards_road(road, s, sign, to_sun)
+            if towards > 0.0:
+                height = min(height, (off - 1.0) / towards)
+            xy = road.position(s, verge + sign * (off + 0.5 * depth))
+            reach = 0.5 * math.hypot(length, depth)
+            if any(np.hypot(*(xy - c)) < reach + rc + 2.0 for c, rc in placed):
+                continue
+            th = float(road.heading_at(s))
+            corners = xy + np.array([[a * length * math.cos(th) - b * depth * math.sin(th),
+                                      a * length * math.sin(th) + b * depth * math.cos(th)]
+                                     for a in (-0.5, 0.5) for b in (-0.5, 0.5)])
+            if height >= 4.0 and _clear_of_road(road, corners, abs(verge) + 5.0):
+                placed.append((xy, reach))
+                assets.building(props, rng, xy, th, length, depth, height)
+
+
+def _skyline(props: assets.Props, rng: np.random.Generator, road: Road, skyline: str,
+             layout: WorldLayout) -> None:
+    """Hills in a ring around the whole road, where the ground plane ends; "city" puts far
+    buildings in front of lower hills. Too far to cast a shadow on anything we see."""
+    if skyline == "none":
+        return
+    pts = road.position(np.linspace(0.0, road.length_m, 64))
+    centre = pts.mean(axis=0)
+    plane_half = float(np.max(np.abs(pts - centre))) + 200.0  # world.py's ground plane
+    reach = float(np.max(np.hypot(*(pts - centre).T))) + layout.lead_m
+    radius = max(0.95 * plane_half, reach + 60.0)
+    n = 192
+    ang = np.linspace(0.0, 2 * np.pi, n, endpoint=False)
+    shape = sum(rng.normal() / k * np.cos(k * ang + rng.uniform(0, 2 * np.pi))
+                for k in range(1, 13))
+    shape = (shape - shape.min()) / max(float(np.ptp(shape)), 1e-9)
+    low, high = (8.0, 30.0) if skyline == "city" else (12.0, 55.0)
+    apron = min(radius, 0.9 * plane_half)
+    props.add("prop_hills", hill_ring(centre, apron, radius, HILL_WIDTH_M,
+                                      low + (high - low) * shape), cast=False)
+    # Woods between the road and the hills: groups of trees, too far for single trees to
+    # matter, whose leaves and ragged tops are most of the edges real frames have up there.
+    belt = max(reach + 40.0, 0.75 * radius)
+    if belt < radius - 20.0:
+        jitter = rng.uniform(-15.0, 15.0, n)
+        tops = rng.uniform(6.0, 14.0, n) * (1.0 + 0.3 * shape)
+        keep = np.repeat(rng.random(n // 4) < 0.6, 4)  # woods ~4 steps long, gaps between
+        props.add("prop_foliage_1", tree_belt(centre, belt + jitter, tops, keep), cast=False)
+    if skyline != "city":
+        return
+    for a in rng.uniform(0.0, 2 * np.pi, 90):
+        dist = radius - rng.uniform(10.0, 60.0)
+        xy = centre + dist * np.array([math.cos(a), math.sin(a)])
+        height = float(np.clip(rng.lognormal(math.log(30.0), 0.5), 12.0, 110.0))
+        if _clear_of_road(road, xy, 80.0):
+            assets.building(props, rng, xy, a + 0.5 * math.pi, rng.uniform(20.0, 45.0),
+                            rng.uniform(15.0, 30.0), height, cast=False)

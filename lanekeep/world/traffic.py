@@ -1,0 +1,209 @@
+"""Other vehicles: mocap bodies moved along their lanes each control step, and how much of
+the paint they hide from a camera.
+
+Each vehicle is a car, van or truck built from primitives (lanekeep/world/vehicle_assets.py: wheels
+on the ground, arches, windows, lights, bumpers) on a mocap body whose origin stays on the
+ground. Camera shadow maps are off by default (they double a CPU render), so like the roadside
+casters (world_roadside.py) a vehicle's shadow is drawn: two dark translucent polygons in group
+GROUP_SHADOW (hidden from the segmentation render, so the marking masks stay exact), children of
+the mocap body so they drive along:
+
+  - a contact shadow: the footprint, a little larger, darkness CONTACT_DARKNESS (the road under
+    a car gets no sky light, sun or not);
+  - the cast shadow: the convex hull of all parts' corners cast along the sun onto the road,
+    computed in the vehicle's frame for its heading at the build. As the road turns, the
+    shadow turns with the vehicle: its tip errs by the turn angle times the shadow's length
+    (0.72 rad in the "occlusion" scenario's bend: ~0.5 m for a car, ~1.1 m for its truck).
+    Its darkness follows the sun's strength (none at night). Where it overlaps a building's
+    shadow the two overlays darken each other.
+"""
+
+
+from __future__ import annotations
+
+import math
+
+import mujoco
+import numpy as np
+
+from lanekeep.geometry.road import Road
+from lanekeep.scenario.schema import VehicleSpec
+from lanekeep.sensing.cameras import GROUP_SHADOW, GROUP_WORLD
+from lanekeep.world.parts import (
+    OVERLAY_Z_M,
+    ConditionsInfo,
+    VehicleTrack,
+    yaw_quat,
+)
+from lanekeep.world.roadside import cast_shadow, overlay_alpha
+from lanekeep.world.vehicle_assets import Part, vehicle_parts
+
+SUN_SHADOW_DARKNESS = 0.55  # as a ShadowZone's default, under the full day sun
+DAY_SUN_DIFFUSE = 0.75  # world_lighting.LIGHTING["day"]: the sun of SUN_SHADOW_DARKNESS
+CONTACT_DARKNESS = 0.45
+LIGHTS_ON_BELOW = 0.5  # sun diffuse under which vehicles drive with lights on (dawn, dusk, night)
+
+# role -> material attributes shared by all vehicles (paint is per vehicle)
+SHARED_LOOK = {
+    "glass": dict(rgba=[0.06, 0.08, 0.1, 1.0], specular=0.9, shininess=0.9),
+    "tyre": dict(rgba=[0.035, 0.035, 0.035, 1.0], specular=0.05, shininess=0.1),
+    "hub": dict(rgba=[0.55, 0.56, 0.58, 1.0], specular=0.6, shininess=0.6),
+    "trim": dict(rgba=[0.1, 0.1, 0.11, 1.0], specular=0.2, shininess=0.3),
+    "underbody": dict(rgba=[0.04, 0.04, 0.045, 1.0], specular=0.0, shininess=0.0),
+    "plate": dict(rgba=[0.9, 0.9, 0.85, 1.0], specular=0.3, shininess=0.3),
+}
+
+
+def add_vehicle(spec: mujoco.MjSpec, road: Road, v: VehicleSpec, index: int,
+                to_sun: np.ndarray | None = None) -> VehicleTrack:
+    """Add vehicle `index` at its start pose. `to_sun` (unit vector towards the sun, world
+    frame) places its cast shadow; by default it is read from the spec's light "sun"."""
+    if not 0 <= v.lane < road.n_lanes:
+        raise ValueError(
+            f"conditions.vehicles[{index}].lane = {v.lane} not in 0..{road.n_lanes - 1}"
+        )
+    r = road.lane_center_r(v.lane) + v.offset_m
+    name = f"cond_vehicle_{index}"
+    x, y = road.position(v.s_m, r)
+    yaw = float(road.heading_at(v.s_m)) + (math.pi if v.speed_mps < 0 else 0.0)
+    body = spec.worldbody.add_body(name=name, mocap=True, pos=[x, y, 0.0], quat=yaw_quat(yaw))
+    to_sun, sun = _sun(spec, to_sun)
+    materials = _materials(spec, name, v.colour, sun)
+    parts = vehicle_parts(v)
+    for part in parts:
+        _add_part(spec, body, name, part, materials[part.role])
+    _add_shadows(spec, body, name, parts, yaw, to_sun, sun)
+    return VehicleTrack(name, v.s_m, r, v.speed_mps)
+
+
+def _sun(spec: mujoco.MjSpec, to_sun: np.ndarray | None) -> tuple[np.ndarray | None, float]:
+    """Direction towards the sun and its diffuse strength, from the spec's light "sun" where
+    not given (no light: no cast shadow; full strength when only the direction is given)."""
+    light = spec.light("sun")
+    strength = float(np.mean(light.diffuse)) if light is not None else DAY_SUN_DIFFUSE
+    if to_sun is None and light is not None:
+        to_sun = -np.asarray(light.dir, dtype=float)
+    if to_sun is not None:
+        to_sun = np.asarray(to_sun, dtype=float) / np.linalg.norm(to_sun)
+    return to_sun, strength
+
+
+def _material(spec: mujoco.MjSpec, name: str, **attrs) -> str:
+    if spec.material(name) is None:
+        spec.add_material(name=name, **attrs)
+    return name
+
+
+def _materials(spec: mujoco.MjSpec, name: str, colour, sun: float) -> dict[str, str]:
+    """Material per role: shared ones made once, the paint per vehicle; lamps glow when the
+    sun is low (as the ego car's headlights come on)."""
+    lit = sun < LIGHTS_ON_BELOW
+    out = {role: _material(spec, f"cond_vehicle_{role}", **look)
+           for role, look in SHARED_LOOK.items()}
+    out["taillight"] = _material(spec, "cond_vehicle_taillight", rgba=[0.75, 0.04, 0.03, 1.0],
+                                 emission=1.0 if lit else 0.25, specular=0.5)
+    out["headlight"] = _material(spec, "cond_vehicle_headlight", rgba=[0.95, 0.93, 0.85, 1.0],
+                                 emission=1.0 if lit else 0.2, specular=0.8)
+    out["paint"] = _material(spec, f"{name}_paint", rgba=[*colour, 1.0], specular=0.6,
+                             shininess=0.7)
+    return out
+
+
+def _add_part(spec: mujoco.MjSpec, body, name: str, part: Part, material: str) -> None:
+    geom = f"{name}_{part.name}"
+    common = dict(name=geom, group=GROUP_WORLD, material=material, contype=0, conaffinity=0,
+                  mass=1.0)
+    if part.shape == "hull":
+        spec.add_mesh(name=geom, uservert=np.ravel(part.points).tolist())
+        body.add_geom(type=mujoco.mjtGeom.mjGEOM_MESH, meshname=geom, **common)
+        return
+    kind = mujoco.mjtGeom.mjGEOM_BOX if part.shape == "box" else mujoco.mjtGeom.mjGEOM_CYLINDER
+    body.add_geom(type=kind, pos=list(part.pos), size=list(part.size), quat=list(part.quat),
+                  **common)
+
+
+def contact_polygon(parts: list[Part], margin_m: float = 0.05) -> np.ndarray:
+    """Footprint of the parts (mirrors aside: they are high above the road) grown by a margin,
+    corners cut: CCW octagon (8, 2)."""
+    pts = np.concatenate([p.corners() for p in parts if not p.name.startswith("mirror")])
+    (x0, y0), (x1, y1) = pts[:, :2].min(0) - margin_m, pts[:, :2].max(0) + margin_m
+    c = 0.25 * min(x1 - x0, y1 - y0)
+    return np.array([[x1 - c, y0], [x1, y0 + c], [x1, y1 - c], [x1 - c, y1],
+                     [x0 + c, y1], [x0, y1 - c], [x0, y0 + c], [x0 + c, y0]])
+
+
+def cast_polygon(parts: list[Part], to_sun_local: np.ndarray) -> np.ndarray:
+    """Shadow of the vehicle's convex hull on the road, vehicle frame: CCW polygon (n, 2)."""
+    return cast_shadow(np.concatenate([p.corners() for p in parts]), to_sun_local)
+
+
+def _add_shadows(spec: mujoco.MjSpec, body, name: str, parts: list[Part], yaw: float,
+                 to_sun: np.ndarray | None, sun: float) -> None:
+    contact = _material(spec, "cond_vehicle_contact_shadow",
+                        rgba=[0.0, 0.0, 0.0, overlay_alpha(CONTACT_DARKNESS)], specular=0.0,
+                        shininess=0.0)
+    _add_polygon(spec, body, f"{name}_contact_shadow", contact_polygon(parts),
+                 OVERLAY_Z_M + 0.004, contact)
+    darkness = SUN_SHADOW_DARKNESS * min(1.0, sun / DAY_SUN_DIFFUSE)
+    if to_sun is None or to_sun[2] <= 0.0 or darkness < 0.05:
+        return
+    c, s = math.cos(yaw), math.sin(yaw)
+    local = np.array([c * to_sun[0] + s * to_sun[1], -s * to_sun[0] + c * to_sun[1], to_sun[2]])
+    cast = _material(spec, "cond_vehicle_sun_shadow",
+                     rgba=[0.0, 0.0, 0.0, overlay_alpha(darkness)], specular=0.0, shininess=0.0)
+    _add_polygon(spec, body, f"{name}_shadow", cast_polygon(parts, local), OVERLAY_Z_M, cast)
+
+
+def _add_polygon(spec: mujoco.MjSpec, body, name: str, poly: np.ndarray, z_m: float,
+                 material: str) -> None:
+    """A flat convex polygon (CCW, body frame) as a triangle-fan mesh geom in GROUP_SHADOW."""
+    n = len(poly)
+    verts = np.c_[poly, np.full(n, z_m)]
+    i = np.arange(1, n - 1)
+    faces = np.stack([np.zeros_like(i), i, i + 1], 1)
+    spec.add_mesh(name=name, uservert=verts.ravel().tolist(), userface=faces.ravel().tolist(),
+                  inertia=mujoco.mjtMeshInertia.mjMESH_INERTIA_SHELL)
+    body.add_geom(name=name, type=mujoco.mjtGeom.mjGEOM_MESH, meshname=name, material=material,
+                  group=GROUP_SHADOW, contype=0, conaffinity=0, mass=1.0)
+
+
+def update_dynamic(world, t_s: float) -> None:
+    """Move the other vehicles to their poses at sim time t_s (call every control step).
+
+    Sets the mocap poses and runs mj_kinematics, so a render straight after sees them.
+    """
+    info: ConditionsInfo | None = getattr(world, "conditions", None)
+    if info is None or not info.vehicles:
+        return
+    road, data = world.road, world.data
+    for v in info.vehicles:
+        if v.mocap_id < 0:
+            v.mocap_id = int(world.model.body(v.name).mocapid[0])
+        s = v.s_m + v.speed_mps * t_s
+        data.mocap_pos[v.mocap_id, :2] = road.position(s, v.r_m)
+        yaw = float(road.heading_at(s)) + (math.pi if v.speed_mps < 0 else 0.0)
+        data.mocap_quat[v.mocap_id] = yaw_quat(yaw)
+    mujoco.mj_kinematics(world.model, data)
+
+
+def occluded_marking_share(world, rig, camera: str = "front") -> float:
+    """Share of the marking pixels that the other vehicles hide in one camera (0..1).
+
+    Renders the segmentation twice, with the vehicles in place and with them lowered 1 km
+    under the ground; NaN when no marking is in view.
+    """
+    info: ConditionsInfo | None = getattr(world, "conditions", None)
+    seen = int(world.marking_mask(rig.render_segmentation(world.data, camera)).sum())
+    if info is None or not info.vehicles:
+        return 0.0
+    ids = [v.mocap_id if v.mocap_id >= 0 else int(world.model.body(v.name).mocapid[0])
+           for v in info.vehicles]
+    saved = world.data.mocap_pos.copy()
+    try:
+        world.data.mocap_pos[ids, 2] -= 1000.0
+        mujoco.mj_kinematics(world.model, world.data)
+        total = int(world.marking_mask(rig.render_segmentation(world.data, camera)).sum())
+    finally:
+        world.data.mocap_pos[:] = saved
+        mujoco.mj_kinematics(world.model, world.data)
+    return math.nan if total == 0 else 1.0 - seen / total

@@ -1,0 +1,277 @@
+"""The closed loop's estimator behind one call: centring, tracking, choice, timing laps."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from lanekeep.detectors.base import LaneEstimate
+from lanekeep.estimators.lane_estimator import EgoMotion, EstimatorSettings, LaneEstimator
+
+WIDTH = 3.7
+NAMES = ["hough", "sliding_window"]
+
+
+def _lane(c0: float, heading: float = 0.0) -> LaneEstimate:
+    """A detection of a straight lane whose centre is at y = c0 (both boundaries)."""
+    left = np.array([c0 + WIDTH / 2, heading, 0.0])
+    right = np.array([c0 - WIDTH / 2, heading, 0.0])
+    return LaneEstimate(valid=True, offset_m=-c0, x_m=4.0, left=left, right=right)
+
+
+def _ego(k: int, speed: float = 15.0) -> EgoMotion:
+    return EgoMotion(0.1, speed, 0.0, 0.0, (speed * 0.1 * k, 0.0, 0.0), speed * 0.1 * (k + 1))
+
+
+def _estimator() -> LaneEstimator:
+    return LaneEstimator(NAMES, EstimatorSettings(lane_width_prior_m=WIDTH), reference_x_m=-4.0)
+
+
+def test_one_boundary_is_centred_with_the_lane_width():
+    estimator = _estimator()
+    left_only = LaneEstimate(valid=True, x_m=4.0, left=np.array([1.85, 0.0, 0.0]))
+    np.testing.assert_allclose(estimator.centre_of(left_only), [0.0, 0.0, 0.0])
+    assert estimator.centre_of(LaneEstimate.invalid("none")) is None
+
+
+def test_one_boundary_uses_the_lane_width_the_detections_measured():
+    """The estimator never reads the road's width: two-boundary detections of a 3.3 m lane
+    move its running width from the 3.7 m prior towards 3.3 m, and a one-boundary detection
+    is then centred with it; implausible widths are ignored."""
+    estimator = _estimator()
+    narrow = LaneEstimate(valid=True, offset_m=0.0, x_m=4.0, left=np.array([1.65, 0.0, 0.0]),
+                          right=np.array([-1.65, 0.0, 0.0]))
+    wide = LaneEstimate(valid=True, offset_m=0.0, x_m=4.0, left=np.array([4.0, 0.0, 0.0]),
+                        right=np.array([-4.0, 0.0, 0.0]))
+    for k in range(100):
+        estimator.update({"hough": narrow, "sliding_window": wide}, narrow, _ego(k))
+    assert abs(estimator.lane_width_m - 3.3) < 0.01
+    left_only = LaneEstimate(valid=True, x_m=4.0, left=np.array([1.65, 0.0, 0.0]))
+    assert abs(estimator.centre_of(left_only)[0]) < 0.01
+    estimator.reset()
+    assert estimator.lane_width_m == WIDTH
+
+
+def test_a_steady_lane_is_tracked_and_handed_on_with_its_offset():
+    estimator = _estimator()
+    laps: list[str] = []
+    for k in range(20):
+        out = estimator.update({n: _lane(0.2) for n in NAMES}, _lane(0.2), _ego(k),
+                               lap=laps.append)
+    assert set(out.tracked) == set(NAMES)
+    assert out.tracker_status == {n: "updated" for n in NAMES}
+    np.testing.assert_allclose(out.centre[0], 0.2, atol=1e-4)  # converged within 0.1 mm
+    assert abs(out.offset_m - (-0.2)) < 1e-4
+    assert out.selected in (0, 1)
+    assert laps == ["track", "mmae"] * 20
+
+
+def test_output_leaves_a_model_whose_detector_has_nothing_for_one_that_was_updated():
+    estimator = _estimator()
+    for k in range(10):
+        out = estimator.update({n: _lane(0.0) for n in NAMES}, _lane(0.0), _ego(k))
+    favourite = out.selected
+    other = 1 - favourite
+    detections = {NAMES[favourite]: LaneEstimate.invalid("lost"), NAMES[other]: _lane(0.05)}
+    out = estimator.update(detections, _lane(0.0), _ego(10))
+    assert out.tracker_status[NAMES[favourite]] == "missed"
+    assert out.selected == other
+    np.testing.assert_allclose(out.centre, out.tracked[NAMES[other]])
+
+
+def test_reset_forgets_the_tracks():
+    estimator = _estimator()
+    estimator.update({n: _lane(0.3) for n in NAMES}, _lane(0.3), _ego(0))
+    estimator.reset()
+    out = estimator.update({n: LaneEstimate.invalid("none") for n in NAMES},
+                           LaneEstimate.invalid("none"), _ego(1))
+    assert out.centre is None and out.offset_m is None
+    assert all(c is None for c in out.tracked.values())
+
+
+def test_the_tracker_tuning_file_is_read_strictly():
+    import tomllib
+    from importlib import resources
+
+    import pytest
+
+    from lanekeep.core.config_io import ConfigError
+    from lanekeep.estimators.lane_estimator import TRACKER_TOML, closed_loop_tracker
+
+    text = resources.files("lanekeep.estimators").joinpath(TRACKER_TOML).read_text()
+    tuning = closed_loop_tracker(text)
+    config = tuning.default
+    assert config.coast_with_rates is False
+    data = tomllib.loads(text)
+    measured = np.asarray(data["measured_coefficient_covariance"])
+    np.testing.assert_allclose(config.coefficient_r, data["r_scale"] * measured)
+    own = data["measured_coefficient_covariance_by_detector"]
+    assert set(own) == {"hough", "sliding_window", "lanenet"}
+    for name, covariance in own.items():
+        np.testing.assert_allclose(tuning.for_detector(name).coefficient_r,
+                                   data["r_scale"] * np.asarray(covariance))
+        assert tuning.for_detector(name).coast_with_rates is False
+    assert tuning.for_detector("my_plugin:Detector") is config
+    with pytest.raises(ConfigError, match="by_detector.lanenet"):
+        closed_loop_tracker(text.replace("\nlanenet = [", "\nlanenet = [[1.0], ", 1))
+    with pytest.raises(ConfigError, match="tracker.c1_accel_psd"):
+        closed_loop_tracker(text.replace("c1_accel_psd_ps3 =", "c1_accel_psd =", 1))
+    with pytest.raises(ConfigError, match="r_scale"):
+        closed_loop_tracker(text.replace("r_scale = 4.0", ""))
+    with pytest.raises(ConfigError, match="gate_probability"):
+        closed_loop_tracker(text + "gate_probability = 1.5\n")
+
+
+def test_paper_settings_hand_on_the_selected_detection_at_its_own_row():
+    """Paper mode's PID input is the selected model's detection as the detector reported it
+    (offset and look-ahead), even when its track's gate rejects it; the MMAE compares every
+    offset at the car (x = 0), the reference's too."""
+    from lanekeep.loop.paper_mode import estimator_settings
+    from lanekeep.scenario.schema import EstimationConfig
+
+    settings = estimator_settings(EstimationConfig(mode="paper"))
+    assert (settings.residual_mode, settings.model_lane, settings.output_at) == (
+        "one_step_delay", "detection", "nearest_row")
+    from lanekeep.estimators.lane_estimator import CLOSED_LOOP_TRACKER
+
+    # one R for both models, so that their probabilities stay equal until the jump
+    estimator = LaneEstimator(NAMES, settings, reference_x_m=-4.0,
+                              tracker=CLOSED_LOOP_TRACKER.default)
+    for k in range(10):
+        estimator.update({n: _lane(0.0) for n in NAMES}, _lane(0.0), _ego(k))
+    jump = LaneEstimate(valid=True, offset_m=-1.5, x_m=5.0, left=np.array([3.35, 0.0, 0.0]),
+                        right=np.array([-0.35, 0.0, 0.0]))
+    out = estimator.update({"hough": jump, "sliding_window": _lane(0.0)}, _lane(0.0), _ego(10))
+    assert out.tracker_status == {"hough": "gated", "sliding_window": "updated"}
+    assert out.selected == 0  # the argmax (equal so far: the first), not the accepted one
+    assert (out.offset_m, out.offset_x_m) == (-1.5, 5.0)
+    assert out.reference_x_m == 0.0
+
+
+def test_each_detector_tracks_with_its_own_measured_noise():
+    """The shipped tuning gives every measured detector its own R (a plug-in the pooled one),
+    and the corroboration between models uses each one's: a steady detector's track follows
+    its detections more closely than a noisy detector's track follows the same detections."""
+    from lanekeep.estimators.lane_estimator import CLOSED_LOOP_TRACKER
+
+    names = ["hough", "lanenet", "mod:Plugin"]
+    estimator = LaneEstimator(names, EstimatorSettings(lane_width_prior_m=WIDTH), -4.0)
+    for name in names:
+        assert estimator.trackers[name].config is CLOSED_LOOP_TRACKER.for_detector(name)
+    assert estimator.trackers["mod:Plugin"].config is CLOSED_LOOP_TRACKER.default
+    for k in range(30):
+        estimator.update({n: _lane(0.0) for n in names}, _lane(0.0), _ego(k))
+    out = estimator.update({n: _lane(0.1) for n in names}, _lane(0.0), _ego(30))
+    moved = {n: out.tracked[n][0] for n in names}
+    assert moved["lanenet"] > moved["hough"] > 0.0
+
+
+def test_precision_output_equals_a_direct_computation():
+    """output = "precision": the lane is (sum_n p_n P_n^-1)^-1 sum_n p_n P_n^-1 c_n, with p the
+    MMAE's probabilities and P_n each track's coefficient covariance."""
+    names = ["hough", "sliding_window", "lanenet"]
+    settings = EstimatorSettings(lane_width_prior_m=WIDTH, output="precision")
+    estimator = LaneEstimator(names, settings, reference_x_m=-4.0)
+    lanes = {"hough": 0.05, "sliding_window": -0.03, "lanenet": 0.01}
+    for k in range(25):
+        jitter = 0.01 * (-1) ** k
+        out = estimator.update({n: _lane(c + jitter * (n == "hough")) for n, c in lanes.items()},
+                               _lane(0.0), _ego(k))
+    p = out.selection.probabilities
+    info = [pn * np.linalg.inv(estimator.trackers[n].P[:3, :3])
+            for pn, n in zip(p, names, strict=True)]
+    expected = np.linalg.solve(sum(info), sum(w @ out.tracked[n]
+                                              for w, n in zip(info, names, strict=True)))
+    np.testing.assert_allclose(out.centre, expected, rtol=1e-9, atol=1e-12)
+    assert min(out.tracked[n][0] for n in names) < out.centre[0] < max(
+        out.tracked[n][0] for n in names)
+    fused = LaneEstimator(names, EstimatorSettings(lane_width_prior_m=WIDTH, output="fused"),
+                          reference_x_m=-4.0)
+    for k in range(25):
+        jitter = 0.01 * (-1) ** k
+        plain = fused.update({n: _lane(c + jitter * (n == "hough")) for n, c in lanes.items()},
+                             _lane(0.0), _ego(k))
+    assert not np.allclose(plain.centre, out.centre)  # the variances change the weights
+
+
+def test_the_reference_noise_setting_reaches_the_mmae():
+    """Eq. 8's R comes from the scenario: a noisier reference moves the probabilities less."""
+    from lanekeep.loop.paper_mode import estimator_settings
+    from lanekeep.scenario.schema import EstimationConfig
+
+    spreads = []
+    for std in (0.02, 0.05):
+        settings = estimator_settings(EstimationConfig(reference_std_m=std, mmae_prior="uniform"))
+        assert settings.reference_std_m == std
+        estimator = LaneEstimator(NAMES, settings, -4.0)
+        assert estimator.mmae.config.reference_std_m == std
+        z = [0.0, 0.03]  # residuals of 0 and 3 cm against a reference at 0
+        out = estimator.mmae.step(0.0, z, [1e-4, 1e-4])
+        spreads.append(out.probabilities[0] - out.probabilities[1])
+    assert spreads[0] > spreads[1] > 0
+
+
+def test_the_precision_prior_weighs_each_model_by_its_measured_offset_variance():
+    """p_n(0) proportional to 1 / (C R_n C') at the output's look-ahead, from each detector's own
+    tracker R; "uniform" is the paper's equal start."""
+    names = ["hough", "sliding_window", "lanenet"]
+    settings = EstimatorSettings(lane_width_prior_m=WIDTH, mmae_prior="precision")
+    estimator = LaneEstimator(names, settings, -4.0)
+    c = np.array([1.0, 4.0, 16.0])
+    inverse = np.array([1.0 / (c @ np.asarray(estimator.tracker_configs[n].coefficient_covariance)
+                               @ c) for n in names])
+    np.testing.assert_allclose(estimator.mmae.probabilities, inverse / inverse.sum())
+    assert np.argmax(estimator.mmae.probabilities) == 2  # lanenet: the steadiest near offset
+    uniform = LaneEstimator(names, EstimatorSettings(lane_width_prior_m=WIDTH), -4.0)
+    np.testing.assert_allclose(uniform.mmae.probabilities, np.full(3, 1.0 / 3.0))
+
+
+def _pair(c0: float, width: float) -> LaneEstimate:
+    """A straight lane centred at y = c0 whose two boundaries are `width` apart."""
+    return LaneEstimate(valid=True, offset_m=-c0, x_m=-4.0, left=np.array([c0 + width / 2, 0, 0]),
+                        right=np.array([c0 - width / 2, 0, 0]))
+
+
+def test_a_reference_that_reads_a_lane_of_the_wrong_width_is_taken_as_missed():
+    """A rear pair 0.5 m narrower than the lane the front detectors measure has read a wrong
+    line (a passing car's edge): the MMAE is not updated with it and an event says why. One
+    within the tolerance is compared; without a tolerance (the paper's) every one is."""
+    settings = EstimatorSettings(lane_width_prior_m=WIDTH, reference_width_tolerance_m=0.2)
+    estimator = LaneEstimator(NAMES, settings, reference_x_m=-4.0)
+    for k in range(10):  # 15 m: the models' history reaches where the reference looks
+        estimator.update({n: _lane(0.0) for n in NAMES}, _pair(0.0, WIDTH), _ego(k))
+    before = estimator.mmae.probabilities
+    out = estimator.update({"hough": _lane(0.0), "sliding_window": _lane(0.2)},
+                           _pair(0.25, WIDTH - 0.5), _ego(10))
+    assert not out.selection.updated and out.selection.reference_m is None
+    np.testing.assert_allclose(out.selection.probabilities, before)
+    assert any("reference ignored" in e and "3.20 m" in e for e in out.events)
+    out = estimator.update({"hough": _lane(0.0), "sliding_window": _lane(0.2)},
+                           _pair(0.0, WIDTH - 0.1), _ego(11))
+    assert out.selection.updated and not any("ignored" in e for e in out.events)
+    paper = LaneEstimator(NAMES, EstimatorSettings(lane_width_prior_m=WIDTH), -4.0)
+    for k in range(10):
+        paper.update({n: _lane(0.0) for n in NAMES}, _pair(0.0, WIDTH), _ego(k))
+    assert paper.update({n: _lane(0.0) for n in NAMES}, _pair(0.25, WIDTH - 0.5),
+                        _ego(10)).selection.updated
+
+
+def test_the_reference_width_tolerance_is_a_scenario_setting_paper_mode_leaves_out():
+    from lanekeep.loop.paper_mode import estimator_settings
+    from lanekeep.scenario.schema import EstimationConfig, InvalidValue
+
+    assert estimator_settings(EstimationConfig()).reference_width_tolerance_m == 0.2
+    chosen = EstimationConfig(reference_width_tolerance_m=0.3)
+    assert estimator_settings(chosen).reference_width_tolerance_m == 0.3
+    paper = EstimationConfig(mode="paper", reference_width_tolerance_m=0.3)
+    assert estimator_settings(paper).reference_width_tolerance_m is None
+    with pytest.raises(InvalidValue, match="reference_width_tolerance_m"):
+        EstimationConfig(reference_width_tolerance_m=0.0)
+
+
+def test_a_misspelt_estimator_choice_is_refused_not_taken_for_another():
+    with pytest.raises(ValueError, match="residual_mode"):
+        EstimatorSettings(residual_mode="distance-aligned")
+    with pytest.raises(ValueError, match="output"):
+        EstimatorSettings(output="precise")
+    assert EstimatorSettings(output="fused", mmae_input="detection").output == "fused"

@@ -1,0 +1,127 @@
+"""The paper's own loop (`[estimation] mode = "paper"`, lanekeep/loop/paper_mode.py): its settings,
+and on fixed seeds the pattern of paper 001: no departure in any of its five cases; in the
+sharp turn (case 2) model #2, with its small region of interest, is clearly worse than model
+#1; in the building shadows (case 1) model #1
+loses the lane and the MMAE follows model #2 there (paper Fig. 12)."""
+
+from __future__ import annotations
+
+import functools
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+import pytest
+
+from lanekeep.control.pid import PaperGains
+from lanekeep.detectors.config import load_config
+from lanekeep.loop.episode import Episode
+from lanekeep.loop.paper_mode import PAPER_WINDOWS, front_detector_config, with_mode
+from lanekeep.scenario.schema import load_scenario
+from lanekeep.scoring.truth import lane_offsets
+
+PAPER_CASES = ("case1_building_shadows", "case2_sharp_turn", "case3_mild_turn_shade_bumps",
+               "case4_half_shade_straight", "case5_wet_rain_turn")
+HOUGH, SLIDING = 0, 1  # model #1, model #2
+
+
+@dataclass
+class PaperTrace:
+    """Per step, from the scoring side: where the car was and what the models did."""
+
+    curvature_ahead: list[float] = field(default_factory=list)  # road curvature 4 m ahead
+    shaded_ahead: list[bool] = field(default_factory=list)  # the 4 m point in a cast shadow
+    selected: list[int] = field(default_factory=list)
+    errors_m: list[list[float]] = field(default_factory=list)  # per model, NaN when invalid
+
+    def arrays(self):
+        return (np.asarray(self.curvature_ahead), np.asarray(self.shaded_ahead),
+                np.asarray(self.selected), np.asarray(self.errors_m, dtype=float))
+
+
+@functools.cache
+def paper_run(name: str):
+    scenario = with_mode(load_scenario(name), "paper")
+    trace = PaperTrace()
+    with Episode(scenario) as episode:
+        road, conditions = episode.world.road, episode.world.conditions
+        models = list(episode.front)
+
+        def on_step(step, total):
+            x, y, yaw = step.sensed_pose
+            s, _ = road.local_coordinates(np.array([x, y]))
+            ahead = np.array([x + 4.0 * np.cos(yaw), y + 4.0 * np.sin(yaw)])
+            trace.curvature_ahead.append(float(road.curvature_at(float(s) + 4.0)))
+            trace.shaded_ahead.append(bool(conditions.shaded(ahead)))
+            trace.selected.append(step.selected)
+            row = []
+            for name in models:
+                e = step.estimates[name]
+                truth = lane_offsets(road, x, y, yaw, scenario.road.ego_lane, [e.x_m])[0]
+                row.append(e.offset_m - truth if e.valid else np.nan)
+            trace.errors_m.append(row)
+
+        report = episode.run(on_step=on_step)
+    return report, trace
+
+
+def test_paper_mode_gives_each_model_its_own_window_and_the_pid_table_2():
+    base = load_config()
+    for name, (near, far, half) in PAPER_WINDOWS.items():
+        front = front_detector_config(name, "paper").profiles.front
+        assert (front.x_near_m, front.x_far_m, front.y_half_m) == (near, far, half)
+        assert front_detector_config(name, "default") is None  # the shipped config
+    long_range, short_range = PAPER_WINDOWS["hough"], PAPER_WINDOWS["sliding_window"]
+    assert long_range[1] > base.profiles.front.x_far_m > short_range[1]
+    straight, curvy = PaperGains().gains(False), PaperGains().gains(True)
+    assert curvy.kp == pytest.approx(2 * straight.kp) and straight.ki == 0.0
+
+
+def test_each_mode_has_its_own_front_models_and_the_learned_reference():
+    """Our loop runs LaneNet beside the paper's two classical models; the paper's loop runs its
+    two. Both take the learned detector on the rear camera as the reference (the paper's is
+    a learned one). Switching the mode switches default models and keeps named ones."""
+    ours = load_scenario("clear_curve")
+    assert ours.estimation.front_detectors == ("hough", "sliding_window", "lanenet")
+    assert ours.estimation.reference_detector == "lanenet"
+    paper = with_mode(ours, "paper")
+    assert paper.estimation.front_detectors == ("hough", "sliding_window")
+    assert paper.estimation.reference_detector == "lanenet"
+    assert with_mode(paper, "default").estimation == ours.estimation
+    named = replace(ours, estimation=replace(ours.estimation, front_detectors=("hough",)))
+    assert with_mode(named, "paper").estimation.front_detectors == ("hough",)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", PAPER_CASES)
+def test_paper_mode_keeps_the_lane_in_every_paper_case(name):
+    report, _ = paper_run(name)
+    assert report.completed and report.lane_departures == 0, report.table()
+
+
+@pytest.mark.slow
+def test_case2_model_2_is_worse_in_the_sharp_turn():
+    """Paper Table 3: model #2's RMSE 47.29 cm, model #1's 21.12 cm (2.24x). Ours: 1.16x
+    overall and 1.17x in the turn (measured; 1.30x and 1.36x before distant paint was drawn
+    filtered, lanekeep/world/paint.py: model #1, the long-range one, gained most from lines
+    that no longer break up 30-60 m ahead). (The paper's MMAE then follows model #1 through
+    the turn; ours does not, for its reference is model #2's own algorithm on the rear camera
+    and shares its bias in the turn: see README, "The paper's loop". [lanenet-loop] replaces
+    that reference.)"""
+    report, trace = paper_run("case2_sharp_turn")
+    curvature, _, _, errors = trace.arrays()
+    turn = np.abs(curvature) > 0.01  # the 40 m arc and the steep ends of its clothoids
+    hough, sliding = report.sources["hough"].rmse_cm, report.sources["sliding_window"].rmse_cm
+    assert sliding > 1.1 * hough, report.table()
+    in_turn = np.sqrt(np.nanmean(errors[turn] ** 2, axis=0))
+    assert in_turn[SLIDING] > 1.1 * in_turn[HOUGH], in_turn
+
+
+@pytest.mark.slow
+def test_case1_model_1_loses_the_lane_in_shadow_and_the_mmae_follows_model_2():
+    report, trace = paper_run("case1_building_shadows")
+    _, shaded, selected, errors = trace.arrays()
+    assert shaded.sum() >= 20  # the building shadows lie across the car's path
+    hough_valid = np.isfinite(errors[:, HOUGH])
+    assert hough_valid[shaded].mean() < 0.5 < 0.9 < hough_valid[~shaded].mean()
+    assert np.isfinite(errors[shaded, SLIDING]).all()
+    assert np.mean(selected[shaded] == SLIDING) > 0.9
