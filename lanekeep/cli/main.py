@@ -82,7 +82,7 @@ def _optional_command_modules() -> list:
     import importlib
 
     modules = []
-    for name in ("lanekeep.cli.detect", "lanekeep.cli.episode", "lanekeep.loop.perf",
+    for name in ("lanekeep.cli.detect", "lanekeep.cli.episode", "lanekeep.cli.perf",
                  "lanekeep.cli.eval", "lanekeep.cli.view", "lanekeep.cli.sweep"):
         try:
             modules.append(importlib.import_module(name))

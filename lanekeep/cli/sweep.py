@@ -40,7 +40,7 @@ def register(sub) -> None:
 def _check_world(spec) -> None:
     """The world's cross-field checks (speed bumps on the road, vehicles in lanes, ...) on
     each parameter value, before any worker starts: a bad value is one line, exit 2."""
-    from lanekeep.cli.episode import check_scenario
+    from lanekeep.loop.checks import check_scenario
     from lanekeep.sweep.spec import SweepError, cell_scenario
 
     for i, p in enumerate(spec.parameters):

@@ -13,7 +13,7 @@ import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Protocol, runtime_checkable
 
-from lanekeep.sensing.vehicle_sensors import VehicleSignals
+from lanekeep.core.signals import VehicleSignals
 
 if TYPE_CHECKING:
     from lanekeep.estimators.lane_estimator import EstimatorOutput

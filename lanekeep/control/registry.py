@@ -31,7 +31,7 @@ from lanekeep.control.pid import (
 from lanekeep.control.stanley import StanleyController
 from lanekeep.core import plugins
 from lanekeep.core.config_io import ConfigError
-from lanekeep.sensing.vehicle_sensors import VehicleSignals
+from lanekeep.core.signals import VehicleSignals
 
 if TYPE_CHECKING:
     from lanekeep.estimators.lane_estimator import EstimatorOutput

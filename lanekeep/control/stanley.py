@@ -20,7 +20,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 from lanekeep.control.pid import ControlContext, SpeedController
-from lanekeep.sensing.vehicle_sensors import VehicleSignals
+from lanekeep.core.signals import VehicleSignals
 
 if TYPE_CHECKING:
     from lanekeep.estimators.lane_estimator import EstimatorOutput

@@ -39,9 +39,10 @@ from lanekeep.evaluation.dataset_world import ROAD_LENGTH_M, random_scenario
 from lanekeep.geometry.camera_model import CameraModel
 from lanekeep.scenario.schema import Scenario
 from lanekeep.scoring.metrics import ADE_POINTS_M
-from lanekeep.sensing.cameras import CameraRig, RenderSettings, camera_from_model
+from lanekeep.sensing.cameras import CameraRig, RenderSettings
 from lanekeep.sensing.snapshot import camera_frame, make_effects
 from lanekeep.world.build import World, build
+from lanekeep.world.camera_mount import camera_from_model
 from lanekeep.world.traffic import update_dynamic
 
 SPLIT_IDS = {"train": 0, "val": 1, "test": 2}

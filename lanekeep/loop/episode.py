@@ -24,6 +24,7 @@ import numpy as np
 
 from lanekeep.control.registry import ControlContext, Controller, make_controller
 from lanekeep.core.interrupts import stop_point, stop_requested
+from lanekeep.core.signals import VehicleSignals
 from lanekeep.core.timing import StageClock
 from lanekeep.detectors.base import Detector, LaneEstimate, poly_eval
 from lanekeep.detectors.registry import make_detector
@@ -38,7 +39,7 @@ from lanekeep.scoring.truth import lane_centre_at, lane_centre_fit, lane_offsets
 from lanekeep.sensing.cameras import CameraRig, RenderSettings
 from lanekeep.sensing.paint_visibility import visible_paint
 from lanekeep.sensing.snapshot import make_effects
-from lanekeep.sensing.vehicle_sensors import VehicleSensors, VehicleSignals
+from lanekeep.sensing.vehicle_sensors import VehicleSensors
 from lanekeep.world.build import SimulationError, World, build
 from lanekeep.world.parts import WorldLayout
 

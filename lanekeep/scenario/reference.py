@@ -33,7 +33,7 @@ from lanekeep.scenario.schema import (
     TIMES_OF_DAY,
     Scenario,
 )
-from lanekeep.sensing.vehicle_sensors import MAX_SPEED_SCALE_SIGMA, STEERING_RATIO_RANGE
+from lanekeep.scenario.sensors import MAX_SPEED_SCALE_SIGMA, STEERING_RATIO_RANGE
 
 
 def _one_of(values) -> str:

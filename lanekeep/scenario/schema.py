@@ -24,9 +24,9 @@ from lanekeep.core.config_io import ConfigError, InvalidValue, from_dict
 from lanekeep.estimators.choices import MMAE_PRIORS, MODEL_LANES, OUTPUT_MODES, RESIDUAL_MODES
 from lanekeep.geometry.markings import MarkingStyle
 from lanekeep.geometry.road import MAX_LANES, MAX_ROAD_M, Road, SegmentSpec
+from lanekeep.scenario.pavement import PavementStyle
 from lanekeep.scenario.roadside import Roadside
-from lanekeep.sensing.vehicle_sensors import SensorsConfig
-from lanekeep.world.pavement import PavementStyle
+from lanekeep.scenario.sensors import SensorsConfig
 
 TIMES_OF_DAY = ("day", "dawn", "dusk", "night")
 SHADOW_KINDS = ("buildings", "trees")

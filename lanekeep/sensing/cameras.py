@@ -11,7 +11,6 @@ x forward, y left, z up), so the projection here and the render always agree.
 
 from __future__ import annotations
 
-import math
 import threading
 from contextlib import contextmanager
 from dataclasses import dataclass
@@ -19,50 +18,16 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from lanekeep.geometry.camera_model import CameraModel
 from lanekeep.geometry.lens import Lens, is_distorted
 from lanekeep.sensing.gl_backend import RendererUnavailable
 from lanekeep.sensing.weather import needs_depth
-
-# Geom groups (see mjcf/car.xml and lanekeep/world/build.py).
-GROUP_WORLD = 0
-GROUP_MARKING = 1  # paint drawn as geometry in both renders: raised dots, worn paint
-GROUP_CAR_BODY = 2  # the ego car's body and tyres: seen by neither camera
-GROUP_MARKING_LABEL = 3  # fresh paint geometry: the segmentation render only
-GROUP_HOOD = 4  # the ego car's hood: seen by the front camera when `show_hood` is on
-# Translucent geoms of the RGB render only: shadows, puddles, snow bands and the filtered
-# fresh paint (lanekeep/world/paint.py); hidden from the segmentation render.
-GROUP_RGB_OVERLAY = 5
-GROUP_SHADOW = GROUP_RGB_OVERLAY
-
-
-def camera_from_model(model: mujoco.MjModel, name: str, width: int = 1280,
-                      height: int = 720) -> CameraModel:
-    """The camera `name` of a compiled model (car at rest): pose and fovy read from it."""
-    cam = model.camera(name)
-    quat = np.asarray(model.cam_quat[cam.id], dtype=float)
-    rot = np.zeros(9)
-    mujoco.mju_quat2Mat(rot, quat)
-    parent = int(model.cam_bodyid[cam.id])
-    if model.body(parent).name != "car":
-        raise ValueError(f"camera {name!r} is not mounted on the body 'car'")
-    focal = (height / 2.0) / math.tan(math.radians(float(model.cam_fovy[cam.id])) / 2.0)
-    return CameraModel(
-        name=name,
-        width=width,
-        height=height,
-        fx=focal,
-        fy=focal,
-        cx=(width - 1) / 2.0,
-        cy=(height - 1) / 2.0,
-        position_m=np.asarray(model.cam_pos[cam.id], dtype=float).copy(),
-        rotation=rot.reshape(3, 3),
-    )
-
-
-def front_and_rear(model: mujoco.MjModel, width: int = 1280, height: int = 720) -> dict:
-    """Camera models of both onboard cameras at a given image size."""
-    return {n: camera_from_model(model, n, width, height) for n in ("front", "rear")}
+from lanekeep.world.camera_mount import camera_from_model
+from lanekeep.world.groups import (
+    GROUP_CAR_BODY,
+    GROUP_HOOD,
+    GROUP_MARKING_LABEL,
+    GROUP_RGB_OVERLAY,
+)
 
 
 @dataclass(frozen=True)
@@ -115,7 +80,7 @@ def _rendering():
 class CameraRig:
     """One reused `mujoco.Renderer` per camera; RGB and segmentation renders.
 
-    The ego car's geoms are hidden (groups 2 and 3) as on AirSim's onboard cameras, except its
+    The ego car's body and tyres are hidden (group 2) as on AirSim's onboard cameras, except its
     hood (group 4) on the front camera when `show_hood` is set (it hides paint there in the
     segmentation too); the segmentation render hides the translucent shadow geoms so the
     marking masks are exact.

@@ -39,7 +39,7 @@ def run_cell(cell_id: str, table: dict, source: str, seconds: float | None) -> C
     start = time.perf_counter()
     try:
         import lanekeep  # noqa: F401 - MUJOCO_GL before mujoco
-        from lanekeep.cli.episode import check_scenario
+        from lanekeep.loop.checks import check_scenario
         from lanekeep.loop.episode import Episode
         from lanekeep.loop.paper_mode import with_mode
         from lanekeep.scoring import criteria

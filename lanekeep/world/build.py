@@ -29,18 +29,12 @@ from lanekeep.geometry.road import Road
 from lanekeep.geometry.road_mesh import Ribbon, ribbon
 from lanekeep.mjcf import CAR_XML
 from lanekeep.scenario.schema import Scenario, ScenarioError
-from lanekeep.sensing.cameras import (
-    GROUP_MARKING,
-    GROUP_MARKING_LABEL,
-    GROUP_RGB_OVERLAY,
-    GROUP_WORLD,
-    front_and_rear,
-)
 from lanekeep.world import paint as paint_filter
 from lanekeep.world import pavement, textures
 from lanekeep.world.appearance import MODEL_EXTENT_M, Lighting, appearance_of
-from lanekeep.world.camera_mount import apply_camera_mount
+from lanekeep.world.camera_mount import apply_camera_mount, front_and_rear
 from lanekeep.world.conditions import add_conditions
+from lanekeep.world.groups import GROUP_MARKING, GROUP_MARKING_LABEL, GROUP_RGB_OVERLAY, GROUP_WORLD
 from lanekeep.world.parts import (
     MARKING_Z_M,
     ROAD_Z_M,

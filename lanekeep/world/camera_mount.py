@@ -1,9 +1,10 @@
-"""Re-mount the onboard cameras of a compiled model: height, pitch, roll, yaw and field of view.
+"""The onboard cameras of a compiled model: re-mounted (height, pitch, roll, yaw and field of
+view) and read back as pinhole camera models.
 
-The scenario's `[camera]` mounting keys (lanekeep/scenario/schema.py CameraConfig) change the car's
-own cameras (mjcf/car.xml) after compilation, in `model.cam_pos`, `cam_quat` and `cam_fovy`.
-Everything that projects (`lanekeep.sensing.cameras.camera_from_model`, so the detectors and the
-dataset's labels) reads those fields, so render and projection agree for any mounting.
+The scenario's `[camera]` mounting keys (lanekeep/scenario/schema.py CameraConfig) change the
+car's own cameras (mjcf/car.xml) after compilation, in `model.cam_pos`, `cam_quat` and
+`cam_fovy`. Everything that projects (`camera_from_model`, so the detectors and the dataset's
+labels) reads those fields, so render and projection agree for any mounting.
 
 Rotations compose as q = yaw (about the car's z) * nominal * pitch (about the camera's x,
 its image right) * roll (about the camera's z, its optical axis reversed): pitch and roll
@@ -16,6 +17,8 @@ import math
 
 import mujoco
 import numpy as np
+
+from lanekeep.geometry.camera_model import CameraModel
 
 ONBOARD_CAMERAS = ("front", "rear")
 
@@ -54,3 +57,32 @@ def apply_camera_mount(model: mujoco.MjModel, camera) -> None:
             model.cam_pos[cid, 2] = camera.mount_height_m
         half = math.radians(float(model.cam_fovy[cid])) / 2.0
         model.cam_fovy[cid] = math.degrees(2.0 * math.atan(camera.fov_scale * math.tan(half)))
+
+
+def camera_from_model(model: mujoco.MjModel, name: str, width: int = 1280,
+                      height: int = 720) -> CameraModel:
+    """The camera `name` of a compiled model (car at rest): pose and fovy read from it."""
+    cam = model.camera(name)
+    quat = np.asarray(model.cam_quat[cam.id], dtype=float)
+    rot = np.zeros(9)
+    mujoco.mju_quat2Mat(rot, quat)
+    parent = int(model.cam_bodyid[cam.id])
+    if model.body(parent).name != "car":
+        raise ValueError(f"camera {name!r} is not mounted on the body 'car'")
+    focal = (height / 2.0) / math.tan(math.radians(float(model.cam_fovy[cam.id])) / 2.0)
+    return CameraModel(
+        name=name,
+        width=width,
+        height=height,
+        fx=focal,
+        fy=focal,
+        cx=(width - 1) / 2.0,
+        cy=(height - 1) / 2.0,
+        position_m=np.asarray(model.cam_pos[cam.id], dtype=float).copy(),
+        rotation=rot.reshape(3, 3),
+    )
+
+
+def front_and_rear(model: mujoco.MjModel, width: int = 1280, height: int = 720) -> dict:
+    """Camera models of both onboard cameras at a given image size."""
+    return {n: camera_from_model(model, n, width, height) for n in ("front", "rear")}

@@ -12,38 +12,17 @@ had two tar seams that ran the road's whole length).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import cv2
 import numpy as np
 
-from lanekeep.core.config_io import InvalidValue
+from lanekeep.scenario.pavement import PavementStyle
 from lanekeep.world.textures import periodic_blur, tiled_noise, to_rgb8
 
-SURFACES = ("asphalt", "concrete")
 LANE_U = 0.75  # share of the atlas' width that holds the lane
 SLAB_M = 4.5  # concrete slab length between transverse joints
 WHEEL_TRACK_M = 1.7  # distance between a car's wheel paths
 ASPHALT_TINT = (1.0, 1.0, 1.02)
 CONCRETE_TINT = (1.0, 0.99, 0.95)
-
-
-@dataclass(frozen=True)
-class PavementStyle:
-    """How the carriageway is surfaced. Densities are 0 (none) .. 1 (a road overdue for repair)."""
-
-    surface: str = "asphalt"  # "asphalt" | "concrete" (light grey slabs with joints)
-    asphalt_tone: float = 0.5  # 0 fresh black asphalt .. 1 old, sun-bleached grey
-    cracks: float = 0.3
-    patches: float = 0.2
-    tyre_marks: float = 0.4  # darkness of the wheel paths and the oil strip between them
-
-    def __post_init__(self):
-        if self.surface not in SURFACES:
-            raise InvalidValue("surface", f"must be one of {SURFACES}, got {self.surface!r}")
-        for key in ("asphalt_tone", "cracks", "patches", "tyre_marks"):
-            if not 0.0 <= getattr(self, key) <= 1.0:
-                raise InvalidValue(key, f"must be in [0, 1], got {getattr(self, key)}")
 
 
 def _fold(canvas: np.ndarray, rows: int) -> np.ndarray:

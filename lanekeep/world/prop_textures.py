@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from lanekeep.world.textures import _periodic_blur, _tiled_noise
+from lanekeep.world.textures import periodic_blur, tiled_noise
 
 FACADE_BAYS = 4  # window bays across a facade tile
 FACADE_FLOORS = 4  # floors up a facade tile
@@ -25,7 +25,7 @@ def facade(rng: np.random.Generator, wall_rgb: tuple[float, float, float],
 
     Windows differ pane by pane (sky reflections, blinds, a lit room) as real ones do; the tile
     repeats, so the pattern is drawn once per building kind."""
-    wall = np.asarray(wall_rgb, np.float32) * (1.0 + 0.05 * _tiled_noise(rng, size, 1.5))[..., None]
+    wall = np.asarray(wall_rgb, np.float32) * (1.0 + 0.05 * tiled_noise(rng, size, 1.5))[..., None]
     img = wall.copy()
     bay, floor = size // FACADE_BAYS, size // FACADE_FLOORS
     win_w, win_h = int(bay * rng.uniform(0.45, 0.7)), int(floor * rng.uniform(0.4, 0.6))
@@ -70,17 +70,17 @@ def sign(rng: np.random.Generator, background: tuple[float, float, float],
 
 def concrete(rng: np.random.Generator, size: int = 256) -> np.ndarray:
     """Light concrete with stains and one dark joint across the tile (CONCRETE_TILE_M)."""
-    grey = 0.72 + 0.04 * _tiled_noise(rng, size, 0.8) + 0.05 * _tiled_noise(rng, size, 20.0)
+    grey = 0.72 + 0.04 * tiled_noise(rng, size, 0.8) + 0.05 * tiled_noise(rng, size, 20.0)
     grey[:, :2] *= 0.55  # u runs along the road: a joint every tile
-    stain = np.clip(_tiled_noise(rng, size, 8.0), 0.0, None)
+    stain = np.clip(tiled_noise(rng, size, 8.0), 0.0, None)
     grey -= 0.05 * stain * np.linspace(0.3, 1.0, size)[:, None]  # grime from the ground up
     return _rgb8(grey[..., None] * np.array([1.0, 0.99, 0.95], np.float32))
 
 
 def foliage(rng: np.random.Generator, size: int = 128) -> np.ndarray:
     """Leaf clusters: light and dark green blobs, the edges a crown shows against the sky."""
-    clumps = _tiled_noise(rng, size, 3.0)
-    leaves = _tiled_noise(rng, size, 0.7)
+    clumps = tiled_noise(rng, size, 3.0)
+    leaves = tiled_noise(rng, size, 0.7)
     grey = 0.55 + 0.22 * np.tanh(1.5 * clumps) + 0.12 * leaves
-    grey = _periodic_blur(grey, 0.4)
+    grey = periodic_blur(grey, 0.4)
     return _rgb8(grey[..., None] * np.array([0.42, 0.62, 0.28], np.float32))

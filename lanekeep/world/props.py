@@ -22,12 +22,12 @@ from lanekeep.geometry.road import Road
 from lanekeep.geometry.road_mesh import Ribbon
 from lanekeep.scenario.roadside import SIDES, Roadside
 from lanekeep.scenario.schema import Scenario
-from lanekeep.sensing.cameras import GROUP_SHADOW, GROUP_WORLD
 from lanekeep.world import prop_assets as assets
+from lanekeep.world.groups import GROUP_SHADOW, GROUP_WORLD
 from lanekeep.world.lighting import direct_sun_share
 from lanekeep.world.parts import OVERLAY_Z_M, ConditionsInfo, WorldLayout, add_mesh_geom
 from lanekeep.world.prop_meshes import hill_ring, tree_belt
-from lanekeep.world.roadside import _polygon_mesh, cast_shadow, disjoint_pieces, overlay_alpha
+from lanekeep.world.roadside import cast_shadow, disjoint_pieces, overlay_alpha, polygon_mesh
 
 TREE_OFFSET_M = (4.0, 40.0)  # scenery trees: from the gravel's outer edge (m)
 BUILDING_OFFSET_M = (15.0, 60.0)
@@ -78,7 +78,7 @@ def _add_shadows(spec: mujoco.MjSpec, props: assets.Props, to_sun: np.ndarray,
     alpha = overlay_alpha(cfg.shadow_darkness * direct_share)
     spec.add_material(name="props_shadow", rgba=[0.0, 0.0, 0.0, alpha], specular=0.0,
                       shininess=0.0)
-    add_mesh_geom(spec, "props_shadow", _polygon_mesh(pieces, OVERLAY_Z_M), "props_shadow",
+    add_mesh_geom(spec, "props_shadow", polygon_mesh(pieces, OVERLAY_Z_M), "props_shadow",
                   GROUP_SHADOW)
     info.shadow_polygons.extend(polygons)
 

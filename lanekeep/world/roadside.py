@@ -13,10 +13,10 @@ import numpy as np
 from lanekeep.geometry.road import Road
 from lanekeep.geometry.road_mesh import Ribbon
 from lanekeep.scenario.schema import Conditions, ShadowZone
-from lanekeep.sensing.cameras import GROUP_SHADOW, GROUP_WORLD
 from lanekeep.world import prop_assets as assets
 from lanekeep.world import textures
 from lanekeep.world.appearance import SNOW_TEXTURE
+from lanekeep.world.groups import GROUP_SHADOW, GROUP_WORLD
 from lanekeep.world.parts import (
     OVERLAY_Z_M,
     ConditionsInfo,
@@ -53,7 +53,7 @@ def _convex_hull(points_xy: np.ndarray) -> np.ndarray:
     return hull if _area(hull) > 0 else hull[::-1]
 
 
-def _polygon_mesh(polygons: list[np.ndarray], z_m: float | None = None) -> Ribbon:
+def polygon_mesh(polygons: list[np.ndarray], z_m: float | None = None) -> Ribbon:
     """Triangle fans of convex CCW polygons, one mesh: 2D polygons at height z, or 3D ones."""
     verts, faces, offset = [], [], 0
     for poly in polygons:
@@ -195,7 +195,7 @@ def add_shadow_zone(spec: mujoco.MjSpec, road: Road, zone: ShadowZone, index: in
     polygons = [cast_shadow(points, to_sun) for points in casters.casters]
     if polygons:
         add_mesh_geom(spec, f"cond_shadow_{index}",
-                      _polygon_mesh(disjoint_pieces(polygons), OVERLAY_Z_M),
+                      polygon_mesh(disjoint_pieces(polygons), OVERLAY_Z_M),
                       f"cond_shadow_{index}", GROUP_SHADOW)
         info.shadow_polygons.extend(polygons)
 
@@ -288,7 +288,7 @@ def _drape_shadows(spec: mujoco.MjSpec, centre: np.ndarray, heading: float, half
                     draped.append(lift(strip))
         if not draped:
             continue
-        mesh_arrays = _polygon_mesh(keep + draped)
+        mesh_arrays = polygon_mesh(keep + draped)
         mesh.uservert = mesh_arrays.vertices.astype(np.float32).ravel().tolist()
         mesh.userface = mesh_arrays.faces.ravel().tolist()
         mesh.usertexcoord = mesh_arrays.texcoords.astype(np.float32).ravel().tolist()
@@ -320,7 +320,7 @@ def add_wet(spec: mujoco.MjSpec, road: Road, cond: Conditions, rng: np.random.Ge
         rot = local @ np.array([[c, sn], [-sn, c]])
         polygons.append(road.position(s, r) + rot)
     if polygons:
-        add_mesh_geom(spec, "cond_puddles", _polygon_mesh(polygons, OVERLAY_Z_M - 0.002),
+        add_mesh_geom(spec, "cond_puddles", polygon_mesh(polygons, OVERLAY_Z_M - 0.002),
                   "cond_puddle", GROUP_SHADOW)
         info.puddle_polygons = polygons
 

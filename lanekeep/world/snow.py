@@ -17,7 +17,7 @@ import numpy as np
 from lanekeep.geometry.road import Road
 from lanekeep.geometry.road_mesh import Ribbon
 from lanekeep.scenario.schema import Conditions
-from lanekeep.sensing.cameras import GROUP_SHADOW, GROUP_WORLD
+from lanekeep.world.groups import GROUP_SHADOW, GROUP_WORLD
 from lanekeep.world.parts import MARKING_Z_M, OVERLAY_Z_M, WorldLayout, add_mesh_geom
 
 SNOW_Z_M = 0.5 * (MARKING_Z_M + OVERLAY_Z_M)  # over the paint, under shadows and puddles

@@ -59,8 +59,3 @@ def worn_paint(rng: np.random.Generator, size: int = 64) -> np.ndarray:
     scuffs = np.clip(tiled_noise(rng, (size, size), 2.0) - 0.6, 0.0, None)
     grey = 0.9 + 0.05 * tiled_noise(rng, size, 0.7) - 0.45 * pits - 0.25 * scuffs
     return to_rgb8(np.clip(grey, 0.25, 1.0), (1.0, 1.0, 1.0))
-
-
-# Names other modules imported before these helpers were public.
-_periodic_blur = periodic_blur
-_tiled_noise = tiled_noise

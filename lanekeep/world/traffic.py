@@ -28,7 +28,7 @@ import numpy as np
 
 from lanekeep.geometry.road import Road
 from lanekeep.scenario.schema import VehicleSpec
-from lanekeep.sensing.cameras import GROUP_SHADOW, GROUP_WORLD
+from lanekeep.world.groups import GROUP_SHADOW, GROUP_WORLD
 from lanekeep.world.parts import (
     OVERLAY_Z_M,
     ConditionsInfo,

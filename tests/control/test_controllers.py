@@ -23,9 +23,9 @@ from lanekeep.control.registry import (
 )
 from lanekeep.control.stanley import StanleyController
 from lanekeep.core.config_io import ConfigError
+from lanekeep.core.signals import VehicleSignals
 from lanekeep.loop.episode import Episode
 from lanekeep.scenario.schema import Scenario, ScenarioError, load_scenario, parse_scenario
-from lanekeep.sensing.vehicle_sensors import VehicleSignals
 
 WHEELBASE, MAX_STEER = 2.8, math.radians(35.0)
 

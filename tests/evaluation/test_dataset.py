@@ -17,9 +17,10 @@ from lanekeep.evaluation.dataset import (
 )
 from lanekeep.evaluation.dataset_world import CONDITION_TAGS, random_scenario
 from lanekeep.scenario.schema import CameraConfig, load_scenario
-from lanekeep.sensing.cameras import CameraRig, RenderSettings, camera_from_model
+from lanekeep.sensing.cameras import CameraRig, RenderSettings
 from lanekeep.sensing.snapshot import place_on_road
 from lanekeep.world.build import build
+from lanekeep.world.camera_mount import camera_from_model
 
 SMALL = DatasetRecipe(sequences_per_world=1, frames=2, render_width=320, render_height=180)
 

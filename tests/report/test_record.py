@@ -15,11 +15,11 @@ import numpy as np
 import pytest
 
 import lanekeep  # noqa: F401 - EGL before mujoco
+from lanekeep.core.signals import VehicleSignals
 from lanekeep.detectors.base import LaneEstimate
 from lanekeep.report.record import EpisodeInfo, RerunRecorder
 from lanekeep.scenario.schema import load_scenario
 from lanekeep.sensing.cameras import CameraRig, RenderSettings
-from lanekeep.sensing.vehicle_sensors import VehicleSignals
 from lanekeep.world.build import build
 
 BIN = Path(sys.executable).parent

@@ -12,12 +12,12 @@ from pathlib import Path
 
 import pytest
 
-from lanekeep.cli.episode import _report_from_dict
 from lanekeep.cli.main import main
 from lanekeep.report.json_io import (
     SCHEMA_VERSION,
     lanekeep_version,
     report_document,
+    report_from_dict,
     scenario_sha256,
     strict,
     write_json,
@@ -73,7 +73,7 @@ def test_run_json_is_strict_and_carries_version_hash_and_seed(tmp_path, capsys):
     _assert_metadata(doc, "clear_straight", seed=7)  # the --seed the episode ran with
     assert doc["steps"] == 3
     assert set(doc["sources"]) >= {"fused", "reference"}
-    back = _report_from_dict(doc)  # the metadata does not stop a round trip
+    back = report_from_dict(doc)  # the metadata does not stop a round trip
     assert back.seed == 7 and back.steps == 3 and set(back.sources) == set(doc["sources"])
     assert [p.name for p in tmp_path.iterdir()] == ["run.json"]  # no temporary file left
 
@@ -89,7 +89,7 @@ def test_a_report_with_nan_fields_writes_null_and_reads_back_nan(tmp_path):
     assert doc["sources"]["hough"]["ade_cm"] is None and doc["sources"]["hough"]["rmse_cm"] == 1.5
     assert doc["car_rms_cm"] is None and doc["car_max_cm"] is None  # NaN and infinity alike
     assert doc["seed"] == 4 and doc["scenario_sha256"] == _sha256("clear_straight")
-    back = _report_from_dict(doc)
+    back = report_from_dict(doc)
     assert math.isnan(back.car_rms_cm) and math.isnan(back.sources["reference"].ade_cm)
     assert back.sources["hough"].rmse_cm == 1.5
     assert back.ade_range_m == report.ade_range_m and back.sources.keys() == report.sources.keys()
@@ -102,7 +102,7 @@ def test_bench_json_is_strict_with_metadata_in_each_report(tmp_path, capsys):
     data = strict_load(out)
     assert list(data) == ["clear_straight"]  # keyed by episode label, as before
     _assert_metadata(data["clear_straight"], "clear_straight", seed=0)
-    assert _report_from_dict(data["clear_straight"]).steps == 3
+    assert report_from_dict(data["clear_straight"]).steps == 3
 
 
 def test_perf_json_is_strict_with_metadata(tmp_path, capsys):

@@ -11,8 +11,8 @@ from pathlib import Path
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from lanekeep.cli.episode import check_scenario
 from lanekeep.core.config_io import ConfigError
+from lanekeep.loop.checks import check_scenario
 from lanekeep.scenario.schema import load_scenario, parse_scenario, shipped_scenarios
 
 BASES = {name: tomllib.loads(Path(load_scenario(name).source).read_text(encoding="utf-8"))

@@ -10,9 +10,10 @@ from pathlib import Path
 
 import pytest
 
-from lanekeep.cli.episode import BenchJob, bench_verdict, single_model_table, summary_table
 from lanekeep.cli.main import main
+from lanekeep.loop.runner import BenchJob
 from lanekeep.report.json_io import report_document, report_from_dict
+from lanekeep.report.tables import bench_verdict, single_model_table, summary_table
 from lanekeep.scenario.schema import CriteriaConfig, load_scenario, shipped_scenarios
 from lanekeep.scoring.criteria import evaluate, failure_message, judge
 from lanekeep.scoring.metrics import EpisodeReport, SourceReport

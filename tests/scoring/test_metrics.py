@@ -111,7 +111,7 @@ def test_drift_is_the_change_between_frames_minus_the_true_change():
 
 
 def test_the_drift_table_compares_tracks_with_raw_detections():
-    from lanekeep.cli.episode import drift_table
+    from lanekeep.report.tables import drift_table
 
     def report(name: str, raw: float, track: float) -> EpisodeReport:
         src = {"hough": SourceReport(1, 1, 1, 1, 1, drift_cm=raw),

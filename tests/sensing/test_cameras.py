@@ -10,10 +10,11 @@ import pytest
 
 from lanekeep.mjcf import SCENE_XML
 from lanekeep.scenario.schema import load_scenario
-from lanekeep.sensing.cameras import CameraRig, RenderSettings, camera_from_model
+from lanekeep.sensing.cameras import CameraRig, RenderSettings
 from lanekeep.sensing.chessboard import Board, find_corners, render_chessboards
 from lanekeep.sensing.snapshot import place_on_road
 from lanekeep.world.build import MARKING_Z_M, build
+from lanekeep.world.camera_mount import camera_from_model
 
 
 def test_calibrate_camera_on_rendered_chessboards_recovers_k():

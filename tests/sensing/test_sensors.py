@@ -7,8 +7,10 @@ import numpy as np
 import pytest
 
 from lanekeep.core.config_io import InvalidValue
+from lanekeep.core.signals import VehicleSignals
 from lanekeep.scenario.schema import ScenarioError, parse_scenario
-from lanekeep.sensing.vehicle_sensors import SensorsConfig, VehicleSensors, VehicleSignals
+from lanekeep.scenario.sensors import SensorsConfig
+from lanekeep.sensing.vehicle_sensors import VehicleSensors
 
 MINIMAL = """
 name = "tiny"

@@ -10,14 +10,10 @@ import numpy as np
 import pytest
 
 from lanekeep.scenario.schema import load_scenario
-from lanekeep.sensing.cameras import (
-    GROUP_MARKING_LABEL,
-    GROUP_RGB_OVERLAY,
-    CameraRig,
-    RenderSettings,
-)
+from lanekeep.sensing.cameras import CameraRig, RenderSettings
 from lanekeep.sensing.snapshot import place_on_road
 from lanekeep.world.build import build
+from lanekeep.world.groups import GROUP_MARKING_LABEL, GROUP_RGB_OVERLAY
 from lanekeep.world.paint import FAR_DEPTH_M, SPREAD, profile_rgba
 
 

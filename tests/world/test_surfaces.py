@@ -7,10 +7,12 @@ import dataclasses
 import numpy as np
 import pytest
 
+from lanekeep.scenario.pavement import PavementStyle
 from lanekeep.scenario.schema import ScenarioError, load_scenario, parse_scenario
-from lanekeep.sensing.cameras import GROUP_WORLD, CameraRig, RenderSettings
+from lanekeep.sensing.cameras import CameraRig, RenderSettings
 from lanekeep.world.build import build
-from lanekeep.world.pavement import LANE_U, SLAB_M, PavementStyle, pavement
+from lanekeep.world.groups import GROUP_WORLD
+from lanekeep.world.pavement import LANE_U, SLAB_M, pavement
 
 PERIOD_M = 9.0
 ROWS = 512

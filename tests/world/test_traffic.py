@@ -9,8 +9,9 @@ import numpy as np
 import pytest
 
 from lanekeep.scenario.schema import VehicleSpec, load_scenario
-from lanekeep.sensing.cameras import GROUP_SHADOW, CameraRig, RenderSettings
+from lanekeep.sensing.cameras import CameraRig, RenderSettings
 from lanekeep.world.build import build
+from lanekeep.world.groups import GROUP_SHADOW
 from lanekeep.world.paint import FAR_DEPTH_M
 from lanekeep.world.parts import OVERLAY_Z_M
 from lanekeep.world.traffic import update_dynamic

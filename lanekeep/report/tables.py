@@ -1,0 +1,137 @@
+"""The bench's terminal tables: per-scenario summary, frame-to-frame drift, the model-only
+loops, and the closing verdict lines with the exit code."""
+
+from __future__ import annotations
+
+import math
+from typing import Protocol
+
+from lanekeep.scoring import criteria as criteria_mod
+from lanekeep.scoring.metrics import EpisodeReport
+
+
+class LoopJob(Protocol):
+    """What the model-only table needs of a bench job (lanekeep.loop.runner.BenchJob)."""
+
+    scenario: str
+    front_detectors: tuple[str, ...] | None
+
+    @property
+    def label(self) -> str: ...
+
+
+def bench_verdict(reports: dict[str, EpisodeReport], main_labels: list[str]
+                  ) -> tuple[list[str], int]:
+    """The bench's closing lines and exit code. The code judges the scenarios as configured
+    (`main_labels`); `--single-model` loops are a diagnostic (one detector driving alone),
+    judged by the same criteria and reported, but not counted."""
+    failed = [label for label, r in reports.items() if not r.passed]
+    lines = [f"FAILED {label}: {criteria_mod.failure_message(reports[label])}"
+             for label in failed]
+    main_failed = [label for label in failed if label in main_labels]
+    lines.append(f"criteria: {len(main_labels) - len(main_failed)} of {len(main_labels)} "
+                 "scenarios passed")
+    extra = len(reports) - len(main_labels)
+    if extra:
+        lines.append(f"model-only loops: {extra - (len(failed) - len(main_failed))} of {extra} "
+                     "passed (not counted in the exit code)")
+    return lines, (1 if main_failed else 0)
+
+
+def _best(sources: dict, names: list[str]) -> tuple[str, float]:
+    """The source with the lowest offset RMSE among `names` (NaN counts as worst)."""
+    rmse = {n: sources[n].rmse_cm for n in names}
+    name = min(rmse, key=lambda n: math.inf if math.isnan(rmse[n]) else rmse[n])
+    return name, rmse[name]
+
+
+def _verdict(r: EpisodeReport) -> str:
+    """The summary's last column: "pass", "FAIL" or the status of an episode that stopped."""
+    if r.status != "completed":
+        return r.status.upper().replace("_", " ")
+    return ("pass" if r.passed else "FAIL") if r.criteria else "-"
+
+
+def summary_table(reports: list[EpisodeReport]) -> str:
+    """One line per scenario: fused vs the best front model's own track (like for like: both
+    Kalman estimates at the same look-ahead) and its best raw detection; reference; safety;
+    the criteria's verdict. Columns are as wide as their longest name: nothing is cut."""
+    rows = []
+    for r in reports:
+        tracks = [k for k in r.sources if k.endswith(":track")]
+        raws = [k[: -len(":track")] for k in tracks]
+        rows.append((r, _best(r.sources, tracks), _best(r.sources, raws)))
+    names = [n for _, (t, _), (w, _) in rows for n in (t.split(":")[0], w)] or [""]
+    name_w = max(len(n) for n in names)
+    scen_w = max([28, *(len(r.scenario) + 2 for r in reports)])
+    best_w = name_w + 11  # "%8.1f (name)"
+    header = (f"{'scenario':<{scen_w}}{'fused':>8}{'best track':>{best_w}}{'best raw':>{best_w}}"
+              f"{'reference':>11}{'car RMS':>9}{'depart':>8}{'switch':>8}  result")
+    lines = [header, "-" * len(header)]
+    for r, (track_name, track), (raw_name, raw) in rows:
+        lines.append(
+            f"{r.scenario:<{scen_w}}{r.sources['fused'].rmse_cm:>8.1f}"
+            f"{track:>8.1f} ({track_name.split(':')[0]:>{name_w}})"
+            f"{raw:>8.1f} ({raw_name:>{name_w}})"
+            f"{r.sources['reference'].rmse_cm:>11.1f}{r.car_rms_cm:>9.1f}"
+            f"{r.lane_departures:>8d}{r.mmae_switches:>8d}  {_verdict(r)}"
+        )
+    lines.append("(offset RMSE in cm; track = a model's own Kalman track at the fused output's "
+                 "look-ahead; raw = its detections, on the steps it had one; fused = the MMAE "
+                 "output)")
+    return "\n".join(lines)
+
+
+def _finite_mean(values: list[float]) -> float:
+    finite = [v for v in values if math.isfinite(v)]
+    return sum(finite) / len(finite) if finite else math.nan
+
+
+def drift_table(reports: list[EpisodeReport]) -> str:
+    """Paper 000's tracking claim, per scenario: frame-to-frame drift (metrics.SourceReport)
+    of each front model's raw detections and of its own Kalman track, and of the fused
+    output; the change is the tracks' mean against the raw detections' mean."""
+    rows = []
+    for r in reports:
+        tracks = [k for k in r.sources if k.endswith(":track")]
+        raw = [r.sources[k[: -len(":track")]].drift_cm for k in tracks]
+        track = [r.sources[k].drift_cm for k in tracks]
+        rows.append((r.scenario, _finite_mean(raw), _finite_mean(track),
+                     r.sources["fused"].drift_cm))
+    scen_w = max([28, *(len(n) + 2 for n, *_ in rows)])
+    header = f"{'scenario':<{scen_w}}{'raw':>8}{'tracks':>8}{'change':>9}{'fused':>8}"
+    lines = ["frame-to-frame drift (cm; mean over the front models)", header, "-" * len(header)]
+    for name, raw, track, fused in rows:
+        change = f"{100.0 * (track - raw) / raw:+.0f}%" if raw > 0 else "-"
+        lines.append(f"{name:<{scen_w}}{raw:>8.2f}{track:>8.2f}{change:>9}{fused:>8.2f}")
+    raws = [raw for _, raw, _, _ in rows if math.isfinite(raw)]
+    tracks = [track for _, _, track, _ in rows if math.isfinite(track)]
+    if raws and tracks:
+        mean_raw, mean_track = _finite_mean(raws), _finite_mean(tracks)
+        lines.append(f"{'mean':<{scen_w}}{mean_raw:>8.2f}{mean_track:>8.2f}"
+                     f"{100.0 * (mean_track - mean_raw) / mean_raw:>+8.0f}%")
+    lines.append("(drift: RMS over consecutive steps of the offset's change minus the true "
+                 "change; paper 000 reports -12% for its Kalman filter)")
+    return "\n".join(lines)
+
+
+def single_model_table(jobs: list[LoopJob], reports: dict[str, EpisodeReport]) -> str:
+    """The closed loop driven by the MMAE beside the same loop driven by each front model
+    alone (the paper's "model-only system"): the car's own lateral error and departures."""
+    def loop(job: LoopJob) -> str:
+        return "+".join(job.front_detectors) + " only" if job.front_detectors else "MMAE"
+
+    scen_w = max([28, *(len(j.label) + 2 for j in jobs if j.front_detectors is None)])
+    loop_w = max([22, *(len(loop(j)) + 2 for j in jobs)])
+    header = (f"{'scenario':<{scen_w}}{'loop':>{loop_w}}{'car RMS':>9}{'car max':>9}"
+              f"{'depart':>8}  result")
+    lines = ["closed loop: MMAE vs each front model alone", header, "-" * len(header)]
+    for main in (j for j in jobs if j.front_detectors is None):
+        alone = [j for j in jobs if j.scenario == main.scenario and j.front_detectors]
+        for job in [main, *alone]:
+            r = reports[job.label]
+            lines.append(f"{main.label if job is main else '':<{scen_w}}{loop(job):>{loop_w}}"
+                         f"{r.car_rms_cm:>9.1f}{r.car_max_cm:>9.1f}{r.lane_departures:>8d}"
+                         f"  {_verdict(r)}")
+    lines.append("(car = its true lateral offset from the lane centre, cm)")
+    return "\n".join(lines)
