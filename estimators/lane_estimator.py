@@ -16,6 +16,7 @@ detection is measured from the detections themselves.
 
 from __future__ import annotations
 
+import functools
 import tomllib
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
@@ -26,18 +27,11 @@ import numpy as np
 from lanekeep.core.config_io import ConfigError, from_dict
 from lanekeep.detectors.base import LaneEstimate, poly_eval
 from lanekeep.estimators.alignment import OdometryAlignedHistory
-from lanekeep.estimators.choices import (
-    MMAE_INPUTS,
-    MMAE_PRIORS,
-    MODEL_LANES,
-    OUTPUT_AT,
-    OUTPUT_MODES,
-    RESIDUAL_MODES,
-)
 from lanekeep.estimators.consensus import corroborated
 from lanekeep.estimators.kalman import LaneTracker, TrackerConfig, UpdateStatus
 from lanekeep.estimators.mmae import MMAE, MMAEConfig, MMAEOutput
 from lanekeep.estimators.odometry import EgoMotion
+from lanekeep.estimators.settings import EstimatorSettings
 
 ACCEPTED = (UpdateStatus.UPDATED.value, UpdateStatus.INITIALIZED.value,
             UpdateStatus.RESTARTED.value)
@@ -112,67 +106,15 @@ def closed_loop_tracker(text: str | None = None) -> TrackerTuning:
     return TrackerTuning(config(pooled, "tracker"), by_detector)
 
 
-CLOSED_LOOP_TRACKER = closed_loop_tracker()
+@functools.cache
+def shipped_tracker() -> TrackerTuning:
+    """The shipped tuning (estimators/closed_loop_tracker.toml), read once, on first use (not
+    at import: importing the estimator reads no file)."""
+    return closed_loop_tracker()
 
 
 def _no_lap(stage: str) -> None:
     """The default `lap`: no timing."""
-
-
-SETTING_CHOICES = {  # EstimatorSettings' string choices (see their comments)
-    "residual_mode": RESIDUAL_MODES,
-    "output": OUTPUT_MODES,
-    "model_lane": MODEL_LANES,
-    "output_at": OUTPUT_AT,
-    "mmae_input": MMAE_INPUTS,
-    "mmae_prior": MMAE_PRIORS,
-}
-
-
-@dataclass(frozen=True)
-class EstimatorSettings:
-    """The scenario's estimation choices the estimator needs (see lanekeep.scenario.schema)."""
-
-    offset_lookahead_m: float = 4.0
-    residual_mode: str = "distance_aligned"
-    output: str = "select"
-    model_lane: str = "track"
-    # One-boundary detections are centred with the lane width the detectors measure when they
-    # see both boundaries (a running mean); until then with this prior: the common 3.5-3.75 m
-    # of motorway lanes, not the simulated road's width.
-    # Where the output offset is read: at `offset_lookahead_m` on the output lane ("lookahead"),
-    # or the selected model's own detection at its nearest row ("nearest_row", the paper's PID
-    # input; its track at that row while the detector has nothing).
-    output_at: str = "lookahead"
-    # What the MMAE compares with the reference: each model's Kalman track ("track"), or its
-    # raw detection ("detection", the paper: "the output offsets from both front camera
-    # models", with the model's filter giving eq. 8's C P C').
-    mmae_input: str = "track"
-    # With "detection" input: compare the models and the reference at the car (x = 0, each
-    # detection's lane extrapolated there), the paper's "offset of the vehicle", instead of
-    # at each detector's own look-ahead (+4 m front, -4 m rear: different road points).
-    mmae_at_car: bool = False
-    # Prefer a model whose track accepted this step's detection over a likelier one whose
-    # track coasts (see `LaneEstimator._choose`); the paper takes the argmax.
-    prefer_accepted: bool = True
-    lane_width_prior_m: float = 3.7
-    reference_std_m: float = 0.05  # eq. 8's R: the reference's offset noise (MMAEConfig)
-    # A reference whose two boundaries are further than this from the lane width the front
-    # detectors measure has read a wrong line (a passing car's edge): it is taken as missed.
-    # None: every reading is compared (the paper's).
-    reference_width_tolerance_m: float | None = None
-    # The MMAE's probabilities before the reference has spoken: "uniform" (the paper's) or
-    # "precision", each model's in proportion to the inverse of its measured offset variance
-    # at the output's look-ahead (its tracker's R), as the trackers already weigh it.
-    mmae_prior: str = "uniform"
-    lane_width_gain: float = 0.05  # weight of each two-boundary measurement in the mean
-    lane_width_range_m: tuple[float, float] = (2.5, 5.0)  # plausible widths; others ignored
-
-    def __post_init__(self) -> None:
-        """A misspelt choice would otherwise fall through to some other branch silently."""
-        for key, choices in SETTING_CHOICES.items():
-            if getattr(self, key) not in choices:
-                raise ValueError(f"{key} must be one of {choices}, got {getattr(self, key)!r}")
 
 
 @dataclass(frozen=True)
@@ -195,11 +137,13 @@ class LaneEstimator:
 
     def __init__(self, model_names: list[str], settings: EstimatorSettings,
                  reference_x_m: float,
-                 tracker: TrackerConfig | TrackerTuning = CLOSED_LOOP_TRACKER) -> None:
+                 tracker: TrackerConfig | TrackerTuning | None = None) -> None:
         self.names = list(model_names)
         self.settings = settings
         self.lane_width_m = settings.lane_width_prior_m
         self.reference_x_m = reference_x_m
+        if tracker is None:  # the closed loop's own: what an Episode runs
+            tracker = shipped_tracker()
         tuning = tracker if isinstance(tracker, TrackerTuning) else TrackerTuning(tracker)
         self.tracker_configs = {name: tuning.for_detector(name) for name in self.names}
         self.trackers = {name: LaneTracker(self.tracker_configs[name]) for name in self.names}

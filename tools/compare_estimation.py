@@ -9,65 +9,16 @@ and the rear reference's RMSE; then per value the mean of (output - best track) 
 the car maxima. A choice of the estimator's defaults is made here, and the bench then reports
 it on scenarios it was not chosen on. Shipped scenarios are refused (as by
 tools/measure_detector_noise.py) unless --allow-scored is given.
+
+The code is lanekeep/tuning/estimation.py.
 """
 
 from __future__ import annotations
 
 import argparse
-import dataclasses
-import importlib.util
-import os
-from concurrent.futures import ProcessPoolExecutor
-from pathlib import Path
-from statistics import mean
 
-TOOLS = Path(__file__).resolve().parent
-
-
-def _noise_tool():
-    """tools/measure_detector_noise.py: its tuning-scenario list and shipped-scenario guard."""
-    spec = importlib.util.spec_from_file_location("measure_detector_noise",
-                                                  TOOLS / "measure_detector_noise.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
-def _init_worker(threads: int) -> None:
-    """One worker's thread counts, before EGL, OpenCV or torch start (as `lanekeep bench`)."""
-    os.environ["LP_NUM_THREADS"] = os.environ["OMP_NUM_THREADS"] = str(threads)
-    os.environ.setdefault("MUJOCO_GL", "egl")
-    import cv2
-
-    cv2.setNumThreads(threads)
-
-
-def run_one(job: tuple[str, str, str]) -> tuple[str, str, float, float, str, float, float]:
-    """(scenario, value, output RMSE, best track RMSE, its model, car max, reference RMSE), cm."""
-    path, key, value = job
-    from lanekeep.loop.episode import Episode
-    from lanekeep.scenario.schema import load_scenario
-
-    scenario = load_scenario(path)
-    typed = typed_value(type(getattr(scenario.estimation, key)), value)
-    estimation = dataclasses.replace(scenario.estimation, **{key: typed})
-    with Episode(dataclasses.replace(scenario, estimation=estimation)) as episode:
-        report = episode.run()
-    tracks = {k: v.rmse_cm for k, v in report.sources.items() if k.endswith(":track")}
-    best = min(tracks, key=tracks.get)
-    return (scenario.name, value, report.sources["fused"].rmse_cm, tracks[best], best,
-            report.car_max_cm, report.sources["reference"].rmse_cm)
-
-
-BOOLEANS = {"true": True, "false": False}
-
-
-def typed_value(kind: type, value: str) -> object:
-    """A value of the command line as the key's type: a number key's is a number, a flag's
-    is true or false (`bool("false")` would be True)."""
-    if kind is bool:
-        return BOOLEANS[value]
-    return kind(value) if kind in (int, float) else value
+from lanekeep.tuning.estimation import Setting, run_all, summarise
+from lanekeep.tuning.scenarios import TuningInputError, select_scenarios
 
 
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
@@ -80,40 +31,27 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
                         help="allow shipped scenarios, which `lanekeep bench` scores")
     parser.add_argument("--workers", type=int, default=2)
     args = parser.parse_args(argv)
-    key, _, values = args.setting.partition("=")
-    from lanekeep.scenario.schema import EstimationConfig
-
-    if key not in {f.name for f in dataclasses.fields(EstimationConfig)} or not values:
-        parser.exit(2, f"error: {args.setting!r} is not KEY=VALUE,... of [estimation]\n")
-    args.key, args.values = key, values.split(",")
-    kind = type(getattr(EstimationConfig(), key))
-    for value in args.values:
-        try:
-            typed_value(kind, value)
-        except (KeyError, ValueError):
-            parser.exit(2, f"error: {key} cannot be {value!r}\n")
-    guard = ["--allow-scored"] if args.allow_scored else []
-    args.scenarios = _noise_tool().parse_args([*args.scenarios, *guard]).scenarios
+    try:
+        args.setting = Setting.parse(args.setting)
+        args.scenarios = select_scenarios(args.scenarios, args.allow_scored)
+    except TuningInputError as err:
+        parser.exit(2, f"error: {err}\n")
     return args
 
 
 def main(argv: list[str] | None = None) -> None:
     args = parse_args(argv)
-    jobs = [(path, args.key, value) for path in args.scenarios for value in args.values]
-    threads = max(1, (os.cpu_count() or 1) // args.workers)
-    rows = []
-    with ProcessPoolExecutor(args.workers, initializer=_init_worker,
-                             initargs=(threads,)) as pool:
-        for row in pool.map(run_one, jobs):
-            rows.append(row)
-            name, value, output, track, model, car_max, reference = row
-            print(f"{name:<36} {value:<10} output {output:6.3f}  best track {track:6.3f} "
-                  f"({model})  car max {car_max:5.1f}  reference {reference:5.2f}", flush=True)
-    print(f"\nper value of {args.key} over {len(args.scenarios)} scenarios (cm):")
-    for value in args.values:
-        mine = [r for r in rows if r[1] == value]
-        print(f"  {value:<10} output - best track: mean {mean(r[2] - r[3] for r in mine):+.3f}; "
-              f"car max: sum {sum(r[5] for r in mine):.1f}, worst {max(r[5] for r in mine):.1f}")
+    setting: Setting = args.setting
+    results = []
+    for r in run_all(args.scenarios, setting, args.workers):
+        results.append(r)
+        print(f"{r.scenario:<36} {r.value:<10} output {r.output_cm:6.3f}  best track "
+              f"{r.best_track_cm:6.3f} ({r.best_model})  car max {r.car_max_cm:5.1f}  "
+              f"reference {r.reference_cm:5.2f}", flush=True)
+    print(f"\nper value of {setting.key} over {len(args.scenarios)} scenarios (cm):")
+    for s in summarise(results, setting.values):
+        print(f"  {s.value:<10} output - best track: mean {s.output_minus_track:+.3f}; "
+              f"car max: sum {s.car_max_sum:.1f}, worst {s.car_max_worst:.1f}")
 
 
 if __name__ == "__main__":

@@ -3,9 +3,9 @@
     MUJOCO_GL=egl .venv/bin/python tools/measure_detector_noise.py
 
 Measures on the tuning scenarios, every file in tools/tuning/, which `lanekeep bench` does not
-score (it scores every shipped scenario, lanekeep/scenario/shipped/*.toml): tuning the tracker on the
-bench's scenarios would tune it on its test set. Scenario names or files may be given instead;
-a shipped scenario is refused unless --allow-scored is given.
+score (it scores every shipped scenario, lanekeep/scenario/shipped/*.toml): tuning the tracker
+on the bench's scenarios would tune it on its test set. Scenario names or files may be given
+instead; a shipped scenario is refused unless --allow-scored is given.
 
 Runs each scenario's episode (`--workers` at a time), collects every valid detection's centre
 line [c0, c1, c2] minus the true centre line at the pose its frame was taken from, per front
@@ -20,118 +20,20 @@ track whose R is its detector's follows a good detector without lag and smooths 
 truth is the least-squares quadratic of the exact road centre over the front detectors' own fit
 window (detectors/detectors.toml [profiles.front]), so that the errors are the detectors' and
 not the difference between two windows' quadratic fits of a curving road.
+
+The code is lanekeep/tuning/detector_noise.py.
 """
 
 from __future__ import annotations
 
 import argparse
-import os
 import sys
-from concurrent.futures import ProcessPoolExecutor
-from pathlib import Path
-from typing import NamedTuple
 
 import numpy as np
-from scipy.stats import chi2
 
-from lanekeep.scenario.schema import ScenarioError, load_scenario, shipped_scenarios
-
-TUNING_DIR = Path(__file__).resolve().parent / "tuning"
-
-
-def tuning_scenarios() -> list[Path]:
-    """The tuning scenario files, tools/tuning/*.toml, sorted."""
-    return sorted(TUNING_DIR.glob("*.toml"))
-
-
-def front_window() -> tuple[float, float]:
-    """(near, far) of the front detectors' ground window, where they fit their lines."""
-    from lanekeep.detectors.config import load_config
-
-    front = load_config().profiles.front
-    return tuple(sorted((float(front.x_near_m), float(front.x_far_m))))
-
-
-def coefficient_errors(name: str | Path, fit_range_m: tuple[float, float]
-                       ) -> dict[str, list[np.ndarray]]:
-    """Per front detector, detection minus truth, one row per valid detection of one
-    episode."""
-    from lanekeep.loop.episode import Episode
-    from lanekeep.scoring.truth import lane_truth
-
-    scenario = load_scenario(name)
-    errors: dict[str, list[np.ndarray]] = {}
-    with Episode(scenario) as episode:
-        for _ in range(episode.total_steps):
-            step = episode.step()
-            truth = lane_truth(episode.world.road, *step.sensed_pose, scenario.road.ego_lane,
-                               fit_range_m=fit_range_m).center
-            for detector in episode.front:
-                centre = episode.estimator.centre_of(step.estimates[detector])
-                if centre is not None:
-                    errors.setdefault(detector, []).append(np.asarray(centre) - truth)
-    return errors
-
-
-def _init_worker(threads: int) -> None:
-    """One worker's thread counts, before EGL, OpenCV or torch start (as `lanekeep bench`)."""
-    os.environ["LP_NUM_THREADS"] = os.environ["OMP_NUM_THREADS"] = str(threads)
-    os.environ.setdefault("MUJOCO_GL", "egl")
-    import cv2
-
-    cv2.setNumThreads(threads)
-
-
-def core_covariance(errors: np.ndarray, quantile: float = 0.975, rounds: int = 5
-                    ) -> tuple[np.ndarray, np.ndarray, float]:
-    """Mean and covariance of the errors' core, and the share of rows kept in it."""
-    keep = np.ones(len(errors), bool)
-    limit = chi2.ppf(quantile, errors.shape[1])
-    for _ in range(rounds):
-        mean, cov = errors[keep].mean(0), np.cov(errors[keep].T)
-        d = errors - mean
-        keep = np.einsum("ij,jk,ik->i", d, np.linalg.inv(cov), d) < limit
-    return errors[keep].mean(0), np.cov(errors[keep].T), float(keep.mean())
-
-
-def _num(value: float) -> str:
-    """3 significant digits, TOML's float syntax with a short exponent: 3.18e-3."""
-    mantissa, exponent = f"{value:.2e}".split("e")
-    return f"{mantissa}e{int(exponent)}"
-
-
-def toml_matrix(key: str, cov: np.ndarray) -> str:
-    """`key = [[...], ...]` in TOML, one row a line."""
-    rows = "\n".join("  [" + ", ".join(_num(v) for v in row) + "]," for row in cov)
-    return f"{key} = [\n{rows}\n]"
-
-
-def toml_block(pooled: Fit, per_detector: dict[str, Fit], names: list[str]) -> str:
-    """The covariances as the lines to paste into estimators/closed_loop_tracker.toml."""
-    lines = [f"# scenarios: {' '.join(names)}",
-             f"# all detectors: {pooled.count:,} detections, the {pooled.kept:.0%} core of a "
-             f"robust fit; stds {stds_text(pooled.cov)}",
-             toml_matrix("measured_coefficient_covariance", pooled.cov), "",
-             "[measured_coefficient_covariance_by_detector]"]
-    for detector, fit in per_detector.items():
-        lines.append(f"# {detector}: {fit.count:,} detections, the {fit.kept:.0%} core; "
-                     f"stds {stds_text(fit.cov)}")
-        lines.append(toml_matrix(detector, fit.cov))
-    return "\n".join(lines)
-
-
-def stds_text(cov: np.ndarray) -> str:
-    """The standard deviations of c0, c1, c2 with their units."""
-    s0, s1, s2 = np.sqrt(np.diag(cov))
-    return f"{100 * s0:.1f} cm, {s1:.3g}, {_num(s2)} /m"
-
-
-def _shown(arg: str) -> str:
-    """A scenario argument as given, or a tuning file relative to the working directory."""
-    try:
-        return str(Path(arg).resolve().relative_to(Path.cwd()))
-    except ValueError:
-        return arg
+from lanekeep.scenario.schema import load_scenario, shipped_scenarios
+from lanekeep.tuning.detector_noise import Fit, errors_per_scenario, front_window, toml_block
+from lanekeep.tuning.scenarios import TuningInputError, select_scenarios, shown
 
 
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
@@ -143,45 +45,11 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
                         help="allow shipped scenarios, which `lanekeep bench` scores")
     parser.add_argument("--workers", type=int, default=2, help="episodes run at a time")
     args = parser.parse_args(argv)
-    if not args.scenarios:
-        args.scenarios = [str(path) for path in tuning_scenarios()]
-        if not args.scenarios:
-            parser.exit(2, f"error: no tuning scenarios in {TUNING_DIR}\n")
-    shipped = set(shipped_scenarios())
-    for arg in args.scenarios:
-        try:
-            name = load_scenario(arg).name
-        except ScenarioError as err:
-            parser.exit(2, f"error: {err}\n")
-        if (name in shipped or Path(arg).stem in shipped) and not args.allow_scored:
-            parser.exit(2, f"error: {arg} is a shipped scenario, scored by `lanekeep bench`: "
-                           f"tune on tools/tuning/ (or pass --allow-scored)\n")
+    try:
+        args.scenarios = select_scenarios(args.scenarios, args.allow_scored)
+    except TuningInputError as err:
+        parser.exit(2, f"error: {err}\n")
     return args
-
-
-class Fit(NamedTuple):
-    """The robust core of one set of coefficient errors (a NamedTuple: the tool is also loaded
-    from its file by tools/compare_estimation.py and the tests, outside sys.modules)."""
-
-    count: int
-    mean: np.ndarray
-    cov: np.ndarray
-    kept: float
-
-    @classmethod
-    def of(cls, errors: np.ndarray) -> Fit:
-        mean, cov, kept = core_covariance(errors)
-        return cls(len(errors), mean, cov, kept)
-
-    def report(self, title: str, errors: np.ndarray) -> None:
-        print(f"{title}: {self.count} detections, core {self.kept:.0%}")
-        print("  core mean (bias):", self.mean)
-        print("  stds:", stds_text(self.cov))
-        gate = chi2.ppf(0.99, 3)
-        for scale in (1.0, 2.0, 4.0):
-            d2 = np.einsum("ij,jk,ik->i", errors, np.linalg.inv(scale * self.cov), errors)
-            print(f"  R = {scale:g} x core: {np.mean(d2 > gate):.1%} of detections beyond "
-                  "the 99% gate")
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -190,31 +58,29 @@ def main(argv: list[str] | None = None) -> None:
     shipped = set(shipped_scenarios())
     names = [load_scenario(arg).name for arg in args.scenarios]
     scored = [name for name in names if name in shipped]
-    print(f"measuring on {len(names)} scenarios: {' '.join(_shown(a) for a in args.scenarios)}")
+    print(f"measuring on {len(names)} scenarios: {' '.join(shown(a) for a in args.scenarios)}")
     print("  scored by the bench: " + (", ".join(scored) if scored else "none"))
     print(f"  truth: least-squares quadratic of the road centre over x = {window[0]:g} .. "
           f"{window[1]:g} m (detectors.toml [profiles.front])")
     per_detector: dict[str, list[np.ndarray]] = {}
-    threads = max(1, (os.cpu_count() or 1) // args.workers)
-    with ProcessPoolExecutor(args.workers, initializer=_init_worker,
-                             initargs=(threads,)) as pool:
-        jobs = pool.map(coefficient_errors, args.scenarios, [window] * len(names))
-        for name, errors in zip(names, jobs, strict=True):
-            counts = ", ".join(f"{d} {len(e)}" for d, e in errors.items())
-            print(f"  {name}: {counts} detections", flush=True)
-            for detector, rows in errors.items():
-                per_detector.setdefault(detector, []).extend(rows)
+    jobs = errors_per_scenario(args.scenarios, window, args.workers)
+    for name, errors in zip(names, jobs, strict=True):
+        counts = ", ".join(f"{d} {len(e)}" for d, e in errors.items())
+        print(f"  {name}: {counts} detections", flush=True)
+        for detector, rows in errors.items():
+            per_detector.setdefault(detector, []).extend(rows)
     np.set_printoptions(precision=3, suppress=False)
     arrays = {d: np.array(rows) for d, rows in per_detector.items()}
     fits = {d: Fit.of(e) for d, e in arrays.items()}
     for detector, fit in fits.items():
-        fit.report(detector, arrays[detector])
+        print("\n".join(fit.report(detector, arrays[detector])))
     everything = np.concatenate(list(arrays.values()))
     pooled = Fit.of(everything)
-    pooled.report("all detectors", everything)
+    print("\n".join(pooled.report("all detectors", everything)))
     print("\nTOML (estimators/closed_loop_tracker.toml):")
     print(toml_block(pooled, fits, names))
     sys.stdout.flush()
+
 
 if __name__ == "__main__":
     main()

@@ -28,7 +28,7 @@ from lanekeep.core.signals import VehicleSignals
 from lanekeep.core.timing import StageClock
 from lanekeep.detectors.base import Detector, LaneEstimate, poly_eval
 from lanekeep.detectors.registry import make_detector
-from lanekeep.estimators.lane_estimator import CLOSED_LOOP_TRACKER, EstimatorOutput, LaneEstimator
+from lanekeep.estimators.lane_estimator import EstimatorOutput, LaneEstimator
 from lanekeep.estimators.odometry import DeadReckoning
 from lanekeep.estimators.roll import RollFilter, corrected
 from lanekeep.loop.paper_mode import estimator_settings, front_detector_config, roll_compensation
@@ -144,7 +144,6 @@ class Episode:
             list(self.front),
             estimator_settings(est),
             reference_x_m=float(self.reference.x_ref),
-            tracker=CLOSED_LOOP_TRACKER,
         )
         geometry = self.world.car.geometry
         # The sensors draw from their own stream of the episode's generator, so that they do

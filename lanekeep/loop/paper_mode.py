@@ -56,10 +56,7 @@ def with_mode(scenario: Scenario, mode: str | None) -> Scenario:
 
 def estimator_settings(est: EstimationConfig) -> EstimatorSettings:
     """The estimator's settings of a scenario; paper mode overrides its choices."""
-    settings = EstimatorSettings(est.offset_lookahead_m, est.residual_mode, est.output,
-                                 est.model_lane, reference_std_m=est.reference_std_m,
-                                 mmae_prior=est.mmae_prior,
-                                 reference_width_tolerance_m=est.reference_width_tolerance_m)
+    settings = est.estimator_settings()
     if est.mode != "paper":
         return settings
     return replace(settings, residual_mode="one_step_delay", output="select",

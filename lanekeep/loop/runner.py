@@ -6,8 +6,6 @@ with every partial report kept). `lanekeep run`, `bench`, `perf` and `sweep` cal
 from __future__ import annotations
 
 import dataclasses
-import multiprocessing
-import os
 import sys
 import time
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
@@ -15,11 +13,11 @@ from pathlib import Path
 
 from lanekeep.core.interrupts import (
     end_children,
-    ignore_stop_signals,
     stop_children,
     stop_signals_held,
     stop_signals_interrupt,
 )
+from lanekeep.core.workers import init_worker, spawn_context, worker_pool, worker_threads
 from lanekeep.loop.checks import check_scenario
 from lanekeep.loop.overrides import PluginOverrides
 from lanekeep.report.json_io import report_from_dict
@@ -117,15 +115,6 @@ def _bench_one(job: BenchJob, seconds: float | None, plots: str | None,
                            criteria=criteria, on_step=on_step, plugins=job.plugins).to_dict()
 
 
-def worker_threads(workers: int) -> int:
-    """Threads each bench worker may use so that the workers together fill the machine once.
-
-    Mesa's llvmpipe rasterises with one thread per core and OpenCV parallelises per call; with
-    two workers on two cores both would run two threads each and fight over the cores.
-    """
-    return max(1, (os.cpu_count() or 1) // max(workers, 1))
-
-
 _STOP = None  # in a bench worker: the parent's "stop" event (multiprocessing.Event)
 
 
@@ -133,17 +122,11 @@ _STEPS = None  # in a bench worker: the parent's queue of (job index, steps done
 
 
 def _init_worker(threads: int, stop, steps=None) -> None:
-    """Runs first in every bench worker: thread counts before EGL or OpenCV start; an idle
-    worker ignores Ctrl-C and SIGTERM (one dying would break the pool for all) and starts no
-    episode once the parent has set `stop`; `steps` carries its episodes' progress."""
+    """Runs first in every bench worker (lanekeep/core/workers.py), and keeps the parent's
+    `stop` event (no episode starts once it is set) and `steps` queue (its episodes' progress)."""
     global _STOP, _STEPS
     _STOP, _STEPS = stop, steps
-    ignore_stop_signals()
-    os.environ["LP_NUM_THREADS"] = str(threads)  # Mesa llvmpipe, read when EGL starts
-    os.environ["OMP_NUM_THREADS"] = str(threads)  # torch (LaneNet), read at its import
-    import cv2
-
-    cv2.setNumThreads(threads)
+    init_worker(threads)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -215,10 +198,9 @@ def run_bench(jobs: list[BenchJob], workers: int, seconds: float | None = None,
     """
     start = time.perf_counter()
     reports: list[EpisodeReport | None] = [None] * len(jobs)
-    context = multiprocessing.get_context("spawn")
+    context = spawn_context()
     stop, steps = context.Event(), context.Queue()
-    pool = ProcessPoolExecutor(max_workers=workers, mp_context=context, initializer=_init_worker,
-                               initargs=(worker_threads(workers), stop, steps))
+    pool = worker_pool(workers, _init_worker, (worker_threads(workers), stop, steps))
     futures = {}
     expected = job_steps(jobs, seconds)
     progress = _StepProgress(expected, steps, on_steps)

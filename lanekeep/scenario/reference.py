@@ -20,14 +20,18 @@ from pathlib import Path
 
 from lanekeep.geometry.markings import MARKING_KINDS, WORN_PATTERNS
 from lanekeep.geometry.road import MAX_LANES, MAX_ROAD_M, SEGMENT_KINDS
+from lanekeep.estimators.settings import (
+    MMAE_INPUTS,
+    MMAE_PRIORS,
+    MODEL_LANES,
+    OUTPUT_AT,
+    OUTPUT_MODES,
+    RESIDUAL_MODES,
+)
 from lanekeep.scenario.roadside import SKYLINES
 from lanekeep.scenario.schema import (
     CAMERAS,
     ESTIMATION_MODES,
-    MMAE_PRIORS,
-    MODEL_LANES,
-    OUTPUT_MODES,
-    RESIDUAL_MODES,
     SHADOW_KINDS,
     SIDES,
     TIMES_OF_DAY,
@@ -203,6 +207,26 @@ DESCRIPTIONS: dict[str, tuple[str, str]] = {
         "A rear reading whose lane is further than this from the width the front detectors "
         "measure is taken as missed (it read a wrong line); paper mode compares every "
         "reading.", "0.01..10"),
+    "estimation.output_at": ("Where the output offset is read: on the output lane at "
+                             "offset_lookahead_m, or the selected model's own detection at its "
+                             "nearest row (the paper's PID input; paper mode sets it).",
+                             _one_of(OUTPUT_AT)),
+    "estimation.mmae_input": ("What the MMAE compares with the reference: each model's Kalman "
+                              "track, or its raw detection (the paper's; paper mode sets it).",
+                              _one_of(MMAE_INPUTS)),
+    "estimation.mmae_at_car": ("With detection input: compare the models and the reference at "
+                               "the car (x = 0), the paper's offset of the vehicle, instead of "
+                               "at each detector's own look-ahead.", "true, false"),
+    "estimation.prefer_accepted": ("Prefer a model whose track accepted this step's detection "
+                                   "over a likelier one whose track coasts (the paper takes "
+                                   "the argmax; paper mode turns it off).", "true, false"),
+    "estimation.lane_width_prior_m": ("Lane width that centres a one-boundary detection until "
+                                      "the detectors have measured the width from two "
+                                      "boundaries.", "1..10"),
+    "estimation.lane_width_gain": ("Weight of each two-boundary width measurement in the "
+                                   "running mean.", "(0, 1]"),
+    "estimation.lane_width_range_m": ("Plausible lane widths [low, high]; measurements outside "
+                                      "are ignored.", "0 < low < high"),
     "control": ("The controller, by name.", ""),
     "control.controller": ("Controller turning the estimated lane into steer and throttle.",
                            '"pid", "stanley", package.module:Class, entry points'),

@@ -21,7 +21,9 @@ from importlib import resources
 from pathlib import Path
 
 from lanekeep.core.config_io import ConfigError, InvalidValue, from_dict
-from lanekeep.estimators.choices import MMAE_PRIORS, MODEL_LANES, OUTPUT_MODES, RESIDUAL_MODES
+from lanekeep.estimators.settings import (
+    EstimatorSettings,
+)
 from lanekeep.geometry.markings import MarkingStyle
 from lanekeep.geometry.road import MAX_LANES, MAX_ROAD_M, Road, SegmentSpec
 from lanekeep.scenario.pavement import PavementStyle
@@ -286,14 +288,14 @@ DEFAULT_FRONT_DETECTORS = {"default": ("hough", "sliding_window", "lanenet"),
 
 
 @dataclass(frozen=True)
-class EstimationConfig:
+class EstimationConfig(EstimatorSettings):
     """Which detectors run, which one is the MMAE reference, and how the output is formed.
 
-    The paper runs two front models and a rear-camera reference; residuals compare the
-    reference with the models one step earlier (eq. 2, "one_step_delay") or, our default,
-    at the same road position ("distance_aligned"). Output: the paper's argmax ("select") or
-    the probability-weighted lane ("fused"), or, the default, the lanes fused with their tracks'
-    covariances and the probabilities ("precision").
+    The estimator's own keys (residual_mode, output, model_lane, mmae_prior, ...) and their
+    defaults are `EstimatorSettings`' (estimators/settings.py), defined once; the keys below
+    are the loop's. The paper runs two front models and a rear-camera reference; residuals
+    compare the reference with the models one step earlier (eq. 2) or, our default, at the
+    same road position.
     """
 
     # "paper": the paper's own loop (lanekeep/loop/paper_mode.py): one-step-delay residuals, the
@@ -307,38 +309,6 @@ class EstimationConfig:
     # (CLRNet); model #2 ("sliding_window") there errs with front model #2 and fails in traffic.
     reference_detector: str = "lanenet"
     reference_camera: str = "rear"
-    residual_mode: str = "distance_aligned"
-    # "precision" (default): the models' lanes fused with their tracks' covariances, each
-    # weighted by its MMAE probability (estimators/lane_estimator.py `_precision_fused`);
-    # "fused": the probability-weighted lane of the models; "select": the likeliest model's
-    # (the paper's rule, which paper mode keeps). Chosen on the tuning scenarios with each
-    # detector's own tracker R (`python tools/compare_estimation.py output=fused,precision`):
-    # the output's RMSE above the best own track by +0.05 cm on average against +0.07, at or
-    # below it (to the 0.01 cm printed) in 6 of 9 against 4; car maxima summed 165 cm against
-    # 157 (worst 42.4 against 33.9, tune_traffic_lead_van_three_lanes, where lanenet's
-    # curvature flips sign at a clothoid's end). Before, with one pooled R, "fused" beat
-    # "select" there (+0.25 cm against +0.95).
-    output: str = "precision"
-    # What a model hands the output: its Kalman estimate ("track", the MMAE filter's state) or
-    # its own detection when its track's gate accepts it ("detection", the paper's PID input).
-    model_lane: str = "track"
-    offset_lookahead_m: float = 4.0  # where offsets are compared and reported (front)
-    # Eq. 8's R: the rear reference's offset noise (m) in the MMAE's residual density.
-    reference_std_m: float = 0.05
-    # A rear reading whose lane is further than this from the width the front detectors
-    # measure (the estimator's running width) has read a wrong line and is taken as missed
-    # (estimators/lane_estimator.py). On the tuning scenarios the rear pair stays within
-    # 16 cm of it except where it follows a passing car's edge (the lead van: 4.8% of steps
-    # beyond 30 cm). Paper mode compares every reading, as the paper does.
-    reference_width_tolerance_m: float = 0.2
-    # The MMAE's probabilities before the reference has spoken: "uniform" (the paper's; paper
-    # mode keeps it) or "precision" (each model's in proportion to its tracker R's inverse
-    # offset variance at offset_lookahead_m). Chosen on the tuning scenarios
-    # (`python tools/compare_estimation.py mmae_prior=precision`, 2026-11-26): the output's
-    # RMSE minus the best own track -0.07 cm on average against +0.03 uniform, car maxima
-    # summed 170 cm against 184. With equal starting probabilities the output took the
-    # classical models' bias for the ~3 s the reference needs to tell the models apart.
-    mmae_prior: str = "precision"
     control_lookahead_m: float = 8.0  # where the PID reads the chosen lane
     # Body roll compensation (estimators/roll.py; default mode only): the car's roll per m/s^2
     # of lateral acceleration (a suspension constant; 0 turns it off) and each camera's offset
@@ -349,6 +319,7 @@ class EstimationConfig:
     roll_lever_rear_m: float = 2.5
 
     def __post_init__(self):
+        super().__post_init__()  # the estimator's own checks
         if self.mode not in ESTIMATION_MODES:
             raise InvalidValue("mode", f"must be one of {ESTIMATION_MODES}, got {self.mode!r}")
         if self.front_detectors is None:
@@ -357,29 +328,20 @@ class EstimationConfig:
             raise InvalidValue("front_detectors", "at least one front detector is needed")
         if self.reference_camera not in CAMERAS:
             raise InvalidValue("reference_camera", f"must be one of {CAMERAS}")
-        if self.residual_mode not in RESIDUAL_MODES:
-            raise InvalidValue("residual_mode", f"must be one of {RESIDUAL_MODES}")
-        if self.output not in OUTPUT_MODES:
-            raise InvalidValue("output", f"must be one of {OUTPUT_MODES}")
-        if self.model_lane not in MODEL_LANES:
-            raise InvalidValue("model_lane", f"must be one of {MODEL_LANES}")
-        if self.mmae_prior not in MMAE_PRIORS:
-            raise InvalidValue("mmae_prior", f"must be one of {MMAE_PRIORS}")
-        if not 0.01 <= self.reference_width_tolerance_m <= 10.0:
-            raise InvalidValue("reference_width_tolerance_m",
-                               f"must be in [0.01, 10] m, got {self.reference_width_tolerance_m}")
-        if not 0.001 <= self.reference_std_m <= 1.0:
-            raise InvalidValue("reference_std_m",
-                               f"must be in [0.001, 1] m, got {self.reference_std_m}")
-        for key in ("offset_lookahead_m", "control_lookahead_m"):
-            if not 0.0 <= getattr(self, key) <= 40.0:
-                raise InvalidValue(key, f"must be in [0, 40] m, got {getattr(self, key)}")
+        if not 0.0 <= self.control_lookahead_m <= 40.0:
+            raise InvalidValue("control_lookahead_m",
+                               f"must be in [0, 40] m, got {self.control_lookahead_m}")
         if not 0.0 <= self.roll_gradient_deg_per_mps2 <= 5.0:
             raise InvalidValue("roll_gradient_deg_per_mps2",
                                f"must be in [0, 5], got {self.roll_gradient_deg_per_mps2}")
         for key in ("roll_lever_front_m", "roll_lever_rear_m"):
             if not -10.0 <= getattr(self, key) <= 10.0:
                 raise InvalidValue(key, f"must be in [-10, 10] m, got {getattr(self, key)}")
+
+    def estimator_settings(self) -> EstimatorSettings:
+        """The estimator's part of this table, as the estimator's own type."""
+        return EstimatorSettings(**{f.name: getattr(self, f.name)
+                                    for f in dataclasses.fields(EstimatorSettings)})
 
 
 @dataclass(frozen=True)

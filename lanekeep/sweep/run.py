@@ -9,13 +9,13 @@ exception: one bad cell of a thousand must not end the sweep.
 
 from __future__ import annotations
 
-import multiprocessing
 import os
 import time
 from collections.abc import Callable
-from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from concurrent.futures import FIRST_COMPLETED, wait
 from dataclasses import dataclass
 
+from lanekeep.core.workers import worker_pool
 from lanekeep.sweep.spec import Cell
 
 OnResult = Callable[["CellResult"], None]
@@ -56,29 +56,10 @@ def run_cell(cell_id: str, table: dict, source: str, seconds: float | None) -> C
         return CellResult(cell_id, "failed", None, message, time.perf_counter() - start)
 
 
-def _threads(workers: int) -> int:
-    """Threads per worker so that the workers together fill the machine once (llvmpipe and
-    OpenCV each start one per core otherwise, and the workers fight over the cores)."""
-    return max(1, (os.cpu_count() or 1) // max(workers, 1))
-
-
-def _init_local_worker(threads: int) -> None:
-    from lanekeep.core.interrupts import ignore_stop_signals
-
-    ignore_stop_signals()  # the parent decides what a Ctrl-C stops
-    os.environ["LP_NUM_THREADS"] = str(threads)  # Mesa llvmpipe reads it when EGL starts
-    os.environ["OMP_NUM_THREADS"] = str(threads)  # torch (LaneNet), read at its import
-    import cv2
-
-    cv2.setNumThreads(threads)
-
-
 def run_local(cells: list[Cell], source: str, seconds: float | None, workers: int,
               on_result: OnResult) -> None:
     """The cells in `workers` spawned processes (spawn: EGL and MuJoCo state never forked)."""
-    context = multiprocessing.get_context("spawn")
-    pool = ProcessPoolExecutor(max_workers=workers, mp_context=context,
-                               initializer=_init_local_worker, initargs=(_threads(workers),))
+    pool = worker_pool(workers)
     try:
         futures = {pool.submit(run_cell, c.cell_id, c.table, source, seconds): c for c in cells}
         pending = set(futures)

@@ -10,6 +10,13 @@ from lanekeep.estimators.lane_estimator import EgoMotion, EstimatorSettings, Lan
 
 WIDTH = 3.7
 NAMES = ["hough", "sliding_window"]
+# These unit tests were written for the paper's choices (the likeliest model's lane, equal
+# starting probabilities, every reference reading compared); a test of another choice says so.
+PAPER_CHOICES = {"output": "select", "mmae_prior": "uniform", "reference_width_tolerance_m": None}
+
+
+def _settings(**overrides) -> EstimatorSettings:
+    return EstimatorSettings(**{"lane_width_prior_m": WIDTH, **PAPER_CHOICES, **overrides})
 
 
 def _lane(c0: float, heading: float = 0.0) -> LaneEstimate:
@@ -24,7 +31,7 @@ def _ego(k: int, speed: float = 15.0) -> EgoMotion:
 
 
 def _estimator() -> LaneEstimator:
-    return LaneEstimator(NAMES, EstimatorSettings(lane_width_prior_m=WIDTH), reference_x_m=-4.0)
+    return LaneEstimator(NAMES, _settings(), reference_x_m=-4.0)
 
 
 def test_one_boundary_is_centred_with_the_lane_width():
@@ -132,11 +139,11 @@ def test_paper_settings_hand_on_the_selected_detection_at_its_own_row():
     settings = estimator_settings(EstimationConfig(mode="paper"))
     assert (settings.residual_mode, settings.model_lane, settings.output_at) == (
         "one_step_delay", "detection", "nearest_row")
-    from lanekeep.estimators.lane_estimator import CLOSED_LOOP_TRACKER
+    from lanekeep.estimators.lane_estimator import shipped_tracker
 
     # one R for both models, so that their probabilities stay equal until the jump
     estimator = LaneEstimator(NAMES, settings, reference_x_m=-4.0,
-                              tracker=CLOSED_LOOP_TRACKER.default)
+                              tracker=shipped_tracker().default)
     for k in range(10):
         estimator.update({n: _lane(0.0) for n in NAMES}, _lane(0.0), _ego(k))
     jump = LaneEstimate(valid=True, offset_m=-1.5, x_m=5.0, left=np.array([3.35, 0.0, 0.0]),
@@ -152,13 +159,13 @@ def test_each_detector_tracks_with_its_own_measured_noise():
     """The shipped tuning gives every measured detector its own R (a plug-in the pooled one),
     and the corroboration between models uses each one's: a steady detector's track follows
     its detections more closely than a noisy detector's track follows the same detections."""
-    from lanekeep.estimators.lane_estimator import CLOSED_LOOP_TRACKER
+    from lanekeep.estimators.lane_estimator import shipped_tracker
 
     names = ["hough", "lanenet", "mod:Plugin"]
-    estimator = LaneEstimator(names, EstimatorSettings(lane_width_prior_m=WIDTH), -4.0)
+    estimator = LaneEstimator(names, _settings(), -4.0)
     for name in names:
-        assert estimator.trackers[name].config is CLOSED_LOOP_TRACKER.for_detector(name)
-    assert estimator.trackers["mod:Plugin"].config is CLOSED_LOOP_TRACKER.default
+        assert estimator.trackers[name].config is shipped_tracker().for_detector(name)
+    assert estimator.trackers["mod:Plugin"].config is shipped_tracker().default
     for k in range(30):
         estimator.update({n: _lane(0.0) for n in names}, _lane(0.0), _ego(k))
     out = estimator.update({n: _lane(0.1) for n in names}, _lane(0.0), _ego(30))
@@ -170,7 +177,7 @@ def test_precision_output_equals_a_direct_computation():
     """output = "precision": the lane is (sum_n p_n P_n^-1)^-1 sum_n p_n P_n^-1 c_n, with p the
     MMAE's probabilities and P_n each track's coefficient covariance."""
     names = ["hough", "sliding_window", "lanenet"]
-    settings = EstimatorSettings(lane_width_prior_m=WIDTH, output="precision")
+    settings = _settings(output="precision")
     estimator = LaneEstimator(names, settings, reference_x_m=-4.0)
     lanes = {"hough": 0.05, "sliding_window": -0.03, "lanenet": 0.01}
     for k in range(25):
@@ -185,7 +192,7 @@ def test_precision_output_equals_a_direct_computation():
     np.testing.assert_allclose(out.centre, expected, rtol=1e-9, atol=1e-12)
     assert min(out.tracked[n][0] for n in names) < out.centre[0] < max(
         out.tracked[n][0] for n in names)
-    fused = LaneEstimator(names, EstimatorSettings(lane_width_prior_m=WIDTH, output="fused"),
+    fused = LaneEstimator(names, _settings(output="fused"),
                           reference_x_m=-4.0)
     for k in range(25):
         jitter = 0.01 * (-1) ** k
@@ -215,14 +222,14 @@ def test_the_precision_prior_weighs_each_model_by_its_measured_offset_variance()
     """p_n(0) proportional to 1 / (C R_n C') at the output's look-ahead, from each detector's own
     tracker R; "uniform" is the paper's equal start."""
     names = ["hough", "sliding_window", "lanenet"]
-    settings = EstimatorSettings(lane_width_prior_m=WIDTH, mmae_prior="precision")
+    settings = _settings(mmae_prior="precision")
     estimator = LaneEstimator(names, settings, -4.0)
     c = np.array([1.0, 4.0, 16.0])
     inverse = np.array([1.0 / (c @ np.asarray(estimator.tracker_configs[n].coefficient_covariance)
                                @ c) for n in names])
     np.testing.assert_allclose(estimator.mmae.probabilities, inverse / inverse.sum())
     assert np.argmax(estimator.mmae.probabilities) == 2  # lanenet: the steadiest near offset
-    uniform = LaneEstimator(names, EstimatorSettings(lane_width_prior_m=WIDTH), -4.0)
+    uniform = LaneEstimator(names, _settings(), -4.0)
     np.testing.assert_allclose(uniform.mmae.probabilities, np.full(3, 1.0 / 3.0))
 
 
@@ -236,7 +243,7 @@ def test_a_reference_that_reads_a_lane_of_the_wrong_width_is_taken_as_missed():
     """A rear pair 0.5 m narrower than the lane the front detectors measure has read a wrong
     line (a passing car's edge): the MMAE is not updated with it and an event says why. One
     within the tolerance is compared; without a tolerance (the paper's) every one is."""
-    settings = EstimatorSettings(lane_width_prior_m=WIDTH, reference_width_tolerance_m=0.2)
+    settings = _settings(reference_width_tolerance_m=0.2)
     estimator = LaneEstimator(NAMES, settings, reference_x_m=-4.0)
     for k in range(10):  # 15 m: the models' history reaches where the reference looks
         estimator.update({n: _lane(0.0) for n in NAMES}, _pair(0.0, WIDTH), _ego(k))
@@ -249,7 +256,7 @@ def test_a_reference_that_reads_a_lane_of_the_wrong_width_is_taken_as_missed():
     out = estimator.update({"hough": _lane(0.0), "sliding_window": _lane(0.2)},
                            _pair(0.0, WIDTH - 0.1), _ego(11))
     assert out.selection.updated and not any("ignored" in e for e in out.events)
-    paper = LaneEstimator(NAMES, EstimatorSettings(lane_width_prior_m=WIDTH), -4.0)
+    paper = LaneEstimator(NAMES, _settings(), -4.0)
     for k in range(10):
         paper.update({n: _lane(0.0) for n in NAMES}, _pair(0.0, WIDTH), _ego(k))
     assert paper.update({n: _lane(0.0) for n in NAMES}, _pair(0.25, WIDTH - 0.5),
@@ -275,3 +282,14 @@ def test_a_misspelt_estimator_choice_is_refused_not_taken_for_another():
     with pytest.raises(ValueError, match="output"):
         EstimatorSettings(output="precise")
     assert EstimatorSettings(output="fused", mmae_input="detection").output == "fused"
+
+
+def test_an_estimator_built_on_its_own_runs_the_loop_an_episode_runs():
+    """One definition of the settings: the scenario's [estimation] defaults are the
+    estimator's own, so `EstimatorSettings()` is what a default Episode runs."""
+    from lanekeep.loop.paper_mode import estimator_settings
+    from lanekeep.scenario.schema import EstimationConfig
+
+    assert EstimationConfig().estimator_settings() == EstimatorSettings()
+    assert estimator_settings(EstimationConfig()) == EstimatorSettings()
+    assert EstimatorSettings().output == "precision"

@@ -6,8 +6,9 @@ No timing is asserted here: speed targets are benchmarks (`lanekeep perf`), not 
 import json
 
 from lanekeep.cli.main import main
+from lanekeep.core.workers import worker_threads
 from lanekeep.loop.perf import format_results
-from lanekeep.loop.runner import BenchJob, longest_first, run_bench, run_episode, worker_threads
+from lanekeep.loop.runner import BenchJob, longest_first, run_bench, run_episode
 
 STAGES = {"render_front", "render_rear", "effects_front", "effects_rear", "detect_hough",
           "detect_sliding_window", "detect_lanenet", "detect_reference", "track", "mmae",

@@ -27,7 +27,7 @@ LAYERS = {
     "control": 8,
     "report": 9,
     "loop": 10, "evaluation": 10,
-    "sweep": 11, "envs": 11,
+    "sweep": 11, "envs": 11, "tuning": 11,
     "cli": 12,
 }
 NO_MUJOCO = ("detectors", "estimators")  # perception and estimation see frames, not a model

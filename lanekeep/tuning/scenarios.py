@@ -1,0 +1,62 @@
+"""Which scenarios a tuning tool may measure on: the tuning scenarios, tools/tuning/*.toml, by
+default; a shipped scenario (scored by `lanekeep bench` at its file's seed) only when asked.
+
+tools/ is not installed: the tuning scenarios are found beside this package in the repository
+(an editable install), and a tool run from an installed copy has none.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+
+from lanekeep.scenario.schema import ScenarioError, load_scenario, shipped_scenarios
+
+TUNING_DIR = Path(__file__).resolve().parents[2] / "tools" / "tuning"
+
+
+class TuningInputError(ValueError):
+    """A user error of a tuning tool: its message is one line, the tool exits 2."""
+
+
+def tuning_scenarios() -> list[Path]:
+    """The tuning scenario files, tools/tuning/*.toml, sorted."""
+    return sorted(TUNING_DIR.glob("*.toml"))
+
+
+def select_scenarios(scenarios: Sequence[str] = (), allow_scored: bool = False) -> list[str]:
+    """The scenario arguments to measure on: `scenarios` as given, or every tuning scenario.
+
+    Raises TuningInputError when there are no tuning scenarios, a scenario does not load, or
+    one is shipped (by name or file) and `allow_scored` is false.
+    """
+    selected = list(scenarios) or [str(path) for path in tuning_scenarios()]
+    if not selected:
+        raise TuningInputError(f"no tuning scenarios in {TUNING_DIR}")
+    shipped = set(shipped_scenarios())
+    for arg in selected:
+        try:
+            name = load_scenario(arg).name
+        except ScenarioError as err:
+            raise TuningInputError(str(err)) from None
+        if (name in shipped or Path(arg).stem in shipped) and not allow_scored:
+            raise TuningInputError(f"{arg} is a shipped scenario, scored by `lanekeep bench`: "
+                                   f"tune on tools/tuning/ (or pass --allow-scored)")
+    return selected
+
+
+def shown(arg: str) -> str:
+    """A scenario argument as given, or a tuning file relative to the working directory."""
+    try:
+        return str(Path(arg).resolve().relative_to(Path.cwd()))
+    except ValueError:
+        return arg
+
+
+def own_seed(scenario_arg: str) -> int | None:
+    """The seed a scenario's file gives it (the one the bench scores); None if it will not
+    load (`select_scenarios` then says why)."""
+    try:
+        return load_scenario(scenario_arg).seed
+    except ScenarioError:
+        return None
