@@ -13,7 +13,6 @@ from lanekeep.loop.episode import Episode
 ALLOWED = {
     ("lanekeep.loop.episode", "_true_pose"),
     ("lanekeep.loop.episode", "_score"),
-    ("lanekeep.loop.episode", "_wheels_outside_lane"),
     ("lanekeep.loop.episode", "_sense"),  # motion blur follows the true motion
     ("lanekeep.sensing.vehicle_sensors", None),  # the sensors measure the true state
     ("lanekeep.world.build", None),  # the simulator

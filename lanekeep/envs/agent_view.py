@@ -22,7 +22,8 @@ import weakref
 import numpy as np
 
 from lanekeep.detectors.base import poly_eval
-from lanekeep.loop.episode import FUSED, Episode, Percept, StepResult
+from lanekeep.loop.episode import Episode, Percept, StepResult
+from lanekeep.scoring.step_score import FUSED
 
 LANE_KEYS = ("valid", "offset_m", "heading_rad", "curvature_1pm")
 SIGNAL_KEYS = ("speed_mps", "yaw_rate_rps", "accel_long_mps2", "accel_lat_mps2",

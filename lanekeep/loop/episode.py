@@ -7,11 +7,12 @@ paper's "observer"); the MMAE selects (or fuses) the front models; the scenario'
 look-ahead, and the speed PI) steers and drives.
 
 What the car knows is what a car has: the camera frames and its sensor signals
-(lanekeep/sensing/vehicle_sensors.py: wheel odometry, IMU yaw rate, accelerations, steering angle), dead-reckoned
-into the estimator's ego-motion (estimators/odometry.py). The simulator's state (the car's
-true pose and speed, the road) is read only to score the step (`_true_pose`, `_score`,
-`_wheels_outside_lane`), to image the scene (`_sense`: motion blur follows the true motion) and
-by the recorder; tests/test_honest_loop.py makes any other read fail.
+(lanekeep/sensing/vehicle_sensors.py: wheel odometry, IMU yaw rate, accelerations, steering
+angle), dead-reckoned into the estimator's ego-motion (estimators/odometry.py). The
+simulator's state (the car's true pose and speed, the road) is read only to score the step
+(`_true_pose`, `_score`, which calls lanekeep/scoring/), to image the scene (`_sense`: motion
+blur follows the true motion) and by the recorder; tests/loop/test_honest_loop.py makes any
+other read fail.
 """
 
 from __future__ import annotations
@@ -26,7 +27,7 @@ from lanekeep.control.registry import ControlContext, Controller, make_controlle
 from lanekeep.core.interrupts import stop_point, stop_requested
 from lanekeep.core.signals import VehicleSignals
 from lanekeep.core.timing import StageClock
-from lanekeep.detectors.base import Detector, LaneEstimate, poly_eval
+from lanekeep.detectors.base import Detector, LaneEstimate
 from lanekeep.detectors.registry import make_detector
 from lanekeep.estimators.lane_estimator import EstimatorOutput, LaneEstimator
 from lanekeep.estimators.odometry import DeadReckoning
@@ -34,28 +35,15 @@ from lanekeep.estimators.roll import RollFilter, corrected
 from lanekeep.loop.paper_mode import estimator_settings, front_detector_config, roll_compensation
 from lanekeep.report.record import EpisodeInfo, NullRecorder, Recorder
 from lanekeep.scenario.schema import Scenario
+from lanekeep.scoring.departures import off_road_reason, wheels_outside_lane
 from lanekeep.scoring.metrics import EpisodeReport, Metrics
-from lanekeep.scoring.truth import lane_centre_at, lane_centre_fit, lane_offsets
+from lanekeep.scoring.step_score import REFERENCE, score_estimates, source_names
+from lanekeep.scoring.step_truth import StepTruth, step_truth
 from lanekeep.sensing.cameras import CameraRig, RenderSettings
 from lanekeep.sensing.paint_visibility import visible_paint
 from lanekeep.sensing.snapshot import make_effects
 from lanekeep.sensing.vehicle_sensors import VehicleSensors
 from lanekeep.world.build import SimulationError, World, build
-from lanekeep.world.parts import WorldLayout
-
-FUSED, REFERENCE = "fused", "reference"
-TRACK_SUFFIX = ":track"  # a front model's own Kalman track, scored like the fused output
-
-
-def track_source(model: str) -> str:
-    """The report column of a model's own track ("hough" -> "hough:track")."""
-    return model + TRACK_SUFFIX
-
-
-def source_names(models: list[str]) -> list[str]:
-    """Report columns in order: per model its raw detection and its own track, then the
-    fused output and the reference."""
-    return [n for m in models for n in (m, track_source(m))] + [FUSED, REFERENCE]
 
 TYRES = ("front_left_tyre", "front_right_tyre", "rear_left_tyre", "rear_right_tyre")
 
@@ -82,9 +70,10 @@ class StepResult:
     mmae_residuals_m: np.ndarray
     steer: float
     throttle: float
-    truth_offset_m: float  # the car's true lateral offset after the period (at `pose`)
-    truth_output_m: float  # the true offset at the output's look-ahead, where frames were taken
-    truth_centre: np.ndarray  # true lane centre in the frame of `sensed_pose`
+    # The step's truth, computed once by scoring (lanekeep/scoring/step_truth.py): offsets at
+    # every look-ahead an estimate reports at or the recorder draws, the centre line, the
+    # car's offset after the period. Read by the metrics, the recorder, the plots and tools.
+    truth: StepTruth
     pose: tuple[float, float, float]  # after the control period
     sensed_pose: tuple[float, float, float]  # where the frames were taken
     speed_mps: float  # true speed (scoring, recording)
@@ -96,6 +85,21 @@ class StepResult:
     marking_masks_after: dict[str, np.ndarray] | None = None
     # Why the car is off the road after this period ("" while on it): `run()` ends there.
     off_road: str = ""
+
+    @property
+    def truth_offset_m(self) -> float:
+        """The car's true lateral offset after the period (at `pose`)."""
+        return self.truth.car_offset_m
+
+    @property
+    def truth_output_m(self) -> float:
+        """The true offset at the output's look-ahead, where the frames were taken."""
+        return self.truth.offset_at(self.output_x_m)
+
+    @property
+    def truth_centre(self) -> np.ndarray:
+        """The true lane centre in the frame of `sensed_pose`."""
+        return self.truth.centre
 
 
 @dataclass
@@ -292,65 +296,39 @@ class Episode:
         Per front model two columns: its raw detection (at the detector's own look-ahead) and
         its own Kalman track (at the output's look-ahead, like the fused output).
         """
-        world = self.world
-        lane = self.scenario.road.ego_lane
-        tracked, selection = estimate.tracked, estimate.selection
-        centre, offset, x_out = estimate.centre, estimate.offset_m, estimate.offset_x_m
-        # One truth of the lane where the frames were taken, and its offsets at every
-        # look-ahead that an estimate reports at (one Newton solve for all of them).
-        true_centre, s_car = lane_centre_fit(world.road, *sensed_pose, lane)  # for drawing
-        true_y = lane_centre_at(world.road, *sensed_pose, lane, self.metrics.ade_points_m,
-                                s_car=s_car)  # exact, for ADE / FDE
-        x_ref = estimate.reference_x_m
-        lookaheads = sorted({round(e.x_m, 3) for e in estimates.values()}
-                            | {round(x_out, 3), round(x_ref, 3)})
-        offsets = dict(zip(lookaheads, lane_offsets(world.road, *sensed_pose, lane, lookaheads,
-                                                    s_car=s_car), strict=True))
-
-        def true_offset(x_m: float) -> float:
-            return float(offsets[round(x_m, 3)])
-
-        x, y, yaw = self._true_pose()
-        car_offset_m = float(lane_offsets(world.road, x, y, yaw, lane, [0.0])[0])
-
-        track_offsets: dict[str, float | None] = {}
-        for name in self.front:
-            e = estimates[name]
-            self.metrics.add_offset(name, e.offset_m if e.valid else None, true_offset(e.x_m))
-            self.metrics.add_lane(name, self.estimator.centre_of(e), true_y)
-            track = tracked[name]
-            track_offsets[name] = None if track is None else -float(poly_eval(track, x_out))
-            self.metrics.add_offset(track_source(name), track_offsets[name], true_offset(x_out))
-            self.metrics.add_lane(track_source(name), track, true_y)
-        ref = estimates[REFERENCE]
-        self.metrics.add_offset(REFERENCE, selection.reference_m if ref.valid else None,
-                                true_offset(x_ref))
-        self.metrics.add_offset(FUSED, offset, true_offset(x_out))
-        self.metrics.add_lane(FUSED, centre, true_y)
-        if centre is None:
-            self.metrics.add_no_estimate()
-        outside = self._wheels_outside_lane()
-        off_road = self._off_road(car_offset_m)
+        world, lane = self.world, self.scenario.road.ego_lane
+        pose_after = self._true_pose()
+        truth = step_truth(
+            world.road, lane, sensed_pose, pose_after,
+            [e.x_m for e in estimates.values()] + [estimate.offset_x_m, estimate.reference_x_m],
+            self.metrics.ade_points_m,
+            drawn_lookaheads_m=(0.0, self.scenario.estimation.offset_lookahead_m))
+        track_offsets = score_estimates(self.metrics, list(self.front), estimates, estimate,
+                                        truth, self.estimator.centre_of)
+        tyres_xy = world.data.geom_xpos[self._tyre_geoms, :2]
+        outside = wheels_outside_lane(world.road, lane, tyres_xy)
+        off_road = off_road_reason(world.road, world.layout, tyres_xy, truth.car_offset_m,
+                                   self.scenario.criteria.off_road_distance_m,
+                                   float(world.data.time))
         if off_road:
             events.append(off_road)
         if outside:
             events.append("lane departure: a wheel crossed a lane boundary")
-        self.metrics.add_car(car_offset_m, outside)
+        self.metrics.add_car(truth.car_offset_m, outside)
+        selection = estimate.selection
         self.metrics.add_selection(estimate.selected, selection.reference_repaired)
         return StepResult(
             index=self.index, time_s=float(world.data.time), frames=frames, estimates=estimates,
-            tracked=tracked, track_offsets_m=track_offsets,
+            tracked=estimate.tracked, track_offsets_m=track_offsets,
             probabilities=np.asarray(selection.probabilities),
-            selected=int(estimate.selected), output_offset_m=offset, output_x_m=x_out,
-            output_centre=centre,
-            reference_m=selection.reference_m, reference_x_m=x_ref,
+            selected=int(estimate.selected), output_offset_m=estimate.offset_m,
+            output_x_m=estimate.offset_x_m, output_centre=estimate.centre,
+            reference_m=selection.reference_m, reference_x_m=estimate.reference_x_m,
             reference_repaired=selection.reference_repaired,
             mmae_residuals_m=np.asarray(selection.residuals_m, dtype=float),
-            steer=steer, throttle=throttle, truth_offset_m=car_offset_m,
-            truth_output_m=true_offset(x_out),
-            truth_centre=true_centre, pose=(x, y, yaw), sensed_pose=sensed_pose,
-            speed_mps=world.car.speed_mps(), signals=signals, events=events,
-            tracker_status=dict(estimate.tracker_status), off_road=off_road,
+            steer=steer, throttle=throttle, truth=truth, pose=pose_after,
+            sensed_pose=sensed_pose, speed_mps=world.car.speed_mps(), signals=signals,
+            events=events, tracker_status=dict(estimate.tracker_status), off_road=off_road,
         )
 
     def _marking_masks(self) -> dict[str, np.ndarray]:
@@ -366,36 +344,6 @@ class Episode:
                 paint, bare, weather.range_m(depth), weather.extinction_per_m,
                 float(weather.airlight.mean()), fx.sensor.gain).astype(np.uint8)
         return masks
-
-    def _off_road(self, car_offset_m: float) -> str:
-        """Why the car has left the road ("" if it has not): all four wheels beyond the paved
-        surface (the lanes and the asphalt shoulders build() lays, or past the road's ends), or
-        its centre beyond [criteria] off_road_distance_m from the ego lane's. Truth, for
-        scoring and termination only: nothing of it reaches perception or control."""
-        road = self.world.road
-        s, r = road.local_coordinates(self.world.data.geom_xpos[self._tyre_geoms, :2])
-        s, r = np.asarray(s), np.asarray(r)
-        layout = WorldLayout()  # what build() laid (Episode builds with the default layout)
-        lo = road.boundary_r(0) - layout.shoulder_m
-        hi = road.boundary_r(road.n_lanes) + layout.shoulder_m
-        off = (r < lo) | (r > hi)
-        if not road.closed:
-            off |= (s < -layout.lead_m) | (s > road.length_m + layout.lead_m)
-        t = float(self.world.data.time)
-        if np.all(off):
-            return f"off road: all four wheels off the paved surface at t = {t:.1f} s"
-        limit = self.scenario.criteria.off_road_distance_m
-        if limit is not None and abs(car_offset_m) > limit:
-            return (f"off road: the car {abs(car_offset_m):.2f} m from the lane centre "
-                    f"(off_road_distance_m = {limit:g}) at t = {t:.1f} s")
-        return ""
-
-    def _wheels_outside_lane(self) -> bool:
-        world = self.world
-        xy = world.data.geom_xpos[self._tyre_geoms, :2]
-        _, r = world.road.local_coordinates(xy)
-        centre = world.road.lane_center_r(self.scenario.road.ego_lane)
-        return bool(np.any(np.abs(np.asarray(r) - centre) > world.road.lane_width_m / 2.0))
 
     # -- whole episodes --------------------------------------------------------------------
     @property

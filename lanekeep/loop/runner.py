@@ -69,8 +69,7 @@ def run_episode(scenario_name: str, seed: int | None = None, seconds: float | No
     from lanekeep.core.progress import step_bar
 
     with detector_weights(weights), Episode(scenario, recorder=recorder) as episode:
-        trace = EpisodeTrace(list(episode.front), episode.world.road,
-                             scenario.road.ego_lane)
+        trace = EpisodeTrace(list(episode.front))
         total = episode.total_steps if seconds is None else int(round(seconds / episode.dt_s))
         bar = step_bar(total, scenario.name, enabled=None if progress else False)
 

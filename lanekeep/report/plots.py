@@ -17,7 +17,6 @@ from pathlib import Path
 import numpy as np
 
 from lanekeep.report.record import COLOURS, FUSED, REFERENCE, TRUTH, colour
-from lanekeep.scoring.truth import lane_offsets
 
 FILES = ("offsets.png", "errors.png", "probabilities.png", "top_view.png")
 
@@ -30,12 +29,11 @@ def _rgb(name: str, models: list[str]) -> tuple[float, float, float]:
 
 @dataclass
 class EpisodeTrace:
-    """Per-step series kept for the plots (a few floats per step). `road` and `lane` give the
-    truth at each estimate's own look-ahead (from the pose its frames were taken at)."""
+    """Per-step series kept for the plots (a few floats per step); the truth at each
+    estimate's own look-ahead is the step's own (`StepResult.truth`, computed once by scoring
+    from the pose its frames were taken at)."""
 
     model_names: list[str]
-    road: object = None  # lanekeep.geometry.road.Road
-    lane: int = 0
     time_s: list[float] = field(default_factory=list)
     truth_m: list[float] = field(default_factory=list)  # the car's offset (x = 0)
     truth_ahead_m: list[float] = field(default_factory=list)  # at the output's look-ahead
@@ -55,17 +53,14 @@ class EpisodeTrace:
     def add(self, step) -> None:
         nan = float("nan")
         self.time_s.append(step.time_s)
-        self.truth_m.append(step.truth_offset_m)
-        self.truth_ahead_m.append(step.truth_output_m)
+        self.truth_m.append(step.truth.car_offset_m)
+        self.truth_ahead_m.append(step.truth.offset_at(step.output_x_m))
         self.ahead_x_m = step.output_x_m
         self.reference_x_m = step.reference_x_m
         estimates = [step.estimates[n] for n in self.model_names]
         self.model_x_m = [float(e.x_m) for e in estimates]
         xs = [*self.model_x_m, float(step.reference_x_m)]
-        if self.road is None:
-            truths = [nan] * len(xs)
-        else:
-            truths = lane_offsets(self.road, *step.sensed_pose, self.lane, xs).tolist()
+        truths = [step.truth.offset_at(x) for x in xs]
         self.model_truth_m.append(truths[:-1])
         self.reference_truth_m.append(truths[-1])
         self.model_offsets_m.append([e.offset_m if e.valid else nan for e in estimates])

@@ -55,7 +55,7 @@ import numpy as np
 
 from lanekeep.core.interrupts import stop_signals_held
 from lanekeep.detectors.base import poly_eval
-from lanekeep.scoring.truth import LanePolylines, lane_offsets
+from lanekeep.scoring.truth import LanePolylines
 from lanekeep.sensing.cameras import RENDERER_IDLE
 
 APPLICATION_ID = "lanekeep"
@@ -139,25 +139,22 @@ def vehicle_to_world(xy: np.ndarray, pose: tuple[float, float, float]) -> np.nda
 
 
 class _Truth:
-    """What the recording draws and plots as the truth, from lanekeep.scoring.truth: exact
-    offsets at the look-aheads it needs (as the metrics score them), and polylines to draw."""
+    """What the recording draws and plots as the truth: the step's own offsets (computed once
+    by scoring, `StepResult.truth`) and, on steps whose images are logged, the lane's
+    polylines to draw (lanekeep.scoring.truth)."""
 
-    def __init__(self, road, lane: int, pose: tuple[float, float, float],
-                 lookaheads_m: list[float]) -> None:
-        self._road, self._lane, self._pose = road, lane, pose
-        self._s_car, _ = road.local_coordinates(np.array(pose[:2], dtype=float))
-        offsets = lane_offsets(road, *pose, lane, lookaheads_m, s_car=self._s_car)
-        self._offsets = dict(zip(lookaheads_m, offsets.tolist(), strict=True))
+    def __init__(self, road, lane: int, pose: tuple[float, float, float], step_truth) -> None:
+        self._road, self._lane, self._pose, self._truth = road, lane, pose, step_truth
 
     @functools.cached_property
     def lines(self) -> LanePolylines:
         """Made only on steps whose images are logged."""
         return LanePolylines(self._road, self._lane, self._pose, TRUTH_BEHIND_M,
-                             TRUTH_AHEAD_M, TRUTH_STEP_M, s_car=self._s_car)
+                             TRUTH_AHEAD_M, TRUTH_STEP_M)
 
     def offset_m(self, x_m: float) -> float:
         """True offset of the car from the lane centre at look-ahead x (+ = car left)."""
-        return self._offsets[float(x_m)]
+        return self._truth.offset_at(x_m)
 
 
 def _camera_x_range(camera) -> tuple[float, float]:
@@ -445,7 +442,7 @@ class RerunRecorder:
         self._path.append(pose[:2])
         rec.set_time("step", sequence=int(step.index))
         rec.set_time("sim_time", duration=max(0.0, float(step.time_s) - view.dt_s))
-        truth = _Truth(view.road, self.scenario.road.ego_lane, pose, self._truth_points(step))
+        truth = _Truth(view.road, self.scenario.road.ego_lane, pose, step.truth)
         self._log_scalars(step, truth)
         self._log_events(step)
         if step.index % self.every == 0:
@@ -456,13 +453,6 @@ class RerunRecorder:
             rec.set_time("sim_time", duration=float(step.time_s))
             for name, mask in masks.items():
                 rec.log(f"cameras/{name}/segmentation", rr.SegmentationImage(mask, opacity=0.5))
-
-    def _truth_points(self, step) -> list[float]:
-        """The look-aheads whose true offsets this step's plots need."""
-        xs = {0.0, self.scenario.estimation.offset_lookahead_m, float(step.output_x_m),
-              float(step.reference_x_m)}
-        xs |= {float(e.x_m) for e in step.estimates.values()}
-        return sorted(xs)
 
     def _sources(self) -> dict[str, str]:
         """Estimate name -> the camera its frame came from."""

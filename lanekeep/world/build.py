@@ -18,7 +18,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import mujoco
 import numpy as np
@@ -65,6 +65,7 @@ class World:
     car: Car
     marking_boundary: np.ndarray  # geom id -> boundary index, -1 for non-marking geoms
     conditions: ConditionsInfo | None = None  # conditions hook: what world_conditions added
+    layout: WorldLayout = field(default_factory=WorldLayout)  # what build() laid beside the lanes
 
     def reset(self) -> None:
         """Put the car at the scenario's start pose and speed, everything else at rest."""
@@ -328,14 +329,21 @@ def _add_markings(
     return names, colour_only
 
 
+def laid_layout(road: Road, layout: WorldLayout | None = None) -> WorldLayout:
+    """The layout build() lays for `road` (the default unless one is given): a track has no
+    lead, since its start and end meet and a lead would lie across it."""
+    layout = layout or WorldLayout()
+    if road.closed:
+        layout = dataclasses.replace(layout, lead_m=0.0)
+    return layout
+
+
 def build_spec(
     scenario: Scenario, road: Road, layout: WorldLayout | None = None
 ) -> tuple[mujoco.MjSpec, dict[str, int], ConditionsInfo]:
     """The scenario's MjSpec, the marking geom names with their boundary index, and what the
     scenario's conditions added (lanekeep/world/conditions.py)."""
-    layout = layout or WorldLayout()
-    if road.closed:  # a track: its start and end meet, and a lead would lie across it
-        layout = dataclasses.replace(layout, lead_m=0.0)
+    layout = laid_layout(road, layout)
     spec = mujoco.MjSpec.from_file(str(CAR_XML))
     spec.modelname = f"lanekeep_{scenario.name}"
     spec.visual.global_.offwidth = max(scenario.camera.width, 1280)
@@ -439,7 +447,8 @@ def build(scenario: Scenario, layout: WorldLayout | None = None) -> World:
     for name, boundary in marking_names.items():
         marking_boundary[model.geom(name).id] = boundary
     data = mujoco.MjData(model)
-    world = World(scenario, road, model, data, Car(model, data), marking_boundary, conditions)
+    world = World(scenario, road, model, data, Car(model, data), marking_boundary, conditions,
+                  laid_layout(road, layout))
     world.reset()
     return world
 

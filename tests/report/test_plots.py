@@ -27,20 +27,23 @@ def test_run_writes_offsets_and_errors_per_source_and_names_the_files(tmp_path, 
         assert f"wrote {out / name}" in err
 
 
-def _fake_step(i: int):
+def _fake_step(i: int, road):
     from types import SimpleNamespace
 
     from lanekeep.detectors.base import LaneEstimate
+    from lanekeep.scoring.metrics import ADE_POINTS_M
+    from lanekeep.scoring.step_truth import step_truth
 
     est = {"hough": LaneEstimate(True, 0.1 + 0.01 * i, 6.0, np.array([1.8, 0, 0]),
                                  np.array([-1.8, 0, 0]), 0.9),
            "sliding_window": LaneEstimate.invalid("no paint", 8.0)}
-    return SimpleNamespace(time_s=0.1 * (i + 1), truth_offset_m=0.05, truth_output_m=0.07,
-                           output_x_m=6.0, reference_x_m=-5.0, estimates=est,
+    pose = (10.0 + i, 0.0, 0.0)
+    truth = step_truth(road, 0, pose, pose, [6.0, 8.0, -5.0], np.asarray(ADE_POINTS_M))
+    return SimpleNamespace(time_s=0.1 * (i + 1), truth=truth, output_x_m=6.0, reference_x_m=-5.0, estimates=est,
                            track_offsets_m={"hough": 0.08, "sliding_window": None},
                            output_offset_m=0.09, reference_m=0.0, probabilities=[0.7, 0.3],
                            mmae_residuals_m=np.array([-0.02, np.nan]),
-                           pose=(10.0 + i, 0.0, 0.0), sensed_pose=(10.0 + i, 0.0, 0.0))
+                           pose=pose, sensed_pose=pose)
 
 
 def test_errors_are_against_the_truth_at_each_estimates_own_look_ahead(tmp_path):
@@ -54,9 +57,9 @@ def test_errors_are_against_the_truth_at_each_estimates_own_look_ahead(tmp_path)
 
     scenario = load_scenario("clear_straight")
     road = build(scenario).road
-    trace = EpisodeTrace(["hough", "sliding_window"], road, 0)
+    trace = EpisodeTrace(["hough", "sliding_window"])
     for i in range(5):
-        trace.add(_fake_step(i))
+        trace.add(_fake_step(i, road))
     errors = trace.errors_cm()
     assert list(errors) == ["hough", "hough:track", "sliding_window", "sliding_window:track",
                             "fused", "reference"]
@@ -64,7 +67,7 @@ def test_errors_are_against_the_truth_at_each_estimates_own_look_ahead(tmp_path)
     truth_ref = lane_offsets(road, 10.0, 0.0, 0.0, 0, [-5.0])[0]
     assert errors["hough"][0] == pytest.approx((0.1 - truth_6) * 100)
     assert errors["reference"][0] == pytest.approx((0.0 - truth_ref) * 100)
-    assert errors["fused"][0] == pytest.approx((0.09 - 0.07) * 100)
+    assert errors["fused"][0] == pytest.approx((0.09 - truth_6) * 100)  # at the output's x
     assert np.isnan(errors["sliding_window"]).all()  # never valid: no error to draw
     residuals = np.asarray(trace.residuals_m)  # the MMAE's, drawn under its probabilities
     assert residuals.shape == (5, 2) and np.allclose(residuals[:, 0], -0.02)

@@ -19,6 +19,8 @@ from lanekeep.core.signals import VehicleSignals
 from lanekeep.detectors.base import LaneEstimate
 from lanekeep.report.record import EpisodeInfo, RerunRecorder
 from lanekeep.scenario.schema import load_scenario
+from lanekeep.scoring.metrics import ADE_POINTS_M
+from lanekeep.scoring.step_truth import step_truth
 from lanekeep.sensing.cameras import CameraRig, RenderSettings
 from lanekeep.world.build import build
 
@@ -93,6 +95,7 @@ def fake():
 
 def make_step(fake, index: int, **changes) -> SimpleNamespace:
     half = fake.scenario.road.lane_width_m / 2
+    pose = fake.scenario.start_pose(fake.world.road)
     estimate = LaneEstimate(True, 0.05, 6.0, np.array([half, 0.0, 0.0]),
                             np.array([-half, 0.0, 0.0]), 0.9,
                             {"left": np.array([[100.0, 170.0], [140.0, 120.0]])})
@@ -103,9 +106,10 @@ def make_step(fake, index: int, **changes) -> SimpleNamespace:
         track_offsets_m={m: 0.05 for m in MODELS},
         selected=0, output_offset_m=0.05, output_x_m=4.0, output_centre=np.zeros(3),
         reference_m=0.04, reference_x_m=6.0, mmae_residuals_m=np.array([-0.01, np.nan]),
-        reference_repaired=False, steer=0.01, throttle=0.2, truth_offset_m=0.0,
-        truth_output_m=0.0,
-        truth_centre=np.zeros(3), pose=fake.scenario.start_pose(fake.world.road),
+        reference_repaired=False, steer=0.01, throttle=0.2,
+        truth=step_truth(fake.world.road, fake.scenario.road.ego_lane, pose, pose, [6.0, 4.0],
+                         np.asarray(ADE_POINTS_M), drawn_lookaheads_m=(0.0, 4.0)),
+        pose=fake.scenario.start_pose(fake.world.road),
         sensed_pose=fake.scenario.start_pose(fake.world.road), speed_mps=15.0,
         signals=VehicleSignals(15.0, 0.0, 0.0, 0.0, 0.0),
         events=[], tracker_status=dict.fromkeys(MODELS, "updated"),
