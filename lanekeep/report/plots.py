@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from lanekeep.report.record import COLOURS, FUSED, REFERENCE, TRUTH, colour
+from lanekeep.report.palette import COLOURS, FUSED, REFERENCE, TRUTH, colour
 
 FILES = ("offsets.png", "errors.png", "probabilities.png", "top_view.png")
 

@@ -41,7 +41,6 @@ Scalars and events are logged every step; images, overlays and the 3D view every
 from __future__ import annotations
 
 import functools
-import math
 import queue
 import threading
 import uuid
@@ -54,31 +53,34 @@ import cv2
 import numpy as np
 
 from lanekeep.core.interrupts import stop_signals_held
-from lanekeep.detectors.base import poly_eval
+from lanekeep.report.blueprint import blueprint, scenario_document
+from lanekeep.report.overlay import (
+    MAX_POINTS_PER_SIDE,
+    camera_x_range,
+    car_footprint,
+    lifted,
+    map_xy,
+    pixel_strips,
+    poly_points,
+    vehicle_to_world,
+)
+from lanekeep.report.palette import (
+    CAR_COLOUR,
+    COLOURS,
+    FUSED,
+    OUTPUT,
+    PATH_COLOUR,
+    REFERENCE,
+    ROAD_COLOUR,
+    TRUTH,
+    colour,
+)
 from lanekeep.scoring.truth import LanePolylines
 from lanekeep.sensing.cameras import RENDERER_IDLE
 
 APPLICATION_ID = "lanekeep"
-REFERENCE, TRUTH, OUTPUT = "reference", "truth", "output"
-FUSED = "fused"  # the MMAE output: one name in the table, the JSON, the plots and here
-# Mid-tone colours, each readable on the viewer's light and dark themes (no white, no black);
-# the fused output gets the strongest one.
-COLOURS = {
-    TRUTH: (30, 170, 30),
-    OUTPUT: (220, 20, 20),
-    FUSED: (220, 20, 20),
-    REFERENCE: (120, 90, 230),
-    "hough": (255, 140, 0),
-    "sliding_window": (0, 140, 230),
-    "lanenet": (190, 50, 190),
-}
-_SPARE_COLOURS = ((200, 150, 0), (0, 160, 150), (150, 110, 60), (230, 90, 140))
-ROAD_COLOUR, PATH_COLOUR, CAR_COLOUR = (128, 128, 128), (140, 80, 30), (60, 60, 200)
-LANE_RANGE_M = (3.0, 30.0)  # |x| of the lane polylines drawn from each camera
 TRUTH_BEHIND_M, TRUTH_AHEAD_M, TRUTH_STEP_M = 25.0, 45.0, 0.5
 ROAD_STEP_M = 1.0
-MAX_POINTS_PER_SIDE = 400
-LINE_Z_M = 0.05  # lifted above the road in the 3D view
 BATCH_FLUSH_S, BATCH_BYTES = 2.0, 8 << 20  # rerun's chunk batcher (default 0.2 s, 2 MiB)
 
 
@@ -124,18 +126,8 @@ class NullRecorder:
         return None
 
 
-def colour(name: str, index: int = 0) -> tuple[int, int, int]:
-    """Fixed colour per source, so a model has the same colour in every view."""
-    return COLOURS.get(name, _SPARE_COLOURS[index % len(_SPARE_COLOURS)])
 
 
-# -- geometry -----------------------------------------------------------------------------------
-def vehicle_to_world(xy: np.ndarray, pose: tuple[float, float, float]) -> np.ndarray:
-    """Vehicle-frame XY (..., 2) of `pose` into world XY."""
-    x, y, yaw = pose
-    v = np.asarray(xy, dtype=float)
-    c, s = math.cos(yaw), math.sin(yaw)
-    return np.stack([x + v[..., 0] * c - v[..., 1] * s, y + v[..., 0] * s + v[..., 1] * c], -1)
 
 
 class _Truth:
@@ -157,164 +149,22 @@ class _Truth:
         return self._truth.offset_at(x_m)
 
 
-def _camera_x_range(camera) -> tuple[float, float]:
-    """Vehicle-frame x interval of the ground that a camera looks at (front: +, rear: -)."""
-    forward = -camera.rotation[0, 2]
-    lo, hi = LANE_RANGE_M
-    return (lo, hi) if forward >= 0 else (-hi, -lo)
 
 
-def _poly_points(coeffs, x_range: tuple[float, float], n: int = 28) -> np.ndarray:
-    xs = np.linspace(*x_range, n)
-    return np.column_stack([xs, poly_eval(coeffs, xs)])
 
 
-def _clip_segment(p: np.ndarray, q: np.ndarray, w: float, h: float):
-    """Liang-Barsky: the part of segment p-q inside [0, w] x [0, h], or None."""
-    d = q - p
-    t0, t1 = 0.0, 1.0
-    for num, den in ((p[0], -d[0]), (w - p[0], d[0]), (p[1], -d[1]), (h - p[1], d[1])):
-        if den == 0:
-            if num < 0:
-                return None
-            continue
-        t = num / den
-        if den < 0:
-            t0 = max(t0, t)
-        else:
-            t1 = min(t1, t)
-    return None if t0 > t1 else (p + t0 * d, p + t1 * d)
 
 
-def clip_polyline(uv: np.ndarray, w: float, h: float) -> list[np.ndarray]:
-    """A pixel polyline cut to the image: the runs of it inside [0, w] x [0, h], so that an
-    overlay never draws outside its camera image."""
-    runs: list[list[np.ndarray]] = []
-    current: list[np.ndarray] = []
-    for p, q in zip(uv[:-1], uv[1:], strict=True):
-        part = _clip_segment(np.asarray(p, float), np.asarray(q, float), w, h)
-        if part is None:
-            if current:
-                runs.append(current)
-            current = []
-            continue
-        a, b = part
-        if current and np.allclose(current[-1], a):
-            current.append(b)
-        else:
-            if current:
-                runs.append(current)
-            current = [a, b]
-    if current:
-        runs.append(current)
-    return [np.asarray(r) for r in runs if len(r) >= 2]
 
 
-def _pixel_strips(camera, ground_xy: np.ndarray) -> list[np.ndarray]:
-    """A ground polyline projected into the camera and clipped to its image (points behind the
-    camera dropped first)."""
-    if len(ground_xy) < 2:
-        return []
-    uv, in_front = camera.project_ground(ground_xy)
-    strips: list[np.ndarray] = []
-    start = 0
-    for i in range(len(uv) + 1):  # split where the line passes behind the camera
-        if i == len(uv) or not in_front[i]:
-            if i - start >= 2:
-                strips += clip_polyline(uv[start:i], camera.width, camera.height)
-            start = i + 1
-    return strips
 
 
-def _map_xy(xy: np.ndarray) -> np.ndarray:
-    """World XY to the 2D map's coordinates (image axes: y down, so flip y: north up)."""
-    xy = np.asarray(xy, dtype=np.float32)
-    return np.column_stack([xy[..., 0], -xy[..., 1]])
 
 
-def car_footprint(pose: tuple[float, float, float], length: float, width: float) -> np.ndarray:
-    """Closed polygon (5, 2) of the car's outline at `pose`, world XY (centred on the pose's
-    point, the recording's convention for `world/car/body`)."""
-    corners = np.array([[length / 2, width / 2], [length / 2, -width / 2],
-                        [-length / 2, -width / 2], [-length / 2, width / 2],
-                        [length / 2, width / 2]])
-    return vehicle_to_world(corners, pose)
 
 
-# -- the blueprint ------------------------------------------------------------------------------
-def blueprint(scenario):
-    """Cameras side by side; then offsets and errors | the road map and the 3D follow view |
-    probabilities, MMAE residuals, car (offset, steer) and speed, each unit in its own plot;
-    events below."""
-    import rerun.blueprint as rrb
-
-    x, y, yaw = scenario.start_pose()
-    eye = [x - 25.0 * math.cos(yaw), y - 25.0 * math.sin(yaw), 45.0]
-    top = rrb.Spatial3DView(
-        origin="world", name="follow view (3D)",
-        eye_controls=rrb.EyeControls3D(kind=rrb.Eye3DKind.Orbital, position=eye,
-                                       look_target=[x, y, 0.0], eye_up=[0.0, 0.0, 1.0],
-                                       tracking_entity="world/car"),
-    )
-    legend = rrb.PlotLegend(corner=rrb.Corner2D.LeftTop)
-    # Each model's own Kalman track is recorded too ("hough:track"), but left out of the default
-    # offsets / errors plots: it shares its model's colour and would double their legends (the
-    # selection panel adds it back).
-    hidden = [f"- $origin/{m}:track" for m in scenario.estimation.front_detectors]
-    return rrb.Blueprint(
-        rrb.Vertical(
-            rrb.Horizontal(
-                rrb.Spatial2DView(origin="cameras/front", name="front camera"),
-                rrb.Spatial2DView(origin="cameras/rear", name="rear camera"),
-            ),
-            rrb.Horizontal(
-                rrb.Vertical(
-                    rrb.TimeSeriesView(origin="plots/offset", name="offsets (m, + = car left)",
-                                       contents=["+ $origin/**", *hidden], plot_legend=legend),
-                    rrb.TimeSeriesView(origin="plots/error", name="errors (m, estimate - truth)",
-                                       contents=["+ $origin/**", *hidden], plot_legend=legend),
-                ),
-                rrb.Vertical(
-                    rrb.Spatial2DView(origin="map", name="road map (to scale, north up)"),
-                    top,
-                ),
-                rrb.Vertical(
-                    rrb.TimeSeriesView(origin="plots/probability", name="MMAE probabilities",
-                                       axis_y=rrb.ScalarAxis(range=(0.0, 1.0)),
-                                       plot_legend=legend),
-                    rrb.TimeSeriesView(origin="plots/residual",
-                                       name="MMAE residuals (m, reference - model)",
-                                       plot_legend=legend),
-                    rrb.TimeSeriesView(origin="plots/car", name="car: offset (m), steer",
-                                       plot_legend=legend),
-                    rrb.TimeSeriesView(origin="plots/speed", name="car: speed (m/s)",
-                                       plot_legend=legend),
-                ),
-                column_shares=[2, 2, 2],
-            ),
-            rrb.TextLogView(origin="events", name="events"),
-            row_shares=[4, 7, 1.8],
-        ),
-        rrb.BlueprintPanel(state="collapsed"),
-        rrb.SelectionPanel(state="collapsed"),
-        rrb.TimePanel(state="collapsed"),
-    )
 
 
-def scenario_document(scenario) -> str:
-    """Markdown that says how to reproduce the recording: command, seed, the scenario's TOML."""
-    from lanekeep.scenario.schema import shipped_scenarios
-
-    source = Path(scenario.source) if scenario.source else None
-    if source is not None and source.is_file():
-        toml = source.read_text(encoding="utf-8")
-        shipped = scenario.name in shipped_scenarios() and source.name == f"{scenario.name}.toml"
-        where = scenario.name if shipped else str(source)
-    else:
-        toml, where = f"# not read from a file; the parsed scenario:\n# {scenario!r}", "?"
-    return (f"# {scenario.name}\n\nreproduce: `lanekeep run {where} --seed {scenario.seed}`\n\n"
-            f"seed {scenario.seed}; duration {scenario.duration_s} s; control period "
-            f"{scenario.control_period_s} s\n\n```toml\n{toml}\n```\n")
 
 
 # -- the recorder -------------------------------------------------------------------------------
@@ -467,7 +317,7 @@ class RerunRecorder:
     def _log_static(self, view: EpisodeInfo) -> None:
         rr, rec, road = self._rr, self._rec, view.road
         s = np.append(np.arange(0.0, road.length_m, ROAD_STEP_M), road.length_m)
-        strips = [_lifted(road.position(s, road.boundary_r(i))) for i in range(road.n_lanes + 1)]
+        strips = [lifted(road.position(s, road.boundary_r(i))) for i in range(road.n_lanes + 1)]
         rec.log("world", rr.ViewCoordinates.RIGHT_HAND_Z_UP, static=True)
         rec.log("world/road/boundaries",
                 rr.LineStrips3D(strips, colors=[ROAD_COLOUR], radii=0.08), static=True)
@@ -476,10 +326,10 @@ class RerunRecorder:
                                              half_sizes=[[length / 2, width / 2, 0.75]],
                                              colors=[CAR_COLOUR]), static=True)
         lane = self.scenario.road.ego_lane
-        rec.log("map/road", rr.LineStrips2D([_map_xy(b[:, :2]) for b in strips],
+        rec.log("map/road", rr.LineStrips2D([map_xy(b[:, :2]) for b in strips],
                                             colors=[ROAD_COLOUR], radii=0.4), static=True)
-        rec.log("map/lane", rr.LineStrips2D([_map_xy(strips[lane][:, :2]),
-                                             _map_xy(strips[lane + 1][:, :2])],
+        rec.log("map/lane", rr.LineStrips2D([map_xy(strips[lane][:, :2]),
+                                             map_xy(strips[lane + 1][:, :2])],
                                             colors=[COLOURS[TRUTH]], radii=0.3), static=True)
         rec.log("cameras", rr.AnnotationContext([(0, "road", (0, 0, 0, 0)),
                                                  (1, "marking", (255, 0, 255, 160))]),
@@ -568,22 +418,22 @@ class RerunRecorder:
         cameras = self._view.cameras
         for name, cam_name in self._sources().items():
             e = step.estimates.get(name)
-            x_range = _camera_x_range(cameras[cam_name])
+            x_range = camera_x_range(cameras[cam_name])
             yield name, cam_name, (None if e is None or not e.valid else
-                                   [_poly_points(c, x_range) for c in (e.left, e.right)
+                                   [poly_points(c, x_range) for c in (e.left, e.right)
                                     if c is not None])
         centre = step.output_centre
-        x_range = _camera_x_range(cameras["front"])
-        yield OUTPUT, "front", None if centre is None else [_poly_points(centre, x_range)]
+        x_range = camera_x_range(cameras["front"])
+        yield OUTPUT, "front", None if centre is None else [poly_points(centre, x_range)]
 
     def _log_cameras(self, step, truth: _Truth) -> None:
         rr, rec, cameras = self._rr, self._rec, self._view.cameras
         for cam_name, frame in step.frames.items():
             RENDERER_IDLE.wait()
             rec.log(f"cameras/{cam_name}/image", self._jpeg(frame))
-            x_range = _camera_x_range(cameras[cam_name])
+            x_range = camera_x_range(cameras[cam_name])
             strips = [strip for b in truth.lines.boundaries(*x_range)
-                      for strip in _pixel_strips(cameras[cam_name], b)]
+                      for strip in pixel_strips(cameras[cam_name], b)]
             rec.log(f"cameras/{cam_name}/lanes/{TRUTH}",
                     rr.LineStrips2D(strips, colors=[colour(TRUTH)], radii=1.5))
         for name, cam_name, lines in self._lanes(step):
@@ -593,7 +443,7 @@ class RerunRecorder:
                 continue
             camera, rgb = cameras[cam_name], self._colour(name)
             rec.log(f"{base}/{'centre' if name == OUTPUT else 'boundaries'}",
-                    rr.LineStrips2D([s for line in lines for s in _pixel_strips(camera, line)],
+                    rr.LineStrips2D([s for line in lines for s in pixel_strips(camera, line)],
                                     colors=[rgb],
                                     radii=1.5 if name == OUTPUT else 2.0))
             estimate = step.estimates.get(name)
@@ -623,24 +473,21 @@ class RerunRecorder:
                                             rotation=rr.RotationAxisAngle(axis=[0, 0, 1],
                                                                           radians=yaw)))
         path = np.asarray(self._path, dtype=np.float32)
-        rec.log("world/path", rr.LineStrips3D([_lifted(path)], colors=[PATH_COLOUR],
+        rec.log("world/path", rr.LineStrips3D([lifted(path)], colors=[PATH_COLOUR],
                                               radii=0.12))
         length, width = self._view.car_size_m
-        rec.log("map/path", rr.LineStrips2D([_map_xy(path)], colors=[PATH_COLOUR],
+        rec.log("map/path", rr.LineStrips2D([map_xy(path)], colors=[PATH_COLOUR],
                                             radii=rr.Radius.ui_points(1.5)))
-        rec.log("map/car", rr.LineStrips2D([_map_xy(car_footprint(pose, length, width))],
+        rec.log("map/car", rr.LineStrips2D([map_xy(car_footprint(pose, length, width))],
                                            colors=[CAR_COLOUR], radii=0.25))
-        rec.log("map/car/marker", rr.Points2D(_map_xy(np.array([[x, y]])), colors=[CAR_COLOUR],
+        rec.log("map/car/marker", rr.Points2D(map_xy(np.array([[x, y]])), colors=[CAR_COLOUR],
                                               radii=rr.Radius.ui_points(5.0)))
         for name, _, lines in self._lanes(step):
             if lines is None:
                 rec.log(f"world/lanes/{name}", rr.Clear(recursive=False))
                 continue
-            strips = [_lifted(vehicle_to_world(line, pose)) for line in lines]
+            strips = [lifted(vehicle_to_world(line, pose)) for line in lines]
             rec.log(f"world/lanes/{name}", rr.LineStrips3D(strips, colors=[self._colour(name)],
                                                            radii=0.08))
 
 
-def _lifted(xy: np.ndarray) -> np.ndarray:
-    """Ground polyline (N, 2) to 3D points just above the road."""
-    return np.column_stack([xy, np.full(len(xy), LINE_Z_M, dtype=xy.dtype)])

@@ -339,7 +339,7 @@ print("ok")
 
 
 def test_overlays_are_clipped_to_the_image():
-    from lanekeep.report.record import clip_polyline
+    from lanekeep.report.overlay import clip_polyline
 
     line = np.array([[-50.0, 50.0], [50.0, 50.0], [150.0, 50.0], [150.0, 300.0]])
     (run,) = clip_polyline(line, 100.0, 100.0)
@@ -353,9 +353,9 @@ def test_overlays_are_clipped_to_the_image():
 
 def test_colours_are_readable_on_light_and_dark_themes():
     """No series may be near-white or near-black (invisible on one of the viewer's themes)."""
-    from lanekeep.report.record import _SPARE_COLOURS, COLOURS, FUSED
+    from lanekeep.report.palette import COLOURS, FUSED, SPARE_COLOURS
 
-    for rgb in [*COLOURS.values(), *_SPARE_COLOURS]:
+    for rgb in [*COLOURS.values(), *SPARE_COLOURS]:
         luma = 0.299 * rgb[0] + 0.587 * rgb[1] + 0.114 * rgb[2]
         assert 40 < luma < 200, rgb
     assert len({COLOURS[name] for name in ("hough", "sliding_window", "lanenet", FUSED,
