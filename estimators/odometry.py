@@ -1,7 +1,8 @@
 """Dead reckoning from the car's own sensors: what the estimator knows of the car's motion.
 
 A lane-keeping ECU has wheel-speed odometry and an IMU yaw rate, not the simulator's state
-(lanekeep/sensing/vehicle_sensors.py makes those signals). From them this module integrates a pose in an
+(lanekeep/sensing/vehicle_sensors.py makes those signals). From them this module integrates a pose
+in an
 odometry frame (its origin where the episode started; only relative poses matter to the
 alignment of estimators/alignment.py) and estimates the sideslip, which no production sensor
 measures: in a kinematic bicycle the rear axle does not slide sideways, so a point

@@ -1,1 +1,2 @@
-"""The command line: thin (parse, call one library function, print, exit code). Nothing imports it."""
+"""The command line: thin (parse, call one library function, print, exit code). Nothing imports
+it."""

@@ -3,8 +3,10 @@
     lanekeep eval [--detectors hough,sliding_window,lanenet] [--weights FILE] [--json FILE]
                   [--quick] [--cache DIR] [--conditions clear,night,...]
 
-The sets are lanekeep/evaluation/eval_sets.py's (rendered once, then read from the cache), the metrics
-lanekeep/evaluation/lane_metrics.py's (their definitions are in its docstring). Detectors see only the frames
+The sets are lanekeep/evaluation/eval_sets.py's (rendered once, then read from the cache), the
+metrics
+lanekeep/evaluation/lane_metrics.py's (their definitions are in its docstring). Detectors see only
+the frames
 (upscaled to 1280x720) and the camera model; labels are read only to score. Each sequence is fed
 in order to a detector reset before it, so LaneNet's recurrent state spans a sequence and no more.
 Bad input (an unknown detector or condition, an unreadable weights file, an output that cannot

@@ -5,7 +5,8 @@
 
 A controller sees only what a real car's controller could: the estimator's output (the lane
 the MMAE hands on, lanekeep/estimators/lane_estimator.py) and the vehicle's sensor signals
-(lanekeep/sensing/vehicle_sensors.py); nothing of the simulator's truth. The episode calls `reset()` once
+(lanekeep/sensing/vehicle_sensors.py); nothing of the simulator's truth. The episode calls
+`reset()` once
 before the first step.
 
 Built in: "pid" (the paper's eq. 9 steering PID with our improvements, or the paper's own in

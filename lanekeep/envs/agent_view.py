@@ -1,5 +1,6 @@
 """What a learning agent sees of one control step, and what it is paid: shared by the dm_env
-face (lanekeep/envs/dm_env_face.py) and the Gymnasium face (lanekeep/envs/gym_env.py), so both name the same
+face (lanekeep/envs/dm_env_face.py) and the Gymnasium face (lanekeep/envs/gym_env.py), so
+both name the same
 numbers the same way.
 
 The view holds only what the car's own loop holds: the two camera frames, the estimators'

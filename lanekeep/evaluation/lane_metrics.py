@@ -1,7 +1,8 @@
 """Lane metrics of `lanekeep eval`: AP, IoU / F1, ADE / FDE, offset error and ms per frame.
 
 Every detector is scored by this code on the same frames. Ground truth (the dataset's labels,
-made from the road geometry: lanekeep/evaluation/dataset.py) is used here only, never shown to a detector.
+made from the road geometry: lanekeep/evaluation/dataset.py) is used here only, never shown to a
+detector.
 All image quantities are at 1280x720, the frame our cameras give and the labels are in.
 
 AP (proposal average precision at IoU 0.5). Ground truth: every labelled boundary (all slots,

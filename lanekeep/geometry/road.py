@@ -29,7 +29,8 @@ TABLE_STEP_M = 0.1  # spacing of the exact position table
 # The longest road a scenario may build (its meshes and position table grow with it): 20 km,
 # 18 minutes at 66 km/h; a longer drive laps a closed track (tools/soak).
 MAX_ROAD_M = 20_000.0
-MAX_LANES = 5  # a five-lane carriageway: the widest the dataset (lanekeep/evaluation/dataset.py) builds
+# a five-lane carriageway: the widest the dataset (lanekeep/evaluation/dataset.py) builds
+MAX_LANES = 5
 COARSE_STEP_M = 0.5  # spacing of the nearest-point search table
 LEAD_SEED_OFFSET = 7919  # worn paint before the start and after the end draws its own runs
 _GL_X, _GL_W = np.polynomial.legendre.leggauss(4)  # Gauss-Legendre nodes/weights on [-1, 1]

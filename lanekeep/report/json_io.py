@@ -104,7 +104,8 @@ def with_metadata(document: dict, scenario, seed: int | None = None) -> dict:
 
 def report_document(report: EpisodeReport, scenario) -> dict:
     """An episode's report as written to JSON: `report.to_dict()` led by the metadata, every
-    non-finite number as None (strict JSON). A judged report (lanekeep/scoring/criteria.py) also says
+    non-finite number as None (strict JSON). A judged report (lanekeep/scoring/criteria.py) also
+    says
     `passed`, beside its `criteria` verdicts (name, limit, value, passed) and `status`."""
     document = report.to_dict()
     if report.criteria:

@@ -173,7 +173,8 @@ class RerunRecorder:
 
     `start` takes the episode's static information, `log_step` queues each step: a writer
     thread JPEG-encodes, projects and logs, so the loop does not wait for it while the GIL is
-    free (physics, OpenCV; it never runs beside a render, see lanekeep.sensing.cameras). The queue is
+    free (physics, OpenCV; it never runs beside a render, see lanekeep.sensing.cameras). The
+    queue is
     bounded, so a slow writer slows the loop rather than filling memory. Steps are treated as
     immutable once handed over.
 

@@ -18,8 +18,6 @@ import typing
 from collections.abc import Iterator
 from pathlib import Path
 
-from lanekeep.geometry.markings import MARKING_KINDS, WORN_PATTERNS
-from lanekeep.geometry.road import MAX_LANES, MAX_ROAD_M, SEGMENT_KINDS
 from lanekeep.estimators.settings import (
     MMAE_INPUTS,
     MMAE_PRIORS,
@@ -28,6 +26,8 @@ from lanekeep.estimators.settings import (
     OUTPUT_MODES,
     RESIDUAL_MODES,
 )
+from lanekeep.geometry.markings import MARKING_KINDS, WORN_PATTERNS
+from lanekeep.geometry.road import MAX_LANES, MAX_ROAD_M, SEGMENT_KINDS
 from lanekeep.scenario.roadside import SKYLINES
 from lanekeep.scenario.schema import (
     CAMERAS,
@@ -230,7 +230,8 @@ DESCRIPTIONS: dict[str, tuple[str, str]] = {
     "control": ("The controller, by name.", ""),
     "control.controller": ("Controller turning the estimated lane into steer and throttle.",
                            '"pid", "stanley", package.module:Class, entry points'),
-    "sensors": ("Error magnitudes of the car's own sensors (sources: lanekeep/sensing/vehicle_sensors.py).",
+    "sensors": ("Error magnitudes of the car's own sensors (sources: "
+                "lanekeep/scenario/sensors.py).",
                 ""),
     "sensors.perfect": ("Read the true values exactly (ablations).", "true, false"),
     "sensors.speed_scale_sigma": ("Wheel-speed scale error, 1-sigma, drawn once per episode.",

@@ -120,7 +120,8 @@ class CameraConfig:
     show_hood: bool = True  # the ego car's hood at the bottom of the front image
     # The mounting of both onboard cameras, changed from the car's own (mjcf/car.xml: 1.5 m
     # high, front pitched 10 deg up with a 120 deg horizontal field of view): other cameras, as
-    # real rigs and the datasets (lanekeep/evaluation/dataset.py) have. Applied by lanekeep/world/camera_mount.py
+    # real rigs and the datasets (lanekeep/evaluation/dataset.py) have. Applied by
+    # lanekeep/world/camera_mount.py
     # to the compiled model, so the detectors' camera models (read from it) stay exact.
     mount_height_m: float = 0.0  # 0 = the car's 1.5 m; else the cameras' height above ground
     pitch_offset_deg: float = 0.0  # added to each camera's pitch, + = looking up
@@ -371,7 +372,8 @@ class ControlConfig:
     """Which controller turns the estimated lane into steer and throttle (`[control]`)."""
 
     # "pid" (the paper's eq. 9, default), "stanley", an entry point of the group
-    # lanekeep.control.registry, or an import path "package.module:Class" (lanekeep/control/registry.py)
+    # lanekeep.control.registry, or an import path "package.module:Class"
+    # (lanekeep/control/registry.py)
     controller: str = "pid"
 
     def __post_init__(self):

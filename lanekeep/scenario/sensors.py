@@ -1,5 +1,6 @@
 """The `[sensors]` table of a scenario: the error magnitudes of the car's sensors, with the
-sources of their defaults (the simulator that applies them is lanekeep/sensing/vehicle_sensors.py)."""
+sources of their defaults (the simulator that applies them is
+lanekeep/sensing/vehicle_sensors.py)."""
 
 from __future__ import annotations
 

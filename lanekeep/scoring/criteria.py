@@ -1,4 +1,5 @@
-"""Pass/fail judgement of an episode: a scenario's `[criteria]` (lanekeep.scenario.schema.CriteriaConfig),
+"""Pass/fail judgement of an episode: a scenario's `[criteria]`
+(lanekeep.scenario.schema.CriteriaConfig),
 overridden by `run` / `bench` options, against its report.
 
 Why: a CI job needs an exit code, not a table to read. Each limit is optional (None = not

@@ -97,7 +97,8 @@ class EpisodeReport:
     wall_s: float = 0.0
     stop_reason: str = ""  # why an incomplete episode stopped ("" when completed)
     status: str = "completed"  # one of STATUSES; `completed` is status == "completed"
-    criteria: tuple[Verdict, ...] = ()  # pass/fail verdicts (lanekeep/scoring/criteria.py), if judged
+    # pass/fail verdicts (lanekeep/scoring/criteria.py), if judged
+    criteria: tuple[Verdict, ...] = ()
     # (nearest, farthest) look-ahead (m) of ADE / FDE, for the table's footer.
     ade_range_m: tuple[float, float] = (ADE_POINTS_M[0], ADE_POINTS_M[-1])
 

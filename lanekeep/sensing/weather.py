@@ -1,5 +1,6 @@
 """Weather and motion between the scene and the lens: fog, falling rain, snowflakes, drops on
-the lens, motion blur. They use the render's depth (lanekeep/sensing/cameras.py reads it from the same
+the lens, motion blur. They use the render's depth (lanekeep/sensing/cameras.py reads it from the
+same
 pass as the colour) so that they sit in the scene, not on top of it.
 
   - Fog: Koschmieder's law on the range of every pixel, I = I0 t + A (1 - t) with

@@ -1,5 +1,6 @@
 """Roadside props from a scenario's `[roadside]` table (lanekeep/scenario/roadside.py) put into
-the world: guard rails, barriers, poles, signs, gantries, overpasses (lanekeep/world/prop_assets.py),
+the world: guard rails, barriers, poles, signs, gantries, overpasses
+(lanekeep/world/prop_assets.py),
 scenery trees and buildings placed by the seed, and hills or a city at the horizon.
 
 Real frames are full of edges above the horizon (2-14% edge pixels) where ours had none. Each

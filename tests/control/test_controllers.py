@@ -1,5 +1,6 @@
 """Controllers behind one interface (lanekeep/control/registry.py): the default "pid" reproduces the
-episode's former inline control exactly, "stanley" (lanekeep/control/stanley.py) follows the textbook
+episode's former inline control exactly, "stanley" (lanekeep/control/stanley.py) follows the
+textbook
 law and keeps clear_curve in its lane, and `[control] controller` selects them."""
 
 from __future__ import annotations

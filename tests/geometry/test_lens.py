@@ -1,4 +1,5 @@
-"""Lens distortion (lanekeep/geometry/lens.py, `[camera] distortion`): frames, masks and the detectors'
+"""Lens distortion (lanekeep/geometry/lens.py, `[camera] distortion`): frames, masks and the
+detectors'
 camera all bent by the same lens; a lens that folds the image is one clear error."""
 
 from __future__ import annotations
@@ -64,7 +65,8 @@ def test_masks_and_frames_are_bent_alike():
 def test_a_lens_that_folds_the_image_is_one_clear_error(tmp_path):
     with pytest.raises(ScenarioError, match="camera.distortion: .* folds the image"):
         build(_with_lens("clear_straight", (-0.28, 0.08, 0.0, 0.0, -0.01)))
-    body = (Path(lanekeep.__file__).parent / "scenario" / "shipped" / "clear_straight.toml").read_text()
+    shipped = Path(lanekeep.__file__).parent / "scenario" / "shipped"
+    body = (shipped / "clear_straight.toml").read_text()
     path = tmp_path / "folded.toml"
     path.write_text(body + "\n[camera]\ndistortion = [-0.28, 0.08, 0, 0, -0.01]\n")
     proc = subprocess.run([sys.executable, "-m", "lanekeep.cli", "render", str(path), "--out",

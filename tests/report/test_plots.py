@@ -39,7 +39,8 @@ def _fake_step(i: int, road):
            "sliding_window": LaneEstimate.invalid("no paint", 8.0)}
     pose = (10.0 + i, 0.0, 0.0)
     truth = step_truth(road, 0, pose, pose, [6.0, 8.0, -5.0], np.asarray(ADE_POINTS_M))
-    return SimpleNamespace(time_s=0.1 * (i + 1), truth=truth, output_x_m=6.0, reference_x_m=-5.0, estimates=est,
+    return SimpleNamespace(time_s=0.1 * (i + 1), truth=truth, output_x_m=6.0, reference_x_m=-5.0,
+                           estimates=est,
                            track_offsets_m={"hough": 0.08, "sliding_window": None},
                            output_offset_m=0.09, reference_m=0.0, probabilities=[0.7, 0.3],
                            mmae_residuals_m=np.array([-0.02, np.nan]),

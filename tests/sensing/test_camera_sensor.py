@@ -1,4 +1,5 @@
-"""The camera model (lanekeep/sensing/camera_sensor.py): noise always on at a realistic level, causal
+"""The camera model (lanekeep/sensing/camera_sensor.py): noise always on at a realistic level,
+causal
 auto-exposure with highlight protection, a shadow-lifting tone curve, vignetting, optional JPEG,
 the ego hood in the front image only, and the `[camera]` keys validated."""
 
