@@ -1,4 +1,5 @@
-"""Render the LaneNet dataset (lanekeep/evaluation/dataset.py): random worlds, exact labels, by seed.
+"""Render the LaneNet dataset (lanekeep/evaluation/dataset.py): random worlds, exact labels, by
+seed.
 
     python tools/make_dataset.py --out data/lanenet --train 320 --val 24 --test 24 [--workers 2]
 

@@ -18,112 +18,19 @@ and per value the mean and the count of episodes where the output is above its b
 Open loop: the car drove the recorded line whatever the replayed output says, so a change that
 would have steered it elsewhere is not scored for that; confirm a choice with
 compare_estimation (closed loop) and the bench. The recordings are pickles: load only your own.
+
+The code is lanekeep/tuning/replay.py.
 """
 
 from __future__ import annotations
 
 import argparse
-import copy
 import dataclasses
-import importlib.util
 import os
-import pickle
 from pathlib import Path
-from statistics import mean
 
-import numpy as np
-
-TOOLS = Path(__file__).resolve().parent
-
-
-def _compare_tool():
-    """tools/compare_estimation.py: the tuning-scenario guard and its value typing."""
-    spec = importlib.util.spec_from_file_location("compare_estimation",
-                                                  TOOLS / "compare_estimation.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
-def path_stem(name: str, seed: int | None) -> str:
-    return name if seed is None else f"{name}_seed{seed}"
-
-
-def record(scenario_arg: str, out: Path, seed: int | None = None) -> Path:
-    """Drive one scenario (at `seed`, None: the file's); pickle its estimator's inputs and
-    the truth per step."""
-    from lanekeep.loop.episode import Episode
-    from lanekeep.scenario.schema import load_scenario
-
-    scenario = load_scenario(scenario_arg)
-    if seed is not None:
-        scenario = dataclasses.replace(scenario, seed=seed)
-    steps: list[dict] = []
-    with Episode(scenario) as episode:
-        estimator = episode.estimator
-        update = estimator.update
-
-        def recording_update(detections, reference, ego, **timing):
-            steps.append({"detections": copy.deepcopy(detections),
-                          "reference": copy.deepcopy(reference), "ego": ego})
-            return update(detections, reference, ego, **timing)
-
-        estimator.update = recording_update
-        episode.run(on_step=lambda result, _t: steps[-1].update(truth_m=result.truth_output_m))
-        data = {"scenario": path_stem(scenario.name, seed), "names": list(estimator.names),
-                "settings": estimator.settings, "reference_x_m": estimator.reference_x_m,
-                "steps": steps}
-    path = out / f"{path_stem(scenario.name, seed)}.pkl"
-    with path.open("wb") as f:
-        pickle.dump(data, f)
-    return path
-
-
-def _own_seed(scenario_arg: str) -> int | None:
-    """The seed a scenario's file gives it (the one the bench scores); None if it will not
-    load (the guard then says why)."""
-    from lanekeep.scenario.schema import ScenarioError, load_scenario
-
-    try:
-        return load_scenario(scenario_arg).seed
-    except ScenarioError:
-        return None
-
-
-def replay(data: dict, **settings) -> tuple[np.ndarray, np.ndarray]:
-    """The output's and each track's offset error (m, NaN where none) per step, with the
-    recorded settings changed by `settings`."""
-    from lanekeep.detectors.base import poly_eval
-    from lanekeep.estimators.lane_estimator import LaneEstimator
-
-    estimator = LaneEstimator(data["names"], dataclasses.replace(data["settings"], **settings),
-                              data["reference_x_m"])
-    output, tracks = [], []
-    for step in data["steps"]:
-        out = estimator.update(step["detections"], step["reference"], step["ego"])
-        truth = step["truth_m"]
-        output.append(np.nan if out.offset_m is None else out.offset_m - truth)
-        tracks.append([np.nan if out.tracked[n] is None
-                       else -float(poly_eval(out.tracked[n], out.offset_x_m)) - truth
-                       for n in data["names"]])
-    return np.asarray(output), np.asarray(tracks)
-
-
-def rmse_cm(errors_m: np.ndarray) -> float:
-    return float(np.sqrt(np.nanmean(np.square(errors_m))) * 100.0)
-
-
-def compare(recordings: list[dict], key: str, values: list[object]) -> list[tuple]:
-    """(scenario, value, output RMSE, best track RMSE, its model) per recording and value."""
-    rows = []
-    for data in recordings:
-        for value in values:
-            output, tracks = replay(data, **{key: value})
-            scores = [rmse_cm(tracks[:, i]) for i in range(tracks.shape[1])]
-            best = int(np.argmin(scores))
-            rows.append((data["scenario"], value, rmse_cm(output), scores[best],
-                         data["names"][best]))
-    return rows
+from lanekeep.tuning.replay import compare, load_recordings, record, setting_values, summarise
+from lanekeep.tuning.scenarios import TuningInputError, own_seed, select_scenarios
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -143,10 +50,11 @@ def main(argv: list[str] | None = None) -> None:
         if args.seed is not None and args.seed < 0:
             parser.exit(2, f"error: --seed must be >= 0, got {args.seed}\n")
         unscored = args.seed is not None and all(
-            _own_seed(s) != args.seed for s in args.scenarios)
-        guard = ["--allow-scored"] if args.allow_scored or unscored else []
-        tool = _compare_tool()
-        scenarios = tool._noise_tool().parse_args([*args.scenarios, *guard]).scenarios
+            own_seed(s) != args.seed for s in args.scenarios)
+        try:
+            scenarios = select_scenarios(args.scenarios, args.allow_scored or unscored)
+        except TuningInputError as err:
+            parser.exit(2, f"error: {err}\n")
         if args.out.exists() and not args.out.is_dir():
             parser.exit(2, f"error: {args.out} exists and is not a directory\n")
         args.out.mkdir(parents=True, exist_ok=True)
@@ -157,32 +65,13 @@ def main(argv: list[str] | None = None) -> None:
     from lanekeep.estimators.lane_estimator import EstimatorSettings
 
     key, _, text = args.setting.partition("=")
-    fields = {f.name for f in dataclasses.fields(EstimatorSettings)}
-    paths = sorted(args.recordings.glob("*.pkl"))
-    if key not in fields or not text:
+    if key not in {f.name for f in dataclasses.fields(EstimatorSettings)} or not text:
         parser.exit(2, f"error: {args.setting!r} is not KEY=VALUE,... of EstimatorSettings\n")
-    if not paths:
-        parser.exit(2, f"error: no recordings (*.pkl) in {args.recordings}\n")
-    recordings = []
-    for path in paths:
-        try:
-            with path.open("rb") as f:
-                data = pickle.load(f)
-            getattr(data["settings"], key)
-            data["steps"], data["names"], data["reference_x_m"]  # noqa: B018 - a recording's keys
-        except (OSError, pickle.UnpicklingError, EOFError, AttributeError, KeyError,
-                TypeError) as err:
-            parser.exit(2, f"error: {path} is not a recording of this tool ({err!r})\n")
-        recordings.append(data)
-    kind = type(getattr(recordings[0]["settings"], key))  # as the recorded loop had it
-    if kind not in (bool, int, float, str):
-        parser.exit(2, f"error: {key} is {getattr(recordings[0]['settings'], key)!r} in the "
-                       "recordings; only a number, a string or true/false is set here\n")
     try:
-        typed_value = _compare_tool().typed_value
-        values = [typed_value(kind, v) for v in text.split(",")]
-    except (KeyError, ValueError):
-        parser.exit(2, f"error: {key} cannot be {text!r} (a {kind.__name__} here)\n")
+        recordings = load_recordings(args.recordings, key)
+        values = setting_values(recordings, key, text)
+    except TuningInputError as err:
+        parser.exit(2, f"error: {err}\n")
     try:
         rows = compare(recordings, key, values)
     except ValueError as err:  # the estimator's own checks (an unknown mode, a bad number)
@@ -191,10 +80,9 @@ def main(argv: list[str] | None = None) -> None:
         print(f"{name:<36} {value!s:<10} output {output:7.4f}  best track {track:7.4f} "
               f"({model})  {output - track:+.4f}")
     print(f"\nper value of {key} over {len(recordings)} recordings (cm, open loop):")
-    for value in values:
-        mine = [r for r in rows if r[1] == value]
-        print(f"  {value!s:<10} output - best track: mean {mean(r[2] - r[3] for r in mine):+.4f}"
-              f"; above it in {sum(r[2] > r[3] for r in mine)}")
+    for s in summarise(rows, values):
+        print(f"  {s.value!s:<10} output - best track: mean {s.output_minus_track:+.4f}"
+              f"; above it in {s.above}")
 
 
 if __name__ == "__main__":

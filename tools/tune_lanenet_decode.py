@@ -6,14 +6,15 @@
 The shipped weights run once over every validation sequence (front and rear frames, each
 sequence from a reset state, frames upscaled to 1280x720 as `lanekeep eval` does), on the
 sequences as rendered and on a copy with vehicle-sized occluders over 60% of their paint
-(`lanekeep/eval_sets.occlude`, seeded apart from `lanekeep eval`'s sets). Each combination of
-the decoding's priors (`DecodeSettings`: curvature prior and its shape, weight of points where
-no paint is seen, std of the ego pair's width about the lane's, power of the objectness that
-weighs the ego pair's points, furthest point fitted) then decodes the same network outputs,
-and the ego lane is scored by `lanekeep/evaluation/lane_metrics.py`'s rules: ADE at 4-20 m and the offset
-error (cm), and the share of valid frames. The choice is the lowest mean of ADE + offset error
-over the two copies. Labels are read only to score. The validation worlds are disjoint from the
-training worlds and from `lanekeep eval`'s, so the choice is scored afresh there.
+(`lanekeep/evaluation/eval_sets.occlude`, seeded apart from `lanekeep eval`'s sets). Each
+combination of the decoding's priors (`DecodeSettings`: curvature prior and its shape, weight of
+points where no paint is seen, std of the ego pair's width about the lane's, power of the
+objectness that weighs the ego pair's points, furthest point fitted) then decodes the same
+network outputs, and the ego lane is scored by `lanekeep/evaluation/lane_metrics.py`'s rules:
+ADE at 4-20 m and the offset error (cm), and the share of valid frames. The choice is the
+lowest mean of ADE + offset error over the two copies. Labels are read only to score. The
+validation worlds are disjoint from the training worlds and from `lanekeep eval`'s, so the
+choice is scored afresh there.
 """
 
 from __future__ import annotations

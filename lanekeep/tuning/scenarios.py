@@ -15,7 +15,7 @@ from lanekeep.scenario.schema import ScenarioError, load_scenario, shipped_scena
 TUNING_DIR = Path(__file__).resolve().parents[2] / "tools" / "tuning"
 
 
-class TuningInputError(ValueError):
+class TuningInputError(Exception):
     """A user error of a tuning tool: its message is one line, the tool exits 2."""
 
 

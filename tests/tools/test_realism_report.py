@@ -1,12 +1,13 @@
-"""tools/realism_report.py: each statistic on constructed images with known answers, the
-simulator frame it measures, and the command line's exit status on bad input.
+"""tools/realism_report.py: each statistic (lanekeep/tuning/realism.py) on constructed images
+with known answers, the simulator frame it measures (lanekeep/tuning/realism_report.py), and
+the command line's exit status on bad input.
 
 No real photos here (they are not ours to ship); one small render of one shipped scenario.
 """
 
 import dataclasses
-import importlib.util
 import math
+import subprocess
 import sys
 from pathlib import Path
 
@@ -14,18 +15,19 @@ import cv2
 import numpy as np
 import pytest
 
-TOOLS = Path(__file__).resolve().parents[2] / "tools"
+from lanekeep.tuning import realism as rr
+from lanekeep.tuning import realism_report as report
+from lanekeep.tuning.scenarios import TuningInputError
+
+TOOL = Path(__file__).resolve().parents[2] / "tools" / "realism_report.py"
 
 
-def _tool():
-    spec = importlib.util.spec_from_file_location("realism_report", TOOLS / "realism_report.py")
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module  # its dataclass looks its module up there
-    spec.loader.exec_module(module)
-    return module
+def _main(*args: str) -> subprocess.CompletedProcess:
+    """tools/realism_report.py run with `args`, as from a shell."""
+    return subprocess.run([sys.executable, str(TOOL), *args], capture_output=True, text=True,
+                          timeout=300)
 
 
-rr = _tool()
 H, W = 360, 640
 
 
@@ -180,7 +182,7 @@ def test_render_front_is_the_snapshot_the_car_sees(tmp_path):
     scenario = load_scenario("snow")
     small = dataclasses.replace(scenario,
                                 camera=dataclasses.replace(scenario.camera, width=320, height=180))
-    rgb, paint, horizon = rr.render_front(small)
+    rgb, paint, horizon = report.render_front(small)
     render_snapshot(small, tmp_path, effects=True)
     snapshot = cv2.cvtColor(cv2.imread(str(tmp_path / "front.png")), cv2.COLOR_BGR2RGB)
     np.testing.assert_array_equal(rgb, snapshot)
@@ -188,29 +190,32 @@ def test_render_front_is_the_snapshot_the_car_sees(tmp_path):
     assert 0 < horizon < 180
     stats = rr.frame_stats(rgb, horizon, paint)
     assert stats["paint_minus_road"] > 0  # markings are brighter than asphalt
-    with pytest.raises(rr.BadInput, match="outside"):
-        rr.render_front(small, at_s=-5.0)
+    with pytest.raises(TuningInputError, match="outside"):
+        report.render_front(small, at_s=-5.0)
 
 
 # -- command line ------------------------------------------------------------------------------
-def test_missing_real_folder_is_one_line_and_exit_2(tmp_path, capsys):
-    assert rr.main(["--real", str(tmp_path / "nope")]) == 2
-    err = capsys.readouterr().err.strip()
+def test_missing_real_folder_is_one_line_and_exit_2(tmp_path):
+    result = _main("--real", str(tmp_path / "nope"))
+    assert result.returncode == 2
+    err = result.stderr.strip()
     assert err.count("\n") == 0 and "no such folder" in err
 
 
-def test_folder_without_images_is_one_line_and_exit_2(tmp_path, capsys):
+def test_folder_without_images_is_one_line_and_exit_2(tmp_path):
     (tmp_path / "sub").mkdir()
     (tmp_path / "sub" / "notes.txt").write_text("x")
-    assert rr.main(["--real", str(tmp_path)]) == 2
-    err = capsys.readouterr().err.strip()
+    result = _main("--real", str(tmp_path))
+    assert result.returncode == 2
+    err = result.stderr.strip()
     assert err.count("\n") == 0 and "no .jpg" in err
 
 
-def test_unknown_scenario_is_one_line_and_exit_2(tmp_path, capsys):
+def test_unknown_scenario_is_one_line_and_exit_2(tmp_path):
     cv2.imwrite(str(tmp_path / "a.png"), grey(100, 72, 128))
-    assert rr.main(["--real", str(tmp_path), "--scenarios", "no_such_scenario"]) == 2
-    assert "unknown scenario" in capsys.readouterr().err
+    result = _main("--real", str(tmp_path), "--scenarios", "no_such_scenario")
+    assert result.returncode == 2
+    assert "unknown scenario" in result.stderr
 
 
 def test_real_folder_stats_and_table(tmp_path):
@@ -221,11 +226,11 @@ def test_real_folder_stats_and_table(tmp_path):
     img[260:, 600:611] = 200
     cv2.imwrite(str(folder / "0.png"), img)
     (folder / "labels" / "0.txt").write_text("605 300 605 700\n")
-    info = rr.real_set(folder, None)
+    info = report.real_set(folder, None)
     assert info.horizon_row == 250.0
-    rows = rr.real_folder_stats(folder, info)
+    rows = report.real_folder_stats(folder, info)
     assert len(rows) == 1 and rows[0]["paint_minus_road"] == pytest.approx(100.0, abs=2.0)
-    table = rr.markdown_table([("TuSimple (mean of 1)", rr.mean_stats(
+    table = report.markdown_table([("TuSimple (mean of 1)", rr.mean_stats(
         [{k: v for k, v in rows[0].items() if k != "image"}]))])
     assert table.count("\n") == 2 and "| TuSimple (mean of 1) | 250 |" in table
-    assert rr.real_set(tmp_path, None).horizon_row is None  # unknown set: centre row, said so
+    assert report.real_set(tmp_path, None).horizon_row is None  # unknown set: centre row, said so

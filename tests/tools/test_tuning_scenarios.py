@@ -1,28 +1,37 @@
-"""The tuning scenarios (tools/tuning/), on which the closed loop's tracker noise is measured.
+"""The tuning scenarios (tools/tuning/), on which the closed loop's tracker noise is measured,
+and the tuning tools' library (lanekeep/tuning/) and command lines (tools/).
 
 They must load and build, and stay apart from the shipped scenarios that `lanekeep bench`
 scores; tools/measure_detector_noise.py refuses a shipped one unless told --allow-scored.
 """
 
-import importlib.util
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 from lanekeep.scenario.schema import load_scenario, shipped_scenarios
+from lanekeep.tuning import replay, trace
+from lanekeep.tuning.estimation import Setting, typed_value
+from lanekeep.tuning.scenarios import (
+    TUNING_DIR,
+    TuningInputError,
+    own_seed,
+    select_scenarios,
+    tuning_scenarios,
+)
 from lanekeep.world.build import build
 
 TOOLS = Path(__file__).resolve().parents[2] / "tools"
 TUNING = sorted((TOOLS / "tuning").glob("*.toml"))
 
 
-def _tool(name: str):
-    """A script of tools/ loaded as a module."""
-    spec = importlib.util.spec_from_file_location(name, TOOLS / f"{name}.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+def _tool(name: str, *args: str) -> subprocess.CompletedProcess:
+    """tools/<name>.py run with `args`, as from a shell (its exit status and output)."""
+    return subprocess.run([sys.executable, str(TOOLS / f"{name}.py"), *args],
+                          capture_output=True, text=True, timeout=300)
 
 
 def test_there_are_tuning_scenarios():
@@ -46,54 +55,44 @@ def test_tuning_scenarios_are_not_shipped():
 
 
 def test_noise_tool_defaults_to_the_tuning_scenarios():
-    tool = _tool("measure_detector_noise")
-    args = tool.parse_args([])
-    assert sorted(Path(a) for a in args.scenarios) == TUNING
-    assert not args.allow_scored
+    assert TUNING_DIR == TOOLS / "tuning" and tuning_scenarios() == TUNING
+    assert sorted(Path(a) for a in select_scenarios([])) == TUNING  # allow_scored: False
 
 
 @pytest.mark.parametrize("arg", ["clear_straight", "case2_sharp_turn"])
-def test_noise_tool_refuses_a_shipped_scenario(arg, capsys):
-    tool = _tool("measure_detector_noise")
-    with pytest.raises(SystemExit) as exit_info:
-        tool.parse_args([str(TUNING[0]), arg])
-    assert exit_info.value.code == 2
-    assert "--allow-scored" in capsys.readouterr().err
-    args = tool.parse_args([arg, "--allow-scored"])
-    assert args.scenarios == [arg] and args.allow_scored
+def test_noise_tool_refuses_a_shipped_scenario(arg):
+    refused = _tool("measure_detector_noise", str(TUNING[0]), arg)
+    assert refused.returncode == 2
+    assert "--allow-scored" in refused.stderr
+    with pytest.raises(TuningInputError, match="--allow-scored"):
+        select_scenarios([str(TUNING[0]), arg])
+    assert select_scenarios([arg], allow_scored=True) == [arg]
 
 
 def test_noise_tool_refuses_a_shipped_scenario_file():
-    tool = _tool("measure_detector_noise")
     path = Path(load_scenario("fog").source)
-    with pytest.raises(SystemExit) as exit_info:
-        tool.parse_args([str(path)])
-    assert exit_info.value.code == 2
+    assert _tool("measure_detector_noise", str(path)).returncode == 2
 
 
 def test_compare_tool_defaults_to_the_tuning_scenarios_and_refuses_scored_ones():
-    tool = _tool("compare_estimation")
-    args = tool.parse_args(["output=select,fused"])
-    assert sorted(Path(a) for a in args.scenarios) == TUNING
-    assert (args.key, args.values) == ("output", ["select", "fused"])
-    with pytest.raises(SystemExit) as scored:
-        tool.parse_args(["output=fused", "clear_curve"])
-    assert scored.value.code == 2
-    with pytest.raises(SystemExit) as unknown:
-        tool.parse_args(["no_such_key=1"])
-    assert unknown.value.code == 2
-    assert [tool.typed_value(bool, v) for v in ("true", "false")] == [True, False]
+    assert sorted(Path(a) for a in select_scenarios([])) == TUNING
+    setting = Setting.parse("output=select,fused")
+    assert (setting.key, list(setting.values)) == ("output", ["select", "fused"])
+    assert _tool("compare_estimation", "output=fused", "clear_curve").returncode == 2
+    assert _tool("compare_estimation", "no_such_key=1").returncode == 2
+    with pytest.raises(TuningInputError):
+        Setting.parse("no_such_key=1")
+    assert [typed_value(bool, v) for v in ("true", "false")] == [True, False]
     for bad in ("offset_lookahead_m=far", "reference_std_m=0.05,"):
-        with pytest.raises(SystemExit) as wrong:
-            tool.parse_args([bad])
-        assert wrong.value.code == 2
+        assert _tool("compare_estimation", bad).returncode == 2
+        with pytest.raises(TuningInputError):
+            Setting.parse(bad)
 
 
 def test_trace_tool_tells_a_model_that_errs_with_the_reference_from_one_that_errs_against_it():
     """The residual summary: a model whose carried offset errs with the reference keeps a
     residual of its bias alone (correlation +1); one that errs against it pays for both
     (correlation -1); steps the MMAE did not compare (NaN) are left out."""
-    tool = _tool("trace_estimation")
     rng = np.random.default_rng(0)
     reference_error = rng.normal(0.0, 0.01, 200)
     bias = 0.01
@@ -103,7 +102,7 @@ def test_trace_tool_tells_a_model_that_errs_with_the_reference_from_one_that_err
                "with:residual": reference_error - with_it,
                "against:residual": reference_error - against_it}
     columns["against:residual"][:10] = np.nan
-    summary = tool.residual_summary(["with", "against"], columns)
+    summary = trace.residual_summary(["with", "against"], columns)
     assert summary["with"]["mean_m"] == pytest.approx(-bias)
     assert summary["with"]["rms_m"] == pytest.approx(bias)
     assert summary["with"]["correlation"] == pytest.approx(1.0)
@@ -115,7 +114,6 @@ def test_trace_tool_tells_a_model_that_errs_with_the_reference_from_one_that_err
 def test_trace_tool_shows_when_the_output_accrues_its_excess_over_a_track():
     """Windows of the output's squared error minus a track's: a loss made in the first second
     lands in the first window; steps where either is missing count for neither."""
-    tool = _tool("trace_estimation")
     time = np.arange(1, 41) * 0.1  # 4 s of 0.1 s steps
     track = np.full(40, 0.005)
     fused = track.copy()
@@ -123,14 +121,12 @@ def test_trace_tool_shows_when_the_output_accrues_its_excess_over_a_track():
     fused[25] = np.nan
     columns = {"time": time, "fused": fused, "a:track": track,
                "a:p": np.full(40, 0.9), "b:p": np.full(40, 0.1)}
-    rows = tool.excess_by_window(["a", "b"], columns, "a:track", 2.0)
+    rows = trace.excess_by_window(["a", "b"], columns, "a:track", 2.0)
     assert [r[0] for r in rows] == pytest.approx([0.1, 2.1])
     assert rows[0][1] == pytest.approx(10 * (0.01**2 - 0.005**2))
     assert rows[1][1] == pytest.approx(0.0)
     np.testing.assert_allclose(rows[0][2], [0.9, 0.1])
-    with pytest.raises(SystemExit) as bad:
-        tool.main(["clear_curve", "--window", "0"])
-    assert bad.value.code == 2
+    assert _tool("trace_estimation", "clear_curve", "--window", "0").returncode == 2
 
 
 def _synthetic_recording(steps: int = 60) -> dict:
@@ -159,14 +155,14 @@ def test_replay_tool_scores_estimator_settings_on_a_recorded_drive(tmp_path):
     one line, exit 2."""
     import pickle
 
-    tool = _tool("replay_estimation")
-    rows = tool.compare([_synthetic_recording()], "reference_std_m", [0.05, 0.01])
+    rows = replay.compare([_synthetic_recording()], "reference_std_m", [0.05, 0.01])
     (_, _, slow, best, model), (_, _, fast, best_again, _) = rows
     assert model == "hough" and best == pytest.approx(best_again) and best < 0.05
     assert best < fast < slow < 5.0
     with (tmp_path / "synthetic.pkl").open("wb") as f:
         pickle.dump(_synthetic_recording(10), f)
-    tool.main(["compare", str(tmp_path), "prefer_accepted=true,false"])
+    ok = _tool("replay_estimation", "compare", str(tmp_path), "prefer_accepted=true,false")
+    assert ok.returncode == 0, ok.stderr
     junk = tmp_path / "junk"
     junk.mkdir()
     (junk / "a.pkl").write_bytes(b"not a pickle")
@@ -176,24 +172,19 @@ def test_replay_tool_scores_estimator_settings_on_a_recorded_drive(tmp_path):
                 ["compare", str(tmp_path), "lane_width_range_m=3"],
                 ["compare", str(tmp_path / "none"), "reference_std_m=0.05"],
                 ["compare", str(junk), "reference_std_m=0.05"]):
-        with pytest.raises(SystemExit) as wrong:
-            tool.main(bad)
-        assert wrong.value.code == 2
+        assert _tool("replay_estimation", *bad).returncode == 2, bad
 
 
 def test_replay_tool_records_a_shipped_scenario_only_at_a_seed_the_bench_does_not_score(
         tmp_path):
     """The bench scores each shipped scenario at its file's seed: recording it there is
     refused (exit 2, before anything drives); another seed is unscored data, named apart."""
-    tool = _tool("replay_estimation")
-    own = tool._own_seed("fog")
+    own = own_seed("fog")
     assert isinstance(own, int)
-    with pytest.raises(SystemExit) as scored:
-        tool.main(["record", str(tmp_path), "fog", "--seed", str(own)])
-    assert scored.value.code == 2
-    with pytest.raises(SystemExit) as negative:
-        tool.main(["record", str(tmp_path), "fog", "--seed", "-1"])
-    assert negative.value.code == 2
+    scored = _tool("replay_estimation", "record", str(tmp_path), "fog", "--seed", str(own))
+    assert scored.returncode == 2
+    negative = _tool("replay_estimation", "record", str(tmp_path), "fog", "--seed", "-1")
+    assert negative.returncode == 2
     assert not list(tmp_path.iterdir())
-    assert tool.path_stem("fog", own + 1) == f"fog_seed{own + 1}"
-    assert tool.path_stem("fog", None) == "fog"
+    assert replay.path_stem("fog", own + 1) == f"fog_seed{own + 1}"
+    assert replay.path_stem("fog", None) == "fog"

@@ -16,111 +16,16 @@ rear (the closed loop's reference) in order, so the sliding windows' memory of t
 plays as in the loop, and prints per detector: RMSE and the 95th percentile of the offset
 error, the share of valid frames, the share of gross errors (over GROSS_M) and the detector's
 time per frame. A replay scores detection, not control.
+
+The code is lanekeep/tuning/detector_replay.py.
 """
 
 from __future__ import annotations
 
 import argparse
-import json
-import time
 from pathlib import Path
 
-import numpy as np
-
-WANDER_M = 0.35  # the recorded drive's lateral wander about the lane centre (amplitude)
-WANDER_PERIOD_S = 9.0
-GROSS_M = 0.3  # an error this large is a wrong line (a vehicle edge, a shadow), not noise
-JOBS = (("hough", "front"), ("sliding_window", "front"), ("sliding_window", "rear"))
-
-
-def record(scenario_path: str, out: Path, seconds: float | None, closed_loop: bool = False
-           ) -> None:
-    """Drive the scenario; save its frames and the true offsets per step."""
-    from lanekeep.loop.episode import Episode
-    from lanekeep.scenario.schema import load_scenario
-    from lanekeep.scoring.truth import lane_offsets
-
-    scenario = load_scenario(scenario_path)
-    out.mkdir(parents=True, exist_ok=True)
-    with Episode(scenario) as episode:
-        steps = episode.total_steps if seconds is None else int(round(seconds / episode.dt_s))
-        cams = episode.rig.cameras
-        x_refs = _x_refs(cams)
-        frames = {name: np.lib.format.open_memmap(
-            out / f"{name}.npy", mode="w+", dtype=np.uint8,
-            shape=(steps, cams[name].height, cams[name].width, 3)) for name in ("front", "rear")}
-        truth = np.zeros((steps, len(x_refs)))
-        lane = scenario.road.ego_lane
-        for i in range(steps):
-            pose = episode.world.car.pose()  # the pose the frames are rendered at
-            step = episode.step(None if closed_loop else _truth_action(episode, pose, i))
-            for name in frames:
-                frames[name][i] = step.frames[name]
-            truth[i] = lane_offsets(episode.world.road, *pose, lane, list(x_refs.values()))
-        for f in frames.values():
-            f.flush()
-    np.save(out / "truth.npy", truth)
-    (out / "meta.json").write_text(json.dumps({"scenario": str(scenario_path),
-                                               "x_refs": x_refs, "steps": steps}))
-
-
-def _truth_action(episode, pose, index: int) -> tuple[float, float]:
-    """(steer, throttle) that follow the true lane centre, offset by the wander."""
-    from lanekeep.scoring.truth import lane_centre_fit
-
-    centre, _ = lane_centre_fit(episode.world.road, *pose, episode.scenario.road.ego_lane)
-    x_ctrl = episode.scenario.estimation.control_lookahead_m
-    wander = WANDER_M * np.sin(2.0 * np.pi * index * episode.dt_s / WANDER_PERIOD_S)
-    offset = -float(centre[0] + centre[1] * x_ctrl) - wander
-    speed = episode.world.car.speed_mps()
-    steer = episode.controller.steering(offset, speed, curvature_1pm=float(2.0 * centre[2]))
-    return steer, episode.controller.speed(speed)
-
-
-def _x_refs(cameras) -> dict[str, float]:
-    """Look-ahead of each job's detector, keyed 'detector@camera'."""
-    from lanekeep.detectors.registry import make_detector
-
-    return {f"{d}@{c}": float(make_detector(d, cameras[c]).x_ref) for d, c in JOBS}
-
-
-def score(folder: Path) -> dict[str, dict[str, float]]:
-    """Per-detector error statistics over a recording (see the module docstring)."""
-    from lanekeep.detectors.registry import make_detector
-    from lanekeep.scenario.schema import load_scenario
-    from lanekeep.sensing.cameras import CameraRig, RenderSettings
-    from lanekeep.world.build import build
-
-    meta = json.loads((folder / "meta.json").read_text())
-    scenario = load_scenario(meta["scenario"])
-    world = build(scenario)
-    with CameraRig(world.model, RenderSettings.of(scenario, scenario.camera.width,
-                                                  scenario.camera.height)) as rig:
-        cameras = dict(rig.cameras)
-    truth = np.load(folder / "truth.npy")
-    frames = {name: np.load(folder / f"{name}.npy", mmap_mode="r") for name in ("front", "rear")}
-    out = {}
-    for j, (name, cam) in enumerate(JOBS):
-        detector = make_detector(name, cameras[cam])
-        errors, valid, wall = [], 0, 0.0
-        for i in range(len(truth)):
-            frame = np.ascontiguousarray(frames[cam][i])
-            t0 = time.perf_counter()
-            est = detector.detect(frame)
-            wall += time.perf_counter() - t0
-            if est.valid:
-                valid += 1
-                errors.append(est.offset_m - truth[i, j])
-        err = np.abs(np.asarray(errors)) if errors else np.zeros(1)
-        out[f"{name}@{cam}"] = {
-            "rmse_cm": float(np.sqrt(np.mean(err ** 2)) * 100),
-            "p95_cm": float(np.percentile(err, 95) * 100),
-            "max_cm": float(err.max() * 100),
-            "valid_pct": 100.0 * valid / len(truth),
-            "gross_pct": 100.0 * float(np.sum(err > GROSS_M)) / len(truth),
-            "ms": 1000.0 * wall / len(truth),
-        }
-    return out
+from lanekeep.tuning.detector_replay import record, score
 
 
 def main(argv: list[str] | None = None) -> None:

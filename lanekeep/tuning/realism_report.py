@@ -1,0 +1,242 @@
+"""The realism report: the same image statistics (`lanekeep.tuning.realism`) for rendered
+frames and real photos, side by side, as a Markdown table and a JSON document.
+
+Simulator side: each scenario's front camera at its start pose (or a given arc length), WITH
+the scenario's image effects, i.e. the frame the car's camera delivers, plus the segmentation
+render's marking mask for the paint contrast. Real side: every image in each image folder under
+the given root (or the root itself); the photos are only read, never copied. Known folders have
+a horizon row given here; TuSimple label files (labels/N.txt) give the paint pixels. Renders
+only, nothing scored: the shipped scenarios are the default. tools/realism_report.py is its
+command line.
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from lanekeep.tuning.realism import (
+    CANNY_HIGH,
+    CANNY_LOW,
+    WORK_WIDTH,
+    camera_horizon_row,
+    frame_stats,
+    label_paint_mask,
+    mean_stats,
+    read_label_lanes,
+)
+from lanekeep.tuning.scenarios import TuningInputError
+
+
+@dataclass(frozen=True)
+class RealSet:
+    """A folder of real frames: its display name and horizon row (None: not known)."""
+
+    name: str
+    horizon_row: float | None
+    horizon_source: str
+
+
+# Horizon rows of the two development sets as given in the [realism] issue (TuSimple near row
+# 250, Udacity near 430) and checked by eye on the frames: where the lane lines vanish. Constants,
+# not estimates: the README gives none, and all frames of a set share one camera mounting.
+KNOWN_SETS = {
+    "tusimple_dev": RealSet("TuSimple", 250.0, "constant (vanishing point of the lanes)"),
+    "udacity": RealSet("Udacity", 430.0, "constant (vanishing point of the lanes)"),
+}
+IMAGE_SUFFIXES = (".jpg", ".jpeg", ".png")
+
+
+# -- simulator frames --------------------------------------------------------------------------
+def render_front(scenario, at_s: float | None = None
+                 ) -> tuple[np.ndarray, np.ndarray, float]:
+    """(RGB, marking mask, horizon row) of a scenario's front camera at a road pose.
+
+    The RGB is exactly render_snapshot(scenario, ..., effects=True)'s front.png: the same
+    world, pose, render settings and image effects drawn from the scenario seed in the same
+    order (both cameras' effects are made, then the front's are applied); the test checks it.
+    Only the front camera is rendered, plus its segmentation for the marking mask.
+    """
+    from lanekeep.sensing.cameras import CameraRig, RenderSettings
+    from lanekeep.sensing.snapshot import camera_frame, make_effects, place_on_road
+    from lanekeep.world.build import build
+
+    world = build(scenario)
+    s = scenario.start.s_m if at_s is None else at_s
+    if not 0.0 <= s <= world.road.length_m:
+        raise TuningInputError(f"--at {s} is outside {scenario.name}'s road "
+                               f"(0..{world.road.length_m:.0f} m)")
+    place_on_road(world, s)
+    settings = RenderSettings.of(scenario)
+    with CameraRig(world.model, settings) as rig:
+        rng = np.random.default_rng(scenario.seed)
+        effects = make_effects(scenario, world, rig, rng)
+        rgb = camera_frame(rig, world, "front", effects["front"], rng, scenario.start.speed_mps)
+        paint = world.marking_mask(rig.render_segmentation(world.data, "front"))
+        horizon = camera_horizon_row(rig.cameras["front"])
+    return rgb, paint, horizon
+
+
+# -- real frames -------------------------------------------------------------------------------
+def image_folders(root: Path) -> list[Path]:
+    """Folders holding images: `root` itself if it does, else its subfolders that do, sorted."""
+    def has_images(folder: Path) -> bool:
+        return any(p.suffix.lower() in IMAGE_SUFFIXES for p in folder.iterdir() if p.is_file())
+
+    if has_images(root):
+        return [root]
+    return [d for d in sorted(root.iterdir()) if d.is_dir() and has_images(d)]
+
+
+def real_set(folder: Path, horizon_override: float | None) -> RealSet:
+    """The set a folder holds: a known one's name and horizon, else the folder name and the
+    `--horizon` row (or the centre row, said so in the table)."""
+    if folder.name in KNOWN_SETS and horizon_override is None:
+        return KNOWN_SETS[folder.name]
+    if horizon_override is not None:
+        return RealSet(folder.name, horizon_override, "--horizon")
+    return RealSet(folder.name, None, "assumed: image centre row")
+
+
+def read_rgb(path: Path) -> np.ndarray | None:
+    """An image file as RGB uint8, None if it cannot be read."""
+    bgr = cv2.imread(str(path), cv2.IMREAD_COLOR)
+    return None if bgr is None else cv2.cvtColor(bgr, cv2.COLOR_BGR2RGB)
+
+
+def real_folder_stats(folder: Path, info: RealSet) -> list[dict[str, float]]:
+    """Statistics of every readable image in a folder; labels/<stem>.txt, if there, gives paint."""
+    rows = []
+    for path in sorted(p for p in folder.iterdir() if p.suffix.lower() in IMAGE_SUFFIXES):
+        rgb = read_rgb(path)
+        if rgb is None:
+            print(f"realism_report: skipping unreadable {path}", file=sys.stderr)
+            continue
+        horizon = info.horizon_row if info.horizon_row is not None else (rgb.shape[0] - 1) / 2
+        label = folder / "labels" / f"{path.stem}.txt"
+        paint = (label_paint_mask(read_label_lanes(label), rgb.shape[:2])
+                 if label.is_file() else None)
+        rows.append({"image": path.name, **frame_stats(rgb, horizon, paint)})
+    return rows
+
+
+# -- output ------------------------------------------------------------------------------------
+COLUMNS = (  # (header, formatter of a stats dict)
+    ("horizon row", lambda s: cell(s["horizon_row"], 0)),
+    ("edges above", lambda s: cell(s["edges_above"], 3)),
+    ("edges below", lambda s: cell(s["edges_below"], 3)),
+    ("sky share above", lambda s: cell(s["sky_share"], 2)),
+    ("luma mean", lambda s: cell(s["luma_mean"], 0)),
+    ("luma p5/p50/p95", lambda s: "/".join(cell(s[k], 0)
+                                         for k in ("luma_p5", "luma_p50", "luma_p95"))),
+    ("mean R/G/B", lambda s: "/".join(cell(s[k], 0) for k in ("mean_r", "mean_g", "mean_b"))),
+    ("saturation", lambda s: cell(s["saturation"], 2)),
+    ("colourfulness", lambda s: cell(s["colourfulness"], 1)),
+    ("noise sigma", lambda s: cell(s["noise_sigma"], 2)),
+    ("paint-road", lambda s: cell(s["paint_minus_road"], 0)),
+    ("paint/road", lambda s: cell(s["paint_over_road"], 2)),
+    ("paint p90-road", lambda s: cell(s["paint_p90_minus_road"], 0)),
+)
+
+LEGEND = """\
+Columns: horizon row (sim: from the camera model; real: per-set constant); edges above/below:
+share of Canny(50, 150) edge pixels after a sigma-1 Gaussian, above / below the horizon; sky
+share above: share of the pixels above the horizon that are smooth and blue-ish or bright;
+luma (Rec. 601, DN) below the horizon; mean R/G/B, HSV saturation and Hasler-Suesstrunk
+colourfulness of the whole frame; noise sigma: sigma (DN) of Immerkaer's high-pass of the luma
+in the flattest 20% of 8x8 blocks below the horizon, noise plus finest texture (JPEG smooths
+real frames: a lower bound there); paint-road / paint/road: difference / ratio of the median
+luma of marking pixels and of road 15..30 px beside them; paint p90-road: the same with the
+paint's 90th percentile (sim: segmentation mask; TuSimple: +-2 px around the label polylines,
+which run through dash gaps and over raised dots, so a lower bound, the medians mostly see
+road; "-": no labels). Real rows are means over their frames; all values at 1280 px wide."""
+
+FOOTER = ("This table is for seeing the gap between the renders and real photos, not a target "
+          "to fit: matching these numbers on a handful of photos would overfit the renderer "
+          "to them without making it realistic.")
+
+
+def cell(value: float, digits: int) -> str:
+    """A table cell: the value to `digits` decimals, "-" where there is none."""
+    return "-" if value is None or not math.isfinite(value) else f"{value:.{digits}f}"
+
+
+def markdown_table(rows: list[tuple[str, dict[str, float]]]) -> str:
+    """Markdown table: one row per (label, stats), the COLUMNS as columns."""
+    head = "| frames | " + " | ".join(h for h, _ in COLUMNS) + " |"
+    rule = "|---|" + "---:|" * len(COLUMNS)
+    body = ["| " + label + " | " + " | ".join(f(s) for _, f in COLUMNS) + " |"
+            for label, s in rows]
+    return "\n".join([head, rule, *body])
+
+
+def jsonable(value):
+    """`value` with every non-finite float as None (JSON has no NaN)."""
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    if isinstance(value, dict):
+        return {k: jsonable(v) for k, v in value.items()}
+    if isinstance(value, list):
+        return [jsonable(v) for v in value]
+    return value
+
+
+@dataclass(frozen=True)
+class ReportRequest:
+    """What to compare: the real frames' root, the scenarios (None: every shipped one), the
+    arc length to render at (None: each start pose) and a horizon row for every real folder
+    (None: the known sets' constants)."""
+
+    real: Path
+    scenarios: tuple[str, ...] | None = None
+    at_s: float | None = None
+    horizon_row: float | None = None
+
+
+def run(request: ReportRequest) -> tuple[str, dict]:
+    """The report's Markdown and its JSON document; TuningInputError on a user error."""
+    real = request.real
+    if not real.is_dir():
+        raise TuningInputError(f"--real {real}: no such folder")
+    folders = image_folders(real)
+    if not folders:
+        raise TuningInputError(f"--real {real}: no {'/'.join(IMAGE_SUFFIXES)} images in it or "
+                               "in its subfolders")
+    from lanekeep.core.config_io import ConfigError
+    from lanekeep.scenario.schema import load_scenario, shipped_scenarios
+
+    rows: list[tuple[str, dict[str, float]]] = []
+    doc: dict = {"sim": [], "real": []}
+    for name in request.scenarios or shipped_scenarios():
+        try:
+            scenario = load_scenario(name)
+        except ConfigError as err:
+            raise TuningInputError(str(err)) from None
+        rgb, paint, horizon = render_front(scenario, request.at_s)
+        stats = frame_stats(rgb, horizon, paint)
+        rows.append((scenario.name, stats))
+        doc["sim"].append({"scenario": scenario.name, "at_s": request.at_s, "stats": stats})
+    for folder in folders:
+        info = real_set(folder, request.horizon_row)
+        per_image = real_folder_stats(folder, info)
+        if not per_image:
+            continue
+        stats = mean_stats([{k: v for k, v in r.items() if k != "image"} for r in per_image])
+        label = f"{info.name} (mean of {len(per_image)})"
+        if info.horizon_row is None:
+            label += " [horizon assumed: centre row]"
+        rows.append((label, stats))
+        doc["real"].append({"set": info.name, "folder": str(folder),
+                            "horizon_source": info.horizon_source, "mean": stats,
+                            "per_image": per_image})
+    if not doc["real"]:
+        raise TuningInputError(f"--real {real}: none of its images could be read")
+    text = "\n\n".join([markdown_table(rows), LEGEND, FOOTER]) + "\n"
+    doc["settings"] = {"work_width": WORK_WIDTH, "canny": [CANNY_LOW, CANNY_HIGH],
+                       "at_s": request.at_s, "footer": FOOTER}
+    return text, jsonable(doc)
