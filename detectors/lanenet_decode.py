@@ -75,7 +75,7 @@ class DecodeSettings:
     # confident proposals lay furthest inside the lane). Chosen on the simulated validation
     # split (tools/tune_lanenet_decode.py --score-power 0,1,2,4: objective 35.93, 34.00,
     # 33.06, 33.19 cm). The weights are absolute: below 1 they also weaken the points against
-    # the curvature prior (see README, "tried and not kept").
+    # the curvature prior (see docs/experiments.md, "tried and not kept").
     score_power: float = SCORE_POWER
     # Ground points further than this from the camera are not fitted (rows near the horizon
     # map to no usable ground beyond 150 m). Nearer limits were tried on the validation split

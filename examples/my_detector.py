@@ -3,7 +3,7 @@
 The detector below is deliberately simple: the brightest pixels of the road below the horizon
 are taken for paint, projected onto the ground through the camera model, split into the left
 and right boundary by side, and a parabola is fitted to each. It meets the `Detector` protocol
-(lanekeep/detectors/base.py): `name`, `x_ref`, `window`, `detect(frame)`, `reset()`.
+(detectors/base.py): `name`, `x_ref`, `window`, `detect(frame)`, `reset()`.
 
     python examples/my_detector.py                          # 20 s of clear_straight
     python examples/my_detector.py --seconds 3 --size 320x180

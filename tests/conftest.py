@@ -1,15 +1,25 @@
-"""Shared fixtures. Importing lanekeep first selects the EGL backend before mujoco loads.
+"""Shared fixtures. Importing lanekeep first selects the EGL backend before mujoco loads; under
+pytest-xdist each worker runs with its share of the cores.
 
 The two worlds are built once per session (a build takes about a second) and put back to
 their start state before every test, so that no test sees what another left behind and the
 results do not depend on the order tests run in.
 """
 
+import os
+
 import pytest
 
 import lanekeep  # noqa: F401
+from lanekeep.core.workers import set_thread_counts, worker_threads
 from lanekeep.scenario.schema import load_scenario
 from lanekeep.world.build import build
+
+if os.environ.get("PYTEST_XDIST_WORKER"):
+    # Under `pytest -n N` each worker gets its share of the cores before EGL, OpenCV or torch
+    # start, as a bench worker does (lanekeep/core/workers.py): N workers that each started a
+    # thread per core would fight over the cores.
+    set_thread_counts(worker_threads(int(os.environ.get("PYTEST_XDIST_WORKER_COUNT", "1"))))
 
 
 @pytest.fixture(scope="session")

@@ -5,13 +5,14 @@ from __future__ import annotations
 import argparse
 
 from lanekeep.core.config_io import ConfigError
+from lanekeep.loop.perf import __doc__ as perf_doc
 from lanekeep.loop.perf import format_results, measure
 
 
 def register(sub) -> None:
     p = sub.add_parser("perf", help="speed of the closed loop: per-stage ms, real-time factor, "
                                     "recording cost, bench throughput (JSON keys: see --help)",
-                       description=__doc__,
+                       description=perf_doc,
                        formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--scenario", default="clear_curve", help="scenario to time")
     p.add_argument("--seconds", type=float, default=10.0,

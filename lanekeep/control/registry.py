@@ -4,7 +4,7 @@
     steer, throttle = controller.control(estimate, signals)   # each control period
 
 A controller sees only what a real car's controller could: the estimator's output (the lane
-the MMAE hands on, lanekeep/estimators/lane_estimator.py) and the vehicle's sensor signals
+the MMAE hands on, estimators/lane_estimator.py) and the vehicle's sensor signals
 (lanekeep/sensing/vehicle_sensors.py); nothing of the simulator's truth. The episode calls
 `reset()` once
 before the first step.

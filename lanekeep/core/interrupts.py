@@ -7,7 +7,8 @@ stop a run the same way, and the results so far are kept whichever way a run is 
 Where the code polls for it (an episode's step loop, inside `stop_point()`), a stop signal only
 sets a flag and the loop ends after the step in progress: an exception raised at an arbitrary
 point, in the middle of a render, a recording write or a queue operation, once left the
-recording's finalisation hanging (a CI run of tests/test_interrupts.py). Elsewhere (building the
+recording's finalisation hanging (a CI run of tests/core/test_interrupts.py). Elsewhere (building
+the
 world, the bench parent waiting for its workers) it raises KeyboardInterrupt. After the first
 stop signal the later ones are ignored, so a forwarded copy or a second Ctrl-C cannot cut the
 code that saves the results.

@@ -8,7 +8,7 @@ lanes and the vehicle's sensor signals (`StepResult.signals`, noisy as configure
 and the `info` entries are the simulator's truth; they score the agent and never reach it as
 an observation.
 
-Sign conventions (vehicle frame: x forward, y left, as in lanekeep/detectors/base.py): an
+Sign conventions (vehicle frame: x forward, y left, as in detectors/base.py): an
 `offset_m` is + when the car is left of the lane centre; `heading_rad` is the angle of the lane
 centre line at the look-ahead relative to the car's heading, + = the lane runs towards the
 car's left; `curvature_1pm` is + for a lane turning left.

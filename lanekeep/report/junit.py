@@ -10,7 +10,7 @@ by one front model alone, "SCENARIO@MODEL"), its time the episode's wall time:
     of type "unstable" / "interrupted" (the run broke off, it did not fail);
   - an episode that never ran (an interrupted bench): <skipped>.
 The layout is the common JUnit one (Ant's junit task, Jenkins' schema);
-tests/test_junit.py validates against an XSD of it.
+tests/report/test_junit.py validates against an XSD of it.
 """
 
 from __future__ import annotations

@@ -2,7 +2,8 @@
 
 Types, defaults and the table layout come from lanekeep/scenario/schema.py's dataclasses (and what
 they nest), so they cannot drift; what a key means, its allowed values and its sign convention
-live in DESCRIPTIONS below, the one place to write them. tests/test_scenario_reference.py fails
+live in DESCRIPTIONS below, the one place to write them. tests/scenario/test_scenario_reference.py
+fails
 on a field without a description (naming its dotted key) and on a committed file that differs
 from the generated one.
 

@@ -104,7 +104,7 @@ class CameraConfig:
     llvmpipe) 4 samples cost 2.6x a plain render of both cameras (94 vs 36 ms, `lanekeep
     perf`) and bought the detectors nothing measurable, since they shrink the frame with
     area averaging before they look at it (2x2 pixels per working pixel): the bench table in
-    README's performance section shows both. Raise it for frames meant for people.
+    docs/experiments.md's performance section shows both. Raise it for frames meant for people.
     """
 
     width: int = 1280

@@ -3,7 +3,7 @@
 before any output, and `detect` reports every boundary (TuSimple lanes, JSON, overlays).
 
 Weights here are untrained networks saved to tmp_path: these tests prove the plumbing, not the
-detection quality (tests/test_lanenet.py and `lanekeep eval` measure that).
+detection quality (tests/detectors/test_lanenet.py and `lanekeep eval` measure that).
 """
 
 from __future__ import annotations
@@ -185,7 +185,7 @@ def test_a_ground_boundary_is_drawn_where_the_camera_sees_it():
 
 
 def _road_png(tmp_path) -> str:
-    """A flat road seen by the default dashcam (as tests/test_detect_cli.py draws it)."""
+    """A flat road seen by the default dashcam (as tests/realcam/test_detect_cli.py draws it)."""
     image = np.full((H, W, 3), (95, 95, 95), np.uint8)
     image[:360] = (200, 170, 120)
     f = 640.0 / np.tan(np.radians(30.0))

@@ -219,7 +219,7 @@ def test_the_scenario_selects_the_controller():
 
 
 def test_stanley_reads_only_the_estimate_and_the_sensors():
-    """Under tests/test_honest_loop.py's guard, any read of the simulator's truth from the
+    """Under tests/loop/test_honest_loop.py's guard, any read of the simulator's truth from the
     controller raises TruthLeak."""
     from truth_guard import guard_truth
 

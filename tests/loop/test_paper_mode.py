@@ -105,7 +105,7 @@ def test_case2_model_2_is_worse_in_the_sharp_turn():
     filtered, lanekeep/world/paint.py: model #1, the long-range one, gained most from lines
     that no longer break up 30-60 m ahead). (The paper's MMAE then follows model #1 through
     the turn; ours does not, for its reference is model #2's own algorithm on the rear camera
-    and shares its bias in the turn: see README, "The paper's loop". [lanenet-loop] replaces
+    and shares its bias in the turn: see docs/paper_mode.md. [lanenet-loop] replaces
     that reference.)"""
     report, trace = paper_run("case2_sharp_turn")
     curvature, _, _, errors = trace.arrays()

@@ -1,6 +1,6 @@
 """A user's own detector and controller, written as a user outside the package would: plain
 classes with the constructor contracts of lanekeep.detectors.registry and lanekeep.control.registry,
-no registration. tests/test_plugins_api.py copies this file under another module name into a
+no registration. tests/core/test_plugins_api.py copies this file under another module name into a
 temporary folder and names the classes by import path or through an entry point.
 """
 
