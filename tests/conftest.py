@@ -9,6 +9,7 @@ results do not depend on the order tests run in.
 import os
 
 import pytest
+from shared_runs import set_root
 
 import lanekeep  # noqa: F401
 from lanekeep.core.workers import set_thread_counts, worker_threads
@@ -20,6 +21,12 @@ if os.environ.get("PYTEST_XDIST_WORKER"):
     # start, as a bench worker does (lanekeep/core/workers.py): N workers that each started a
     # thread per core would fight over the cores.
     set_thread_counts(worker_threads(int(os.environ.get("PYTEST_XDIST_WORKER_COUNT", "1"))))
+
+
+@pytest.fixture(scope="session", autouse=True)
+def _shared_runs_folder(tmp_path_factory):
+    """Where tests/shared_runs.py keeps the session's shared closed-loop runs."""
+    set_root(tmp_path_factory.getbasetemp())
 
 
 @pytest.fixture(scope="session")

@@ -39,9 +39,9 @@ def run_episode(scenario_name: str, seed: int | None = None, seconds: float | No
     loop) override the scenario file's; None keeps them. `weights` is the file of every
     learned detector in the episode (None: their shipped one). `criteria`: the command line's
     criteria (lanekeep/scoring/criteria.py), in place of the file's. `progress`: a step bar on
-    stderr
-    (a terminal only); `on_step(done, total)` is called after every step. `plugins`: the
-    command line's detectors and controller (lanekeep/cli/plugins.py), before `front_detectors`.
+    stderr (a terminal only); `on_step(done, total)` is called after every step. `plugins`:
+    the command line's detectors and controller (lanekeep/cli/plugins.py), before
+    `front_detectors`.
     """
     import lanekeep  # noqa: F401 - EGL before mujoco
     from lanekeep.detectors.registry import detector_weights

@@ -2,11 +2,11 @@
 paper's five cases, determinism, and dm_env conformance."""
 
 import dataclasses
-import functools
 
 import pytest
 from absl.testing import absltest
 from dm_env import test_utils
+from shared_runs import shared
 
 from lanekeep.envs.dm_env_face import LaneKeepEnv
 from lanekeep.loop.episode import Episode
@@ -24,15 +24,14 @@ def _run(name, seconds=None, render_size=None, **changes):
         return episode.run(seconds)
 
 
-# Episodes that several tests read, run once per session (deterministic, so sharing them
-# changes no result): the full-length clear roads and paper cases, and 11 s of snow.
+# Episodes that several tests read, run once per session (tests/shared_runs.py): the
+# full-length clear roads and paper cases, and 11 s of snow.
 LONGER_RUNS = {**{name: None for name in (*PAPER_CASES, "clear_straight", "clear_curve")},
                "snow": 11.0}
 
 
-@functools.cache
 def _shared_run(name: str, seconds: float | None):
-    return _run(name, seconds)
+    return shared(f"default-{name}-{seconds}", lambda: _run(name, seconds))
 
 
 @pytest.fixture(scope="module")
@@ -84,13 +83,14 @@ PAPER_FRONT_MODELS = ("hough", "sliding_window")
 @pytest.fixture(scope="module")
 def paper_two_model_reports():
     """The paper's own comparison: its two classical front models, the learned rear reference."""
-    reports = {}
-    for name in PAPER_CASES:
+    def run(name):
         scenario = load_scenario(name)
         est = dataclasses.replace(scenario.estimation, front_detectors=PAPER_FRONT_MODELS)
         with Episode(dataclasses.replace(scenario, estimation=est)) as episode:
-            reports[name] = episode.run()
-    return reports
+            return episode.run()
+
+    return {name: shared(f"two-models-{name}", lambda name=name: run(name))
+            for name in PAPER_CASES}
 
 
 @pytest.mark.slow

@@ -6,18 +6,17 @@ loses the lane and the MMAE follows model #2 there (paper Fig. 12)."""
 
 from __future__ import annotations
 
-import functools
 from dataclasses import dataclass, field, replace
 
 import numpy as np
 import pytest
+from shared_runs import shared
 
 from lanekeep.control.pid import PaperGains
 from lanekeep.detectors.config import load_config
 from lanekeep.loop.episode import Episode
 from lanekeep.loop.paper_mode import PAPER_WINDOWS, front_detector_config, with_mode
 from lanekeep.scenario.schema import load_scenario
-from lanekeep.scoring.truth import lane_offsets
 
 PAPER_CASES = ("case1_building_shadows", "case2_sharp_turn", "case3_mild_turn_shade_bumps",
                "case4_half_shade_straight", "case5_wet_rain_turn")
@@ -38,8 +37,12 @@ class PaperTrace:
                 np.asarray(self.selected), np.asarray(self.errors_m, dtype=float))
 
 
-@functools.cache
 def paper_run(name: str):
+    """The paper's loop on a paper case with its trace, once per session."""
+    return shared(f"paper-{name}", lambda: _paper_run(name))
+
+
+def _paper_run(name: str):
     scenario = with_mode(load_scenario(name), "paper")
     trace = PaperTrace()
     with Episode(scenario) as episode:
@@ -56,7 +59,7 @@ def paper_run(name: str):
             row = []
             for name in models:
                 e = step.estimates[name]
-                truth = lane_offsets(road, x, y, yaw, scenario.road.ego_lane, [e.x_m])[0]
+                truth = step.truth.offset_at(e.x_m)  # computed once, by the episode's scoring
                 row.append(e.offset_m - truth if e.valid else np.nan)
             trace.errors_m.append(row)
 
