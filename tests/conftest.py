@@ -45,3 +45,10 @@ def _fresh_worlds(request):
     for name in ("straight_world", "curve_world"):
         if name in request.fixturenames:
             request.getfixturevalue(name).reset()
+
+
+def pytest_collection_modifyitems(config, items):
+    """The slow tests (full-resolution closed loops) first, in their order: under pytest-xdist
+    the workers start on the long runs and the short tests fill the end, so that no worker
+    waits alone on one long run at the end."""
+    items.sort(key=lambda item: item.get_closest_marker("slow") is None)
