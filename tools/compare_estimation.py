@@ -16,9 +16,12 @@ The code is lanekeep/tuning/estimation.py.
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
 
 from lanekeep.tuning.estimation import Setting, run_all, summarise
 from lanekeep.tuning.scenarios import TuningInputError, select_scenarios
+
+TUNING_DIR = Path(__file__).resolve().parent / "tuning"  # the scenarios the bench does not score
 
 
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
@@ -33,7 +36,7 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     args = parser.parse_args(argv)
     try:
         args.setting = Setting.parse(args.setting)
-        args.scenarios = select_scenarios(args.scenarios, args.allow_scored)
+        args.scenarios = select_scenarios(args.scenarios, TUNING_DIR, args.allow_scored)
     except TuningInputError as err:
         parser.exit(2, f"error: {err}\n")
     return args

@@ -28,12 +28,15 @@ from __future__ import annotations
 
 import argparse
 import sys
+from pathlib import Path
 
 import numpy as np
 
 from lanekeep.scenario.schema import load_scenario, shipped_scenarios
 from lanekeep.tuning.detector_noise import Fit, errors_per_scenario, front_window, toml_block
 from lanekeep.tuning.scenarios import TuningInputError, select_scenarios, shown
+
+TUNING_DIR = Path(__file__).resolve().parent / "tuning"  # the scenarios the bench does not score
 
 
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
@@ -46,7 +49,7 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     parser.add_argument("--workers", type=int, default=2, help="episodes run at a time")
     args = parser.parse_args(argv)
     try:
-        args.scenarios = select_scenarios(args.scenarios, args.allow_scored)
+        args.scenarios = select_scenarios(args.scenarios, TUNING_DIR, args.allow_scored)
     except TuningInputError as err:
         parser.exit(2, f"error: {err}\n")
     return args

@@ -34,6 +34,8 @@ from lanekeep.tuning.roll_coupling import (
 )
 from lanekeep.tuning.scenarios import TuningInputError, select_scenarios
 
+TUNING_DIR = Path(__file__).resolve().parent / "tuning"  # the scenarios the bench does not score
+
 
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -41,7 +43,8 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--allow-scored", action="store_true")
     args = parser.parse_args(argv)
     try:
-        paths = select_scenarios(args.scenarios or default_scenarios(), args.allow_scored)
+        paths = select_scenarios(args.scenarios or default_scenarios(TUNING_DIR), TUNING_DIR,
+                                 args.allow_scored)
     except TuningInputError as err:
         parser.exit(2, f"error: {err}\n")
     pooled: dict[str, list] = {}

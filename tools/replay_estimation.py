@@ -32,6 +32,8 @@ from pathlib import Path
 from lanekeep.tuning.replay import compare, load_recordings, record, setting_values, summarise
 from lanekeep.tuning.scenarios import TuningInputError, own_seed, select_scenarios
 
+TUNING_DIR = Path(__file__).resolve().parent / "tuning"  # the scenarios the bench does not score
+
 
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -52,7 +54,7 @@ def main(argv: list[str] | None = None) -> None:
         unscored = args.seed is not None and all(
             own_seed(s) != args.seed for s in args.scenarios)
         try:
-            scenarios = select_scenarios(args.scenarios, args.allow_scored or unscored)
+            scenarios = select_scenarios(args.scenarios, TUNING_DIR, args.allow_scored or unscored)
         except TuningInputError as err:
             parser.exit(2, f"error: {err}\n")
         if args.out.exists() and not args.out.is_dir():

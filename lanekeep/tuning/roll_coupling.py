@@ -11,19 +11,18 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
-
-from lanekeep.tuning.scenarios import TUNING_DIR
 
 CURVES = ("tune_right_curve_r100", "tune_left_curve_r200_rain", "tune_gentle_s_curve_r700_r500",
           "tune_sharp_right_r45")
 CORE_M = 0.5  # an offset error this large is a wild fit, not roll
 
 
-def default_scenarios() -> list[str]:
+def default_scenarios(tuning_dir: Path) -> list[str]:
     """The tuning scenarios with curves enough to roll the body: the files of CURVES."""
-    return [str(TUNING_DIR / f"{name}.toml") for name in CURVES]
+    return [str(Path(tuning_dir) / f"{name}.toml") for name in CURVES]
 
 
 def samples(path: str) -> dict[str, list[tuple[float, float, float]]]:

@@ -1,8 +1,8 @@
 """Which scenarios a tuning tool may measure on: the tuning scenarios, tools/tuning/*.toml, by
 default; a shipped scenario (scored by `lanekeep bench` at its file's seed) only when asked.
 
-tools/ is not installed: the tuning scenarios are found beside this package in the repository
-(an editable install), and a tool run from an installed copy has none.
+tools/ is not installed: each tool passes the folder of the tuning scenarios beside it in the
+repository (`tuning_dir`), so an installed package serves a clone's tools.
 """
 
 from __future__ import annotations
@@ -12,27 +12,27 @@ from pathlib import Path
 
 from lanekeep.scenario.schema import ScenarioError, load_scenario, shipped_scenarios
 
-TUNING_DIR = Path(__file__).resolve().parents[2] / "tools" / "tuning"
-
 
 class TuningInputError(Exception):
     """A user error of a tuning tool: its message is one line, the tool exits 2."""
 
 
-def tuning_scenarios() -> list[Path]:
-    """The tuning scenario files, tools/tuning/*.toml, sorted."""
-    return sorted(TUNING_DIR.glob("*.toml"))
+def tuning_scenarios(tuning_dir: Path) -> list[Path]:
+    """The tuning scenario files (tools/tuning/*.toml), sorted."""
+    return sorted(Path(tuning_dir).glob("*.toml"))
 
 
-def select_scenarios(scenarios: Sequence[str] = (), allow_scored: bool = False) -> list[str]:
-    """The scenario arguments to measure on: `scenarios` as given, or every tuning scenario.
+def select_scenarios(scenarios: Sequence[str], tuning_dir: Path,
+                     allow_scored: bool = False) -> list[str]:
+    """The scenario arguments to measure on: `scenarios` as given, or every tuning scenario
+    in `tuning_dir`.
 
     Raises TuningInputError when there are no tuning scenarios, a scenario does not load, or
     one is shipped (by name or file) and `allow_scored` is false.
     """
-    selected = list(scenarios) or [str(path) for path in tuning_scenarios()]
+    selected = list(scenarios) or [str(path) for path in tuning_scenarios(tuning_dir)]
     if not selected:
-        raise TuningInputError(f"no tuning scenarios in {TUNING_DIR}")
+        raise TuningInputError(f"no tuning scenarios in {tuning_dir}")
     shipped = set(shipped_scenarios())
     for arg in selected:
         try:

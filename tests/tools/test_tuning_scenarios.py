@@ -16,7 +16,6 @@ from lanekeep.scenario.schema import load_scenario, shipped_scenarios
 from lanekeep.tuning import replay, trace
 from lanekeep.tuning.estimation import Setting, typed_value
 from lanekeep.tuning.scenarios import (
-    TUNING_DIR,
     TuningInputError,
     own_seed,
     select_scenarios,
@@ -25,7 +24,8 @@ from lanekeep.tuning.scenarios import (
 from lanekeep.world.build import build
 
 TOOLS = Path(__file__).resolve().parents[2] / "tools"
-TUNING = sorted((TOOLS / "tuning").glob("*.toml"))
+TUNING_DIR = TOOLS / "tuning"
+TUNING = sorted(TUNING_DIR.glob("*.toml"))
 
 
 def _tool(name: str, *args: str) -> subprocess.CompletedProcess:
@@ -55,8 +55,8 @@ def test_tuning_scenarios_are_not_shipped():
 
 
 def test_noise_tool_defaults_to_the_tuning_scenarios():
-    assert TUNING_DIR == TOOLS / "tuning" and tuning_scenarios() == TUNING
-    assert sorted(Path(a) for a in select_scenarios([])) == TUNING  # allow_scored: False
+    assert tuning_scenarios(TUNING_DIR) == TUNING
+    assert sorted(Path(a) for a in select_scenarios([], TUNING_DIR)) == TUNING  # not scored
 
 
 @pytest.mark.parametrize("arg", ["clear_straight", "case2_sharp_turn"])
@@ -65,8 +65,8 @@ def test_noise_tool_refuses_a_shipped_scenario(arg):
     assert refused.returncode == 2
     assert "--allow-scored" in refused.stderr
     with pytest.raises(TuningInputError, match="--allow-scored"):
-        select_scenarios([str(TUNING[0]), arg])
-    assert select_scenarios([arg], allow_scored=True) == [arg]
+        select_scenarios([str(TUNING[0]), arg], TUNING_DIR)
+    assert select_scenarios([arg], TUNING_DIR, allow_scored=True) == [arg]
 
 
 def test_noise_tool_refuses_a_shipped_scenario_file():
@@ -75,7 +75,7 @@ def test_noise_tool_refuses_a_shipped_scenario_file():
 
 
 def test_compare_tool_defaults_to_the_tuning_scenarios_and_refuses_scored_ones():
-    assert sorted(Path(a) for a in select_scenarios([])) == TUNING
+    assert sorted(Path(a) for a in select_scenarios([], TUNING_DIR)) == TUNING
     setting = Setting.parse("output=select,fused")
     assert (setting.key, list(setting.values)) == ("output", ["select", "fused"])
     assert _tool("compare_estimation", "output=fused", "clear_curve").returncode == 2
