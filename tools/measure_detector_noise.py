@@ -47,6 +47,8 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     parser.add_argument("--allow-scored", action="store_true",
                         help="allow shipped scenarios, which `lanekeep bench` scores")
     parser.add_argument("--workers", type=int, default=2, help="episodes run at a time")
+    parser.add_argument("--list", action="store_true",
+                        help="print the scenarios it would measure on, one a line, and stop")
     args = parser.parse_args(argv)
     try:
         args.scenarios = select_scenarios(args.scenarios, TUNING_DIR, args.allow_scored)
@@ -57,6 +59,9 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
 
 def main(argv: list[str] | None = None) -> None:
     args = parse_args(argv)
+    if args.list:
+        print("\n".join(shown(a) for a in args.scenarios))
+        return
     window = front_window()
     shipped = set(shipped_scenarios())
     names = [load_scenario(arg).name for arg in args.scenarios]

@@ -67,6 +67,8 @@ def test_noise_tool_refuses_a_shipped_scenario(arg):
     with pytest.raises(TuningInputError, match="--allow-scored"):
         select_scenarios([str(TUNING[0]), arg], TUNING_DIR)
     assert select_scenarios([arg], TUNING_DIR, allow_scored=True) == [arg]
+    allowed = _tool("measure_detector_noise", arg, "--allow-scored", "--list")
+    assert allowed.returncode == 0 and allowed.stdout.split() == [arg]
 
 
 def test_noise_tool_refuses_a_shipped_scenario_file():
