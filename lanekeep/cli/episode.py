@@ -23,7 +23,14 @@ from lanekeep.core.interrupts import (
 from lanekeep.loop.checks import check_scenario, check_weights_option
 from lanekeep.loop.runner import BenchInterrupted, BenchJob, job_steps, run_bench, run_episode
 from lanekeep.report.json_io import report_document, write_json
-from lanekeep.report.tables import bench_verdict, drift_table, single_model_table, summary_table
+from lanekeep.report.tables import (
+    bench_verdict,
+    drift_table,
+    interval_table,
+    paired_table,
+    single_model_table,
+    summary_table,
+)
 from lanekeep.scenario.schema import ESTIMATION_MODES, Scenario
 from lanekeep.scoring import criteria as criteria_mod
 
@@ -112,11 +119,22 @@ def _cmd_run(args: argparse.Namespace) -> int:
 
 
 
+def bench_seeds(args: argparse.Namespace, scenario: Scenario) -> list[int | None]:
+    """The seeds `scenario` runs: `--seeds N` from `--seed` on (without it, from the file's own
+    seed, its nominal drive), else `--seed` alone (None: the file's own)."""
+    if args.seeds is None:
+        return [args.seed]
+    first = scenario.seed if args.seed is None else args.seed
+    return list(range(first, first + args.seeds))
+
+
 def _cmd_bench(args: argparse.Namespace) -> int:
     from lanekeep.loop.paper_mode import with_mode
     from lanekeep.scenario.schema import load_scenario, shipped_scenarios
 
     check_options(args)
+    if args.seeds is not None and args.seeds < 1:
+        raise ConfigError("", "--seeds", f"must be >= 1, got {args.seeds}")
     overrides = criteria_mod.overrides_from_args(args)
     plugins = overrides_from_args(args)
     names = args.scenarios or shipped_scenarios()
@@ -124,19 +142,24 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     # line's detectors; fail fast on a bad name
     scenarios = {name: plugins.apply(with_mode(load_scenario(name), args.mode))
                  for name in names}
-    for scenario in scenarios.values():  # and on a bad scenario, before any worker starts
-        if args.seed is not None:  # (shadow casters stand where the seed puts them)
-            scenario = dataclasses.replace(scenario, seed=args.seed)
-        check_scenario(scenario, args.seconds)
+    seeds = {name: bench_seeds(args, scenario) for name, scenario in scenarios.items()}
+    for name, scenario in scenarios.items():  # and on a bad scenario, before any worker starts
+        for seed in seeds[name]:  # (shadow casters stand where the seed puts them)
+            check_scenario(scenario if seed is None else
+                           dataclasses.replace(scenario, seed=seed), args.seconds)
     code = weights_error("bench", args, list(scenarios.values()))
     if code is not None:
         return code
     if args.record_dir:
         Path(args.record_dir).mkdir(parents=True, exist_ok=True)
-    jobs = [BenchJob(name, args.seed, args.mode, plugins=plugins) for name in names]
+    many = (args.seeds or 1) > 1
+    main_jobs = [BenchJob(name, seed, args.mode, plugins=plugins, seed_in_label=many)
+                 for name in names for seed in seeds[name]]
+    jobs = list(main_jobs)
     if args.single_model:
-        jobs += [BenchJob(name, args.seed, args.mode, (model,), plugins) for name in names
-                 for model in scenarios[name].estimation.front_detectors]
+        jobs += [BenchJob(name, seed, args.mode, (model,), plugins, many) for name in names
+                 for model in scenarios[name].estimation.front_detectors
+                 for seed in seeds[name]]
     from lanekeep.core.progress import set_progress, step_bar
     from lanekeep.report.junit import write_junit
 
@@ -149,29 +172,61 @@ def _cmd_bench(args: argparse.Namespace) -> int:
                 on_steps=lambda done, total: set_progress(bar, done, total))
     except BenchInterrupted as stop:
         return _bench_interrupted(args, jobs, scenarios, stop)
-    reports = {job.label: report for job, report in zip(jobs, done_reports, strict=True)}
+    reports = {job.episode_label: r for job, r in zip(jobs, done_reports, strict=True)}
+    documents = bench_documents(args, jobs, done_reports, scenarios, plugins)
     if args.json:  # first: a failing table must not lose the episodes
-        write_json(args.json, {job.label: report_document(reports[job.label],
-                                                          scenarios[job.scenario])
-                               for job in jobs})
+        write_json(args.json, documents)
     if args.junit:
         write_junit(args.junit, reports, wall)
-    main_labels = [job.label for job in jobs[: len(names)]]
-    for label in main_labels:
-        r = reports[label]
-        print(f"\n== {label} (seed {r.seed}, {r.duration_s:.0f} s, wall {r.wall_s:.0f} s) ==")
-        print(r.table())
-    print("\n" + summary_table([reports[label] for label in main_labels]))
-    print("\n" + drift_table([reports[label] for label in main_labels]))
-    if args.single_model:
-        print("\n" + single_model_table(jobs, reports))
+    main_labels = [job.episode_label for job in main_jobs]
+    if not many:
+        for label in main_labels:
+            r = reports[label]
+            print(f"\n== {label} (seed {r.seed}, {r.duration_s:.0f} s, wall {r.wall_s:.0f} s) ==")
+            print(r.table())
+        print("\n" + summary_table([reports[label] for label in main_labels]))
+        print("\n" + drift_table([reports[label] for label in main_labels]))
+        if args.single_model:
+            print("\n" + single_model_table(jobs, reports))
+    main_docs = [documents[name_label] for name_label in dict.fromkeys(
+        job.label for job in main_jobs)]
+    print(f"\nover {args.seeds} seeds each" + (f", {args.seed} on" if args.seed is not None
+                                                 else ", from each file's own seed on")
+          if many else "")
+    print(interval_table(main_docs))
+    if many or args.single_model:
+        print("\n" + paired_table(main_docs))
     print(f"\nbench wall time: {wall:.1f} s for {len(jobs)} episodes "
           f"with {args.workers} workers")
-    lines, code = bench_verdict(reports, main_labels)
+    lines, code = bench_verdict(reports, main_labels,
+                                "episodes (scenario x seed)" if many else "scenarios")
     print("\n".join(lines))
     return code
 
 
+def bench_documents(args: argparse.Namespace, jobs: list[BenchJob], reports: list,
+                    scenarios: dict[str, Scenario], plugins) -> dict[str, dict]:
+    """`bench --json`: one document per label over its seeds (lanekeep/report/seed_summary.py),
+    the scenarios first, then their model-only loops."""
+    from lanekeep.report.seed_summary import summarise
+
+    by_label: dict[str, list] = {}
+    for job, report in zip(jobs, reports, strict=True):
+        by_label.setdefault(job.label, []).append((job, report))
+    overrides = {**dataclasses.asdict(plugins), "weights": args.weights}
+    documents = {}
+    for label, runs in by_label.items():
+        job = runs[0][0]
+        single = None
+        if job.front_detectors is None and args.single_model:
+            single = {"+".join(j.front_detectors): [r for j, r in other]
+                      for other_label, other in by_label.items()
+                      for j in [other[0][0]]
+                      if j.front_detectors is not None and j.scenario == job.scenario}
+        documents[label] = summarise(label, [r for _, r in runs], scenarios[job.scenario],
+                                     overrides=overrides, mode=args.mode,
+                                     single_model=single)
+    return documents
 
 
 def _bench_interrupted(args: argparse.Namespace, jobs: list[BenchJob],
@@ -179,7 +234,7 @@ def _bench_interrupted(args: argparse.Namespace, jobs: list[BenchJob],
     """Keep what an interrupted bench has: the JSON of every episode that returned a report
     (partial ones say `completed: false`), a table each, and which episodes never ran."""
     with stop_signals_held():
-        kept = {job.label: (job, r) for job, r in zip(jobs, stop.reports, strict=True)
+        kept = {job.episode_label: (job, r) for job, r in zip(jobs, stop.reports, strict=True)
                 if r is not None}
         if args.json:
             write_json(args.json, {label: report_document(r, scenarios[job.scenario])
@@ -187,7 +242,8 @@ def _bench_interrupted(args: argparse.Namespace, jobs: list[BenchJob],
         if args.junit:
             from lanekeep.report.junit import write_junit
 
-            write_junit(args.junit, {job.label: kept.get(job.label, (job, None))[1]
+            write_junit(args.junit, {job.episode_label: kept.get(job.episode_label,
+                                                                  (job, None))[1]
                                      for job in jobs}, stop.wall_s)
         print(file=sys.stderr)
         for label, (_, r) in kept.items():
@@ -195,7 +251,7 @@ def _bench_interrupted(args: argparse.Namespace, jobs: list[BenchJob],
             print(f"\n== {label} (seed {r.seed}, {r.duration_s:.0f} s, {state}) ==")
             print(r.table())
         partial = [label for label, (_, r) in kept.items() if not r.completed]
-        not_run = [job.label for job in jobs if job.label not in kept]
+        not_run = [job.episode_label for job in jobs if job.episode_label not in kept]
         print(f"bench interrupted after {stop.wall_s:.1f} s: {len(kept) - len(partial)} "
               f"episodes complete, {len(partial)} stopped part-way"
               f"{' (' + ', '.join(partial) + ')' if partial else ''}, {len(not_run)} not run"
@@ -233,12 +289,25 @@ def register(sub) -> None:
     add_plugin_options(p)
     p.set_defaults(func=_cmd_run)
 
-    p = sub.add_parser("bench", help="run many scenarios in parallel; paper-style tables")
+    from lanekeep.report.seed_summary import KEYS_HELP
+
+    p = sub.add_parser("bench", help="run many scenarios in parallel; paper-style tables",
+                       epilog=KEYS_HELP, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("scenarios", nargs="*", help="scenario names (default: all shipped)")
     p.add_argument("--workers", type=int, default=2)
-    p.add_argument("--seed", type=int, default=None)
+    p.add_argument("--seed", type=int, default=None,
+                   help="the seed of every episode (default: each file's); with --seeds, the "
+                        "first seed")
+    p.add_argument("--seeds", type=int, default=None, metavar="N",
+                   help="run each scenario on N seeds, from --seed on or, without it, from "
+                        "the file's own seed (its nominal drive; other seeds draw the start "
+                        "and traffic timing within [start.jitter] besides the noise): every "
+                        "metric gets its mean, sd and 95%% interval and the fused output a "
+                        "paired verdict against each model's own track. Seeds 0-999 are the "
+                        "bench's (scored), 1000 and up the tuning tools' (docs/statistics.md)")
     p.add_argument("--seconds", type=float, default=None)
-    p.add_argument("--json", default=None)
+    p.add_argument("--json", default=None,
+                   help="write one document per scenario over its seeds (keys below)")
     p.add_argument("--plots", default=None, help="folder; one subfolder of PNGs per scenario")
     p.add_argument("--record-dir", default=None, help="write one .rrd per scenario here")
     p.add_argument("--mode", choices=ESTIMATION_MODES, default=None,

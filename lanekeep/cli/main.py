@@ -78,12 +78,13 @@ def build_parser() -> argparse.ArgumentParser:
 
 def _optional_command_modules() -> list:
     """Subcommands that live in their own modules (detect, calibrate, run, bench, perf, eval,
-    view, sweep)."""
+    view, sweep, compare)."""
     import importlib
 
     modules = []
     for name in ("lanekeep.cli.detect", "lanekeep.cli.episode", "lanekeep.cli.perf",
-                 "lanekeep.cli.eval", "lanekeep.cli.view", "lanekeep.cli.sweep"):
+                 "lanekeep.cli.eval", "lanekeep.cli.view", "lanekeep.cli.sweep",
+                 "lanekeep.cli.compare"):
         try:
             modules.append(importlib.import_module(name))
         except ModuleNotFoundError as err:

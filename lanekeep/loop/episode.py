@@ -34,6 +34,7 @@ from lanekeep.estimators.odometry import DeadReckoning
 from lanekeep.estimators.roll import RollFilter, corrected
 from lanekeep.loop.paper_mode import estimator_settings, front_detector_config, roll_compensation
 from lanekeep.report.record import EpisodeInfo, NullRecorder, Recorder
+from lanekeep.scenario.nuisance import with_nuisance
 from lanekeep.scenario.schema import Scenario
 from lanekeep.scoring.departures import off_road_reason, wheels_outside_lane
 from lanekeep.scoring.metrics import EpisodeReport, Metrics
@@ -123,7 +124,8 @@ class Episode:
 
     def __init__(self, scenario: Scenario, recorder: Recorder | None = None,
                  render_size: tuple[int, int] | None = None) -> None:
-        self.scenario = scenario
+        # the seed's start and traffic timing (seed 0: the file's own drive)
+        self.scenario = scenario = with_nuisance(scenario)
         est = scenario.estimation
         self.world: World = build(scenario)
         width, height = render_size or (scenario.camera.width, scenario.camera.height)

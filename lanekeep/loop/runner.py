@@ -99,7 +99,7 @@ def run_episode(scenario_name: str, seed: int | None = None, seconds: float | No
 def _bench_one(job: BenchJob, seconds: float | None, plots: str | None,
                record_dir: str | None, weights: str | None = None,
                criteria: dict | None = None, index: int = 0) -> dict | None:
-    label = job.label
+    label = job.episode_label
     record = str(Path(record_dir) / f"{label}.rrd") if record_dir else None
     plots_dir = str(Path(plots) / label) if plots else None
 
@@ -139,6 +139,7 @@ class BenchJob:
     mode: str | None = None
     front_detectors: tuple[str, ...] | None = None
     plugins: PluginOverrides | None = None  # --front-detectors, --controller, ... (all jobs)
+    seed_in_label: bool = False  # a bench over several seeds: one file name per seed
 
     @property
     def label(self) -> str:
@@ -147,6 +148,12 @@ class BenchJob:
         if self.front_detectors is None:
             return name
         return f"{name}@{'+'.join(self.front_detectors)}"
+
+    @property
+    def episode_label(self) -> str:
+        """Its own name (recordings, plots, JUnit cases): the label, ".seedN" added in a bench
+        over several seeds."""
+        return f"{self.label}.seed{self.seed}" if self.seed_in_label else self.label
 
 
 def longest_first(jobs: list[BenchJob], seconds: float | None) -> list[int]:

@@ -29,7 +29,7 @@ from typing import Any
 
 from lanekeep.scoring.metrics import EpisodeReport, SourceReport
 
-SCHEMA_VERSION = 1
+SCHEMA_VERSION = 2  # 2: bench documents summarise seeds (lanekeep/report/seed_summary.py)
 METADATA_KEYS = ("schema_version", "lanekeep_version", "scenario_sha256", "seed")
 
 

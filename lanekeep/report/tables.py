@@ -6,7 +6,9 @@ from __future__ import annotations
 import math
 from typing import Protocol
 
+from lanekeep.report.seed_summary import interval_text
 from lanekeep.scoring import criteria as criteria_mod
+from lanekeep.scoring import statistics as stats
 from lanekeep.scoring.metrics import EpisodeReport
 
 
@@ -20,8 +22,8 @@ class LoopJob(Protocol):
     def label(self) -> str: ...
 
 
-def bench_verdict(reports: dict[str, EpisodeReport], main_labels: list[str]
-                  ) -> tuple[list[str], int]:
+def bench_verdict(reports: dict[str, EpisodeReport], main_labels: list[str],
+                  unit: str = "scenarios") -> tuple[list[str], int]:
     """The bench's closing lines and exit code. The code judges the scenarios as configured
     (`main_labels`); `--single-model` loops are a diagnostic (one detector driving alone),
     judged by the same criteria and reported, but not counted."""
@@ -30,7 +32,7 @@ def bench_verdict(reports: dict[str, EpisodeReport], main_labels: list[str]
              for label in failed]
     main_failed = [label for label in failed if label in main_labels]
     lines.append(f"criteria: {len(main_labels) - len(main_failed)} of {len(main_labels)} "
-                 "scenarios passed")
+                 f"{unit} passed")
     extra = len(reports) - len(main_labels)
     if extra:
         lines.append(f"model-only loops: {extra - (len(failed) - len(main_failed))} of {extra} "
@@ -134,4 +136,65 @@ def single_model_table(jobs: list[LoopJob], reports: dict[str, EpisodeReport]) -
                          f"{r.car_rms_cm:>9.1f}{r.car_max_cm:>9.1f}{r.lane_departures:>8d}"
                          f"  {_verdict(r)}")
     lines.append("(car = its true lateral offset from the lane centre, cm)")
+    return "\n".join(lines)
+
+
+def interval_table(docs: list[dict]) -> str:
+    """One line per scenario over its seeds (lanekeep/report/seed_summary.py documents):
+    fused RMSE and the car's RMS with 95% intervals, the best own track by mean, the fused
+    output's paired verdicts against the model tracks, departures as a rate with its exact
+    interval, and how many episodes met the criteria."""
+    scen_w = max([28, *(len(d["label"]) + 2 for d in docs)])
+    header = (f"{'scenario':<{scen_w}}{'n':>3}  {'fused RMSE [95% CI]':<22}{'best track':<22}"
+              f"{'fused vs tracks':<17}{'car RMS [95% CI]':<22}{'departed':<18}passed")
+    lines = [header, "-" * len(header)]
+    for d in docs:
+        tracks = {k: v for k, v in d["sources"].items() if k.endswith(":track")}
+        best = min(tracks, key=lambda k: math.inf if tracks[k]["rmse_cm"] is None
+                   else tracks[k]["rmse_cm"]) if tracks else None
+        counts = stats.count_verdicts([p["verdict"] for p in d["paired"]["fused_vs"].values()])
+        fused = d["sources"]["fused"]
+        best_text = (f"{tracks[best]['rmse_cm']:.2f} ({best.split(':')[0]})"
+                     if best and tracks[best]["rmse_cm"] is not None else "-")
+        lo, hi = d["departure_rate_ci95"]
+        rate = (f"{d['departed_episodes']}/{d['n']} [{lo:.2f}, {hi:.2f}]" if hi is not None
+                else f"{d['departed_episodes']}/{d['n']}")
+        lines.append(
+            f"{d['label']:<{scen_w}}{d['n']:>3}  "
+            f"{interval_text(fused['rmse_cm'], fused['rmse_cm_ci95']):<22}{best_text:<22}"
+            f"{counts['better']}b {counts['worse']}w {counts['indistinguishable']}i"
+            f"{'':<7}{interval_text(d['car_rms_cm'], d['car_rms_cm_ci95'], 1):<22}"
+            f"{rate:<18}{d['passed_episodes']}/{d['n']}")
+    total = stats.count_verdicts([p["verdict"] for d in docs
+                                  for p in d["paired"]["fused_vs"].values()])
+    lines.append(f"fused vs each model's own track, paired over seeds: {total['better']} "
+                 f"better, {total['worse']} worse, {total['indistinguishable']} "
+                 "indistinguishable (b / w / i per scenario)")
+    lines.append("(cm; mean over seeds [95% t interval]; departed = episodes with a lane "
+                 "departure [Clopper-Pearson 95%]; a verdict needs the paired 95% interval to "
+                 "exclude 0)")
+    return "\n".join(lines)
+
+
+def paired_table(docs: list[dict]) -> str:
+    """Each paired comparison of the bench: fused minus each model's own track (RMSE), and,
+    with --single-model, the MMAE loop minus each model-only loop (car RMS, max, departures)."""
+    rows = []
+    for d in docs:
+        for track, p in d["paired"]["fused_vs"].items():
+            rows.append((d["label"], f"fused - {track} RMSE", p["diff_cm"], p))
+        for model, keys in d["paired"].get("mmae_loop_vs", {}).items():
+            for key, p in keys.items():
+                rows.append((d["label"], f"MMAE - {model} alone: {key}",
+                             p.get("diff_cm", p.get("diff")), p))
+    scen_w = max([28, *(len(d["label"]) + 2 for d in docs)])
+    comp_w = max([34, *(len(r[1]) + 2 for r in rows)])
+    header = f"{'scenario':<{scen_w}}{'comparison':<{comp_w}}{'diff [95% CI]':<26}verdict"
+    lines = ["paired over seeds (difference = first - second; negative = first lower)", header,
+             "-" * len(header)]
+    last = None
+    for label, what, diff, p in rows:
+        lines.append(f"{label if label != last else '':<{scen_w}}{what:<{comp_w}}"
+                     f"{interval_text(diff, p['ci95'], 3):<26}{p['verdict']}")
+        last = label
     return "\n".join(lines)

@@ -101,6 +101,14 @@ DESCRIPTIONS: dict[str, tuple[str, str]] = {
     "start.offset_m": ("Lateral offset from the ego lane's centre; + = left.", "any"),
     "start.heading_deg": ("Heading relative to the road's; + = pointing left.", "any"),
     "start.speed_mps": ("Initial speed.", ">= 0"),
+    "start.jitter": ("What a seed other than 0 draws (uniform within +-each half-width; "
+                     "seed 0 is the nominal drive): lanekeep/scenario/nuisance.py.", ""),
+    "start.jitter.offset_m": ("Half-width of the start's lateral offset draw.", ">= 0"),
+    "start.jitter.heading_deg": ("Half-width of the start's heading draw.", ">= 0"),
+    "start.jitter.speed_mps": ("Half-width of the speed draw; the start and target speeds "
+                               "move together.", ">= 0"),
+    "start.jitter.traffic_s": ("Half-width of each vehicle's timing draw: when the car meets "
+                               "it (its speed relative to the car's times the draw).", ">= 0"),
     "camera": ("Both onboard cameras: image size, the camera model, the mounting.", ""),
     "camera.width": ("Image width of both onboard cameras.", "> 0"),
     "camera.height": ("Image height of both onboard cameras.", "> 0"),

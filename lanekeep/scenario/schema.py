@@ -85,11 +85,34 @@ class RoadConfig:
 
 
 @dataclass(frozen=True)
+class StartJitter:
+    """Half-widths of the uniform ranges a seed other than 0 draws the start from (seed 0 is
+    the nominal drive, exactly as the file says): what an experimenter calls nuisance, so that
+    seeds sample drives rather than repeat one (lanekeep/scenario/nuisance.py).
+
+    `speed_mps` moves the start speed and the target speed together; `traffic_s` moves when
+    the car meets each other vehicle (its speed relative to the car's, times a draw in
+    +-traffic_s)."""
+
+    offset_m: float = 0.15
+    heading_deg: float = 0.5
+    speed_mps: float = 0.5
+    traffic_s: float = 2.0
+
+    def __post_init__(self):
+        for key in ("offset_m", "heading_deg", "speed_mps", "traffic_s"):
+            value = getattr(self, key)
+            if not (math.isfinite(value) and value >= 0):
+                raise InvalidValue(key, f"must be a number >= 0, got {value}")
+
+
+@dataclass(frozen=True)
 class StartConfig:
     s_m: float = 10.0  # arc length along the road
     offset_m: float = 0.0  # lateral offset from the ego lane centre, + = left
     heading_deg: float = 0.0  # relative to the road heading, + = pointing left
     speed_mps: float = 0.0
+    jitter: StartJitter = field(default_factory=StartJitter)  # [start.jitter]: seeds != 0
 
     def __post_init__(self):
         if not self.speed_mps >= 0:
@@ -399,6 +422,9 @@ class Scenario:
     roadside: Roadside = field(default_factory=Roadside)  # props: lanekeep/world/props.py
     criteria: CriteriaConfig = field(default_factory=CriteriaConfig)  # pass/fail limits
     source: str = field(default="", metadata={"toml": False})  # file it was read from
+    # The seed its file gives: that seed is the file's nominal drive, any other draws the
+    # start and traffic timing (lanekeep/scenario/nuisance.py). None (built in memory): 0.
+    nominal_seed: int | None = field(default=None, metadata={"toml": False})
 
     def __post_init__(self):
         for key in ("duration_s", "control_period_s"):
@@ -439,7 +465,8 @@ def parse_scenario(text: str, source: str = "<string>") -> Scenario:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as err:
         raise ScenarioError(source, "", f"invalid TOML: {err}") from None
-    return scenario_from_dict(data, source)
+    scenario = scenario_from_dict(data, source)
+    return dataclasses.replace(scenario, nominal_seed=scenario.seed)
 
 
 def scenario_from_dict(data: dict, source: str = "<dict>") -> Scenario:

@@ -42,7 +42,7 @@ def _sha256(name: str) -> str:
 
 
 def _assert_metadata(doc: dict, scenario: str, seed: int) -> None:
-    assert doc["schema_version"] == SCHEMA_VERSION == 1
+    assert doc["schema_version"] == SCHEMA_VERSION == 2
     assert doc["lanekeep_version"] == lanekeep_version() != ""
     assert doc["scenario_sha256"] == _sha256(scenario)
     assert doc["seed"] == seed
@@ -100,9 +100,12 @@ def test_bench_json_is_strict_with_metadata_in_each_report(tmp_path, capsys):
     assert main(["bench", "clear_straight", "--seconds", "0.3", "--workers", "1",
                  "--json", str(out)]) == 0
     data = strict_load(out)
-    assert list(data) == ["clear_straight"]  # keyed by episode label, as before
+    assert list(data) == ["clear_straight"]  # keyed by scenario label, as before
     _assert_metadata(data["clear_straight"], "clear_straight", seed=0)
-    assert report_from_dict(data["clear_straight"]).steps == 3
+    assert data["clear_straight"]["seeds"] == [0]
+    (episode,) = data["clear_straight"]["episodes"]  # each seed's own report
+    _assert_metadata(episode, "clear_straight", seed=0)
+    assert report_from_dict(episode).steps == 3
 
 
 def test_perf_json_is_strict_with_metadata(tmp_path, capsys):

@@ -1,0 +1,133 @@
+"""A bench scenario over seeds, as `bench --json` writes it: each metric's mean with its spread
+and 95% interval, the departure rate with its exact interval, paired verdicts, and every
+episode's own report so that `lanekeep compare` can pair two runs seed by seed.
+
+The document of each bench label: KEYS_HELP below (`lanekeep bench --help` prints it).
+Intervals: lanekeep/scoring/statistics.py (t over seeds; exact binomial for rates). With one
+seed every interval is null and every verdict "indistinguishable".
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Sequence
+from typing import Any
+
+from lanekeep.report.json_io import report_document, strict, with_metadata
+from lanekeep.scoring import statistics as stats
+from lanekeep.scoring.metrics import EpisodeReport, SourceReport
+
+KEYS_HELP = """\
+bench --json: one document per label (a scenario, or "SCENARIO@MODEL" for a model-only loop):
+  schema_version, lanekeep_version, scenario_sha256   as every report (json_io.METADATA_KEYS)
+  seed            the seed when one ran, else null (see `seeds`)
+  scenario, label, seeds, n       the scenario's name, the bench key, the seeds, their count
+  mode, overrides                 the estimation mode and the command line's changes
+                                  (front_detectors, reference_detector, controller, settings)
+  sources.NAME.KEY                mean over seeds of SourceReport's KEY (rmse_cm, max_cm,
+                                  ade_cm, fde_cm, drift_cm, valid_share), NaN runs left out
+  sources.NAME.KEY_sd, KEY_ci95   sample sd and the mean's 95% t interval [lo, hi]
+  car_rms_cm, car_max_cm, lane_departures, mmae_switches, reference_repairs, no_estimate_s
+                                  means, each with _sd and _ci95 likewise
+  departure_rate, departure_rate_ci95, departed_episodes
+                                  share of episodes with >= 1 lane departure, its
+                                  Clopper-Pearson 95% interval, the count
+  completed, passed               every episode completed / met its criteria
+  completed_episodes, passed_episodes
+  wall_s                          the episodes' wall time, summed
+  paired.fused_vs.MODEL:track     {diff_cm, ci95, verdict, n}: fused RMSE - the model's own
+                                  track RMSE per seed ("better": fused lower, interval < 0)
+  paired.mmae_loop_vs.MODEL.KEY   with --single-model: the MMAE loop's car_rms_cm, car_max_cm,
+                                  lane_departures minus the loop driven by MODEL alone
+  episodes                        each seed's report document (as `run --json` writes it)
+"""
+SOURCE_KEYS = tuple(f.name for f in dataclasses.fields(SourceReport))
+EPISODE_KEYS = ("car_rms_cm", "car_max_cm", "lane_departures", "mmae_switches",
+                "reference_repairs", "no_estimate_s")
+LOOP_KEYS = ("car_rms_cm", "car_max_cm", "lane_departures")  # MMAE loop vs a model alone
+HIGHER_IS_BETTER = frozenset({"valid_share"})
+
+
+def _spread_keys(key: str, values: Sequence[float]) -> dict[str, Any]:
+    s = stats.spread([float(v) for v in values])
+    return {key: s.mean, f"{key}_sd": s.sd, f"{key}_ci95": list(s.ci95)}
+
+
+def summarise(label: str, reports: Sequence[EpisodeReport], scenario,
+              overrides: dict | None = None, mode: str | None = None,
+              single_model: dict[str, Sequence[EpisodeReport]] | None = None) -> dict:
+    """The document of `label` over its seeds' `reports` (in seed order); `single_model` maps
+    a front model to its model-only loop's reports on the same seeds, for the paired block."""
+    if not reports:
+        raise ValueError(f"{label}: no episode to summarise")
+    seeds = [r.seed for r in reports]
+    if len(set(seeds)) != len(seeds):
+        raise ValueError(f"{label}: a seed repeats in {seeds}")
+    names = list(reports[0].sources)
+    sources = {}
+    for name in names:
+        entry: dict[str, Any] = {}
+        for key in SOURCE_KEYS:
+            entry.update(_spread_keys(key, [getattr(r.sources[name], key) for r in reports]))
+        sources[name] = entry
+    departed = sum(1 for r in reports if r.lane_departures > 0)
+    doc: dict[str, Any] = {
+        "scenario": reports[0].scenario, "label": label, "seeds": seeds, "n": len(reports),
+        "mode": mode, "overrides": overrides or {}, "sources": sources,
+    }
+    for key in EPISODE_KEYS:
+        doc.update(_spread_keys(key, [getattr(r, key) for r in reports]))
+    doc.update({
+        "departure_rate": departed / len(reports),
+        "departure_rate_ci95": list(stats.rate_interval(departed, len(reports))),
+        "departed_episodes": departed,
+        "completed": all(r.completed for r in reports),
+        "completed_episodes": sum(1 for r in reports if r.completed),
+        "passed": all(r.passed for r in reports),
+        "passed_episodes": sum(1 for r in reports if r.passed),
+        "wall_s": sum(r.wall_s for r in reports),
+        "paired": paired_block(reports, single_model),
+        "episodes": [report_document(r, scenario) for r in reports],
+    })
+    return strict(with_metadata(doc, scenario, seed=seeds[0] if len(seeds) == 1 else None)
+                  | ({"seed": None} if len(seeds) > 1 else {}))
+
+
+def paired_block(reports: Sequence[EpisodeReport],
+                 single_model: dict[str, Sequence[EpisodeReport]] | None = None) -> dict:
+    """Fused vs each model's own track (RMSE, per seed); the MMAE loop vs each model-only
+    loop (car error and departures, per seed) where those ran."""
+    tracks = [n for n in reports[0].sources if n.endswith(":track")]
+    block: dict[str, Any] = {"fused_vs": {
+        t: stats.paired([r.sources["fused"].rmse_cm for r in reports],
+                        [r.sources[t].rmse_cm for r in reports]).as_dict("cm")
+        for t in tracks}}
+    if single_model:
+        loops = {}
+        for model, alone in single_model.items():
+            by_seed = {r.seed: r for r in alone}
+            pairs = [(r, by_seed[r.seed]) for r in reports if r.seed in by_seed]
+            loops[model] = {
+                key: stats.paired([float(getattr(a, key)) for a, _ in pairs],
+                                  [float(getattr(b, key)) for _, b in pairs]
+                                  ).as_dict("" if key == "lane_departures" else "cm")
+                for key in LOOP_KEYS}
+        block["mmae_loop_vs"] = loops
+    return block
+
+
+def fused_verdicts(docs: Sequence[dict]) -> dict[str, int]:
+    """The count of fused-vs-track verdicts over `docs` (never raw wins)."""
+    return stats.count_verdicts([p["verdict"] for d in docs
+                                 for p in d["paired"]["fused_vs"].values()])
+
+
+def interval_text(mean: float | None, ci: Sequence[float | None] | None, digits: int = 2
+                  ) -> str:
+    """"0.52 [0.48, 0.57]", or the mean alone where there is no interval, "-" for none."""
+    if mean is None or (isinstance(mean, float) and math.isnan(mean)):
+        return "-"
+    if not ci or ci[0] is None or ci[1] is None or any(math.isnan(c) for c in ci):
+        return f"{mean:.{digits}f}"
+    return f"{mean:.{digits}f} [{ci[0]:.{digits}f}, {ci[1]:.{digits}f}]"
