@@ -12,6 +12,12 @@ from pathlib import Path
 
 from lanekeep.scenario.schema import ScenarioError, load_scenario, shipped_scenarios
 
+TUNING_SEEDS_START = 1000
+"""The first tuning seed: seeds from here on are the tuning tools' (`lanekeep bench --help`), so a
+limit or a setting fitted on them is judged on seeds it never saw."""
+SCORED_SEEDS = range(0, TUNING_SEEDS_START)
+"""The seeds `lanekeep bench --seeds` scores: no tuning may look at an episode on one of them."""
+
 
 class TuningInputError(Exception):
     """A user error of a tuning tool: its message is one line, the tool exits 2."""
