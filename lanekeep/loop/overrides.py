@@ -1,26 +1,38 @@
-"""Swapping a scenario's detectors and controller for an episode (the `--front-detectors`,
-`--reference-detector` and `--controller` options of `run` and `bench`): a built-in name, an
-entry point's name or an import path `package.module:Class` (lanekeep/core/plugins.py), so a
-user's own detector or controller runs on the shipped scenarios without editing a file."""
+"""The command line's changes to a scenario for an episode (options of `run` and `bench`).
+
+`--front-detectors`, `--reference-detector` and `--controller` swap its detectors and
+controller: a built-in name, an entry point's name or an import path `package.module:Class`
+(lanekeep/core/plugins.py), so a user's own detector or controller runs on the shipped
+scenarios without editing a file. `--set KEY=VALUE` changes any other scenario key the same way
+(`estimation.mmae_prior=uniform`): how two methods are compared on the same scenarios.
+"""
 
 from __future__ import annotations
 
 import dataclasses
+import json
 from dataclasses import dataclass
+from typing import Any
 
-from lanekeep.scenario.schema import Scenario
+from lanekeep.core.config_io import ConfigError
+from lanekeep.scenario.keys import check_key, with_settings
+from lanekeep.scenario.schema import Scenario, ScenarioError
 
 
 @dataclass(frozen=True)
 class PluginOverrides:
-    """The command line's choices; None keeps the scenario file's."""
+    """The command line's changes to a scenario; None (or no settings) keeps the file's."""
 
     front_detectors: tuple[str, ...] | None = None
     reference_detector: str | None = None
     controller: str | None = None
+    # (dotted key, TOML value) of each `--set`, in the command line's order, applied last
+    settings: tuple[tuple[str, Any], ...] = ()
 
     def check(self) -> None:
-        """Import each name given (ConfigError naming the option and the name)."""
+        """Import each name given and check each setting's key names a scenario key
+        (ConfigError naming the option), before any scenario is loaded; a setting's value and
+        array indices are checked against each scenario by `apply`."""
         from lanekeep.control.registry import check_controller
         from lanekeep.detectors.registry import check_detector
 
@@ -30,9 +42,17 @@ class PluginOverrides:
             check_detector(self.reference_detector, "--reference-detector")
         if self.controller is not None:
             check_controller(self.controller, "--controller")
+        for key, _ in self.settings:
+            try:
+                check_key(key, None, seed_rule="use --seed")
+            except ValueError as err:
+                raise ConfigError("", "--set", f"{key}: {err}") from None
 
     def apply(self, scenario: Scenario) -> Scenario:
-        """`scenario` with these choices in place of its own."""
+        """`scenario` with these changes in place of its own: the detectors and controller,
+        then the settings. A setting the scenario cannot take is the ScenarioError its file
+        would give, naming the key, with the settings that caused it (one may break a rule
+        across keys, e.g. `road.n_lanes=1` with the file's `road.ego_lane = 1`)."""
         est = scenario.estimation
         if self.front_detectors is not None:
             est = dataclasses.replace(est, front_detectors=self.front_detectors)
@@ -41,4 +61,14 @@ class PluginOverrides:
         control = scenario.control
         if self.controller is not None:
             control = dataclasses.replace(control, controller=self.controller)
-        return dataclasses.replace(scenario, estimation=est, control=control)
+        scenario = dataclasses.replace(scenario, estimation=est, control=control)
+        try:
+            return with_settings(scenario, self.settings)
+        except ScenarioError as err:
+            shown = " ".join(f"--set {key}={_toml(value)}" for key, value in self.settings)
+            raise ScenarioError(err.source, err.key, f"{err.message} (after {shown})") from None
+
+
+def _toml(value: Any) -> str:
+    """A value as it could be typed after `--set KEY=` (JSON's scalars and arrays are TOML's)."""
+    return json.dumps(value, ensure_ascii=False, default=str)

@@ -22,14 +22,13 @@ import hashlib
 import itertools
 import json
 import math
-import re
 import tomllib
-import typing
-from dataclasses import dataclass, fields, is_dataclass
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from lanekeep.core.config_io import ConfigError
+from lanekeep.scenario.keys import check_key, parse_key, set_key
 from lanekeep.scenario.schema import Scenario, load_scenario, scenario_from_dict
 from lanekeep.scoring.metrics import EpisodeReport
 from lanekeep.sweep.fields import (
@@ -43,7 +42,6 @@ from lanekeep.sweep.fields import (
 )
 
 KNOWN_KEYS = ("name", "base", "parameters", "seeds", "seconds", "metrics", "render")
-_TOKEN = re.compile(r"([A-Za-z_][A-Za-z0-9_]*)((?:\[\d+\])*)")
 
 
 @dataclass(frozen=True)
@@ -118,56 +116,6 @@ def cell_scenario(table: dict, source: str) -> Scenario:
     return scenario_from_dict(table, source)
 
 
-def parse_key(key: str) -> list[str | int]:
-    """"road.segments[1].curvature_1pm" -> ["road", "segments", 1, "curvature_1pm"]."""
-    path: list[str | int] = []
-    for part in key.split("."):
-        match = _TOKEN.fullmatch(part)
-        if match is None:
-            raise ValueError(f"not a dotted key: {key!r}")
-        path.append(match.group(1))
-        path.extend(int(i) for i in re.findall(r"\[(\d+)\]", match.group(2)))
-    return path
-
-
-def _check_key(key: str, base_table: dict) -> None:
-    """That `key` names a field of Scenario (walking its dataclasses) whose array indices
-    exist in the base scenario; raises ValueError saying which part does not."""
-    path = parse_key(key)
-    tp: Any = Scenario
-    node: Any = base_table
-    for depth, part in enumerate(path):
-        here = key if depth == len(path) - 1 else str(part)
-        if isinstance(part, int):
-            if typing.get_origin(tp) is not tuple:
-                raise ValueError(f"{here!r} is not an array in a scenario")
-            if not isinstance(node, list) or part >= len(node):
-                count = len(node) if isinstance(node, list) else 0
-                raise ValueError(f"index [{part}] does not exist in the base scenario "
-                                 f"(it has {count})")
-            tp, node = typing.get_args(tp)[0], node[part]
-            continue
-        if not is_dataclass(tp):
-            raise ValueError(f"{part!r} is inside a value, not a table")
-        names = {f.name for f in fields(tp) if f.metadata.get("toml", True)}
-        if part not in names or part == "seed" and tp is Scenario:
-            rule = " (use `seeds`)" if part == "seed" else ""
-            raise ValueError(f"{part!r} is not a scenario key{rule}")
-        tp = typing.get_type_hints(tp)[part]
-        node = node.get(part) if isinstance(node, dict) else None
-
-
-def set_key(table: dict, path: list[str | int], value: Any) -> None:
-    """Set `value` at `path`, creating the tables on the way that the base leaves out."""
-    node: Any = table
-    for part, nxt in zip(path[:-1], path[1:], strict=True):
-        if isinstance(part, int):
-            node = node[part]
-        else:
-            node = node.setdefault(part, [] if isinstance(nxt, int) else {})
-    node[path[-1]] = value
-
-
 def _base(source: str, base: Any) -> tuple[str, dict]:
     """The base scenario's raw TOML table (a path is relative to the sweep file)."""
     if not isinstance(base, str) or not base:
@@ -200,7 +148,7 @@ def parse_sweep(text: str, source: str = "<string>") -> SweepSpec:
     parameters = []
     for key, spec in params.items():
         try:
-            _check_key(key, base_table)
+            check_key(key, base_table, seed_rule="use `seeds`")
         except ValueError as err:
             raise SweepError(source, f"parameters.{key}", str(err)) from None
         parameters.append(Parameter(key, values_of(source, key, spec)))

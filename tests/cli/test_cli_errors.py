@@ -131,6 +131,23 @@ def test_an_unknown_detector_in_the_scenario_is_named(tmp_path, capsys):
     _no_files(tmp_path, "out.json")
 
 
+def test_run_rejects_a_set_of_no_scenario_key(tmp_path, capsys):
+    code = main(["run", "clear_straight", "--seconds", "0.3", "--set", "estimation.nope=1",
+                 "--json", str(tmp_path / "out.json")])
+    _one_clear_line(capsys, code, "--set", "estimation.nope", "not a scenario key")
+    _no_files(tmp_path, "out.json")
+
+
+def test_bench_rejects_a_set_value_a_file_could_not_hold_before_any_worker(tmp_path, capsys):
+    code = main(["bench", "clear_straight", "--seconds", "0.3", "--workers", "1",
+                 "--set", "estimation.output=bogus", "--json", str(tmp_path / "bench.json"),
+                 "--record-dir", str(tmp_path / "rrd")])
+    line = _one_clear_line(capsys, code, "estimation.output", "'bogus'", "clear_straight.toml",
+                           "--set estimation.output")
+    assert "must be one of" in line
+    _no_files(tmp_path, "bench.json", "rrd")
+
+
 def test_debug_lets_the_exception_through(tmp_path, capsys):
     with pytest.raises(ConfigError, match="--seconds"):
         main(["--debug", "run", "clear_straight", "--seconds", "0"])
