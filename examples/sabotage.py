@@ -7,7 +7,7 @@ detector (lanekeep/detectors/registry.py) and adds BIAS_M to what it reports (`b
 lane's centre line, and the MMAE output that follows it, is off by 5 cm. On 5 s of
 case4_half_shade_straight the fused RMSE goes from 0.6 cm to 4.4 cm, the car still within 6 cm
 of the centre: the old limit, "twice one measured run" (5 cm there), let it pass; a limit
-calibrated on tuning seeds (a few sd above ~1 cm) fails it.
+calibrated on tuning seeds (a prediction bound above the tuning seeds' RMSE) fails it.
 
 Run from the repository root, with it on the import path (`examples/` is no installed package:
 a plain `lanekeep` does not see it, `python -m lanekeep.cli` puts the working directory first on

@@ -34,7 +34,8 @@ def _flag(name: str) -> specs.BoundedArray:
 
 
 class LaneKeepEnv(dm_env.Environment):
-    """One scenario; `reset(seed)` runs it with that seed (None: the scenario's own seed)."""
+    """One scenario; `reset(seed)` runs it with that seed (None: the last seed given, at first
+    the scenario's own, its nominal drive)."""
 
     def __init__(self, scenario: Scenario | str, render_size: tuple[int, int] | None = None,
                  duration_s: float | None = None) -> None:
@@ -70,8 +71,11 @@ class LaneKeepEnv(dm_env.Environment):
 
     # -- dynamics --------------------------------------------------------------------------
     def reset(self, seed: int | None = None) -> dm_env.TimeStep:
-        """A new episode; `seed` replaces the scenario's seed (world details, image effects and
-        sensor noise follow it), so the same seed gives the same first observation."""
+        """A new episode; `seed` replaces the scenario's seed and is kept for the next resets
+        without one. The seed draws the world's details, the image effects and the sensor noise
+        and, unless it is the file's own seed (0 for a scenario built in memory), the start's
+        offset, heading and speed and the other vehicles' timing within `[start.jitter]`
+        (lanekeep/scenario/nuisance.py); the same seed gives the same first observation."""
         if seed is not None:
             self._seed = int(seed)
         self._slot.close()  # before the next rig exists: freeing a renderer disturbs another's

@@ -34,10 +34,14 @@ Timing: the observation is what the car has at the start of a control period
 observation of the next one, so an agent acts on the same period's frames as the built-in
 controller does. `reset()` returns the first period's observation, before any action.
 
-Seeds: `reset(seed=s)` runs the scenario with seed s (world details, image effects and sensor
-noise all follow it), so the same seed gives the same first observation; a later `reset()`
-without a seed draws the next seed from the environment's generator; the very first `reset()`
-without a seed keeps the scenario file's own seed, as `lanekeep run` does.
+Seeds: `reset(seed=s)` runs the scenario with seed s, so the same seed gives the same first
+observation. The seed draws the world's details, the image effects and the sensor noise and,
+unless s is the file's own seed (0 for a scenario built in memory), the drive too: the start's
+offset, heading and speed and the other vehicles' timing, within the file's `[start.jitter]`
+(lanekeep/scenario/nuisance.py); the file's own seed is its nominal drive, as the file says. A
+later `reset()` without a seed draws the next seed from the environment's generator (so, in
+all likelihood, a drawn drive); the very first `reset()` without a seed keeps the scenario
+file's own seed, as `lanekeep run` does.
 """
 
 from __future__ import annotations

@@ -124,7 +124,7 @@ class Episode:
 
     def __init__(self, scenario: Scenario, recorder: Recorder | None = None,
                  render_size: tuple[int, int] | None = None) -> None:
-        # the seed's start and traffic timing (seed 0: the file's own drive)
+        # the seed's start and traffic timing (the file's own seed: its nominal drive)
         self.scenario = scenario = with_nuisance(scenario)
         est = scenario.estimation
         self.world: World = build(scenario)

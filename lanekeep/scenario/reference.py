@@ -101,8 +101,9 @@ DESCRIPTIONS: dict[str, tuple[str, str]] = {
     "start.offset_m": ("Lateral offset from the ego lane's centre; + = left.", "any"),
     "start.heading_deg": ("Heading relative to the road's; + = pointing left.", "any"),
     "start.speed_mps": ("Initial speed.", ">= 0"),
-    "start.jitter": ("What a seed other than 0 draws (uniform within +-each half-width; "
-                     "seed 0 is the nominal drive): lanekeep/scenario/nuisance.py.", ""),
+    "start.jitter": ("What a seed other than the file's own draws (uniform within +-each "
+                     "half-width; the file's seed is the nominal drive): "
+                     "lanekeep/scenario/nuisance.py.", ""),
     "start.jitter.offset_m": ("Half-width of the start's lateral offset draw.", ">= 0"),
     "start.jitter.heading_deg": ("Half-width of the start's heading draw.", ">= 0"),
     "start.jitter.speed_mps": ("Half-width of the speed draw; the start and target speeds "

@@ -86,9 +86,9 @@ class RoadConfig:
 
 @dataclass(frozen=True)
 class StartJitter:
-    """Half-widths of the uniform ranges a seed other than 0 draws the start from (seed 0 is
-    the nominal drive, exactly as the file says): what an experimenter calls nuisance, so that
-    seeds sample drives rather than repeat one (lanekeep/scenario/nuisance.py).
+    """Half-widths of the uniform ranges a seed draws the start from, unless it is the file's
+    own seed (the nominal drive, exactly as the file says): what an experimenter calls
+    nuisance, so that seeds sample drives rather than repeat one (lanekeep/scenario/nuisance.py).
 
     `speed_mps` moves the start speed and the target speed together; `traffic_s` moves when
     the car meets each other vehicle (its speed relative to the car's, times a draw in
@@ -112,7 +112,7 @@ class StartConfig:
     offset_m: float = 0.0  # lateral offset from the ego lane centre, + = left
     heading_deg: float = 0.0  # relative to the road heading, + = pointing left
     speed_mps: float = 0.0
-    jitter: StartJitter = field(default_factory=StartJitter)  # [start.jitter]: seeds != 0
+    jitter: StartJitter = field(default_factory=StartJitter)  # [start.jitter]: all but the file's seed
 
     def __post_init__(self):
         if not self.speed_mps >= 0:

@@ -9,7 +9,8 @@ first line holds the sweep's fingerprint: an `--out` that holds another sweep is
 Files: sweep.toml (a copy of the sweep file), cells.jsonl, results.parquet (one row per cell:
 cell_id, one column per parameter (its dotted key; an array value as JSON text), seed, status,
 passed, error, wall_s, lanekeep_version, then the metrics, per source "METRIC@SOURCE"),
-summary.json (counts, failures, and each parameter combination's mean / min / max over seeds).
+summary.json (counts, failures, and each parameter combination's mean, sd, 95% t interval
+(lanekeep/scoring/statistics.py; null below two seeds), min and max over seeds).
 """
 
 from __future__ import annotations
@@ -23,6 +24,7 @@ from typing import Any
 
 from lanekeep.core.config_io import ConfigError
 from lanekeep.report.json_io import lanekeep_version, strict, write_json
+from lanekeep.scoring.statistics import spread as seed_spread
 from lanekeep.sweep.run import FINISHED, CellResult
 from lanekeep.sweep.spec import Cell, SweepSpec, report_metrics
 
@@ -145,7 +147,9 @@ class SweepStore:
             for c in metric_cols:
                 values = [m[c] for m in members if isinstance(m.get(c), (int, float))
                           and math.isfinite(m[c])]
-                stats[c] = ({"mean": statistics.fmean(values), "min": min(values),
+                spread = seed_spread(values)
+                stats[c] = ({"mean": statistics.fmean(values), "sd": spread.sd,
+                             "ci95": list(spread.ci95), "min": min(values),
                              "max": max(values)} if values else None)
             by_parameters.append({"parameters": dict(zip(spec.keys, json.loads(key),
                                                          strict=True)),

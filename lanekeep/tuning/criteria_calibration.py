@@ -55,7 +55,9 @@ def fused_rmse_limit_m(values_cm: Sequence[float]) -> float:
     bound for one more draw, rounded UP to the next 0.1 cm. If a seed's RMSE is normal, an
     episode of the loop as calibrated fails it ~0.1% of the time, so a bench of 48 episodes
     (16 scenarios x 3 seeds) fails spuriously ~5% of the time (1 - 0.999^48), while a
-    regression by a few sd fails it. With few seeds the sd itself is uncertain: the t
+    regression beyond the bound fails it (at K = 5 the margin is 7.9 sd: a limit to catch a
+    gross regression, such as examples/sabotage.py's 5 cm bias, not a small one: that is what
+    paired comparisons over seeds are for). With few seeds the sd itself is uncertain: the t
     quantile (not the normal's 3.09) widens the bound for that, and sqrt(1 + 1/K) adds the
     uncertainty of the mean. The values are per seed: a `bench --json` document's
     `episodes[i].sources.fused.rmse_cm`, never the document's mean.
@@ -197,7 +199,7 @@ def criteria_block(cal: Calibration, command: str, date: str, geometry: str = GE
                   f"lane centre ({geometry}); fused RMSE at most the upper 99.9% "
                   f"prediction bound of one new seed's, mean + t(0.999, K-1) sd sqrt(1 + 1/K), "
                   f"rounded up to 0.1 cm (lanekeep/tuning/criteria_calibration.py): a seed of "
-                  f"this loop fails it ~0.1% of the time, one worse by a few sd often."),
+                  f"this loop fails it ~0.1% of the time."),
         "[criteria]",
         "max_lane_departures = 0",
         f"max_car_lateral_error_m = {MAX_CAR_LATERAL_ERROR_M}",

@@ -10,6 +10,7 @@ from pathlib import Path
 import pytest
 
 from lanekeep.cli.main import main
+from lanekeep.scoring.statistics import spread
 from lanekeep.sweep.spec import SweepError, check_values, parse_sweep
 
 pq = pytest.importorskip("pyarrow.parquet")
@@ -133,6 +134,12 @@ def test_interrupted_sweep_resumes_only_the_missing_cells(tmp_path, capsys):
     summary = json.loads((out / "summary.json").read_text())
     assert summary["cells"] == 8 and summary["status"] == {"completed": 8}
     assert summary["cells_missing"] == 0 and len(summary["by_parameters"]) == 4
+    for combo in summary["by_parameters"]:  # two seeds each: a t interval around the mean
+        car = combo["metrics"]["car_rms_cm"]
+        values = [r["car_rms_cm"] for r in rows
+                  if all(r[k] == v for k, v in combo["parameters"].items())]
+        assert car["ci95"] == pytest.approx(list(spread(values).ci95))
+        assert car["ci95"][0] <= car["mean"] <= car["ci95"][1]
     plots = {p.name for p in (out / "plots").iterdir()}
     assert {"rmse_cm__vs__conditions.rain.png", "heatmap__car_rms_cm.png",
             "lane_departures__vs__target_speed_mps.png"} <= plots
