@@ -112,7 +112,7 @@ class StartConfig:
     offset_m: float = 0.0  # lateral offset from the ego lane centre, + = left
     heading_deg: float = 0.0  # relative to the road heading, + = pointing left
     speed_mps: float = 0.0
-    jitter: StartJitter = field(default_factory=StartJitter)  # [start.jitter]: all but the file's seed
+    jitter: StartJitter = field(default_factory=StartJitter)  # [start.jitter]: not the file's seed
 
     def __post_init__(self):
         if not self.speed_mps >= 0:
