@@ -39,14 +39,14 @@ class EstimatorSettings:
     residual_mode: str = "distance_aligned"
     # "precision": the models' lanes fused with their tracks' covariances, each weighted by its
     # MMAE probability (`LaneEstimator._precision_fused`); "fused": the probability-weighted
-    # lane of the models; "select": the likeliest model's (the paper's rule, which paper mode
-    # keeps). Chosen on the tuning scenarios with each detector's own tracker R (`python
-    # tools/compare_estimation.py output=fused,precision`): the output's RMSE above the best
-    # own track by +0.05 cm on average against +0.07, at or below it (to the 0.01 cm printed)
-    # in 6 of 9 against 4; car maxima summed 165 cm against 157 (worst 42.4 against 33.9,
-    # tune_traffic_lead_van_three_lanes, where lanenet's curvature flips sign at a clothoid's
-    # end). Before, with one pooled R, "fused" beat "select" there (+0.25 cm against +0.95).
-    output: str = "precision"
+    # lane of the models; "select": the likeliest model's (the paper's rule). Re-decided
+    # 2026-11-27 by a paired comparison over tuning seeds (docs/statistics.md#defaults: the
+    # five paper cases x seeds 1000-1004, `lanekeep bench ... --seed 1000 --seeds 5 --set
+    # estimation.output=select` against the same without, `lanekeep compare`): "select" minus
+    # "precision" fused RMSE +0.05 cm [-0.02, +0.13], car RMS -0.1 [-0.2, +0.1] cm, car max
+    # -0.1 [-0.3, +0.1] cm: indistinguishable, so the paper's choice. (It had been chosen on
+    # mean differences of 0.02 cm over nine tuning drives, one seed each.)
+    output: str = "select"
     # What a model hands the output: its Kalman estimate ("track", the MMAE filter's state) or
     # its own detection when its track's gate accepts it ("detection", the paper's PID input).
     model_lane: str = "track"
@@ -77,14 +77,14 @@ class EstimatorSettings:
     # where it follows a passing car's edge (the lead van: 4.8% of steps beyond 30 cm).
     # None: every reading is compared (the paper's; paper mode sets it).
     reference_width_tolerance_m: float | None = 0.2
-    # The MMAE's probabilities before the reference has spoken: "uniform" (the paper's; paper
-    # mode keeps it) or "precision" (each model's in proportion to its tracker R's inverse
-    # offset variance at offset_lookahead_m). Chosen on the tuning scenarios
-    # (`python tools/compare_estimation.py mmae_prior=precision`, 2026-11-26): the output's
-    # RMSE minus the best own track -0.07 cm on average against +0.03 uniform, car maxima
-    # summed 170 cm against 184. With equal starting probabilities the output took the
-    # classical models' bias for the ~3 s the reference needs to tell the models apart.
-    mmae_prior: str = "precision"
+    # The MMAE's probabilities before the reference has spoken: "uniform" (the paper's) or
+    # "precision" (each model's in proportion to its tracker R's inverse offset variance at
+    # offset_lookahead_m). Re-decided 2026-11-27 as `output` above (`--set
+    # estimation.mmae_prior=uniform`): "uniform" minus "precision" fused RMSE +0.03 cm
+    # [-0.01, +0.06], car RMS -0.0 [-0.1, +0.1] cm, car max -0.1 [-0.4, +0.2] cm:
+    # indistinguishable, so the paper's choice. (It had been chosen on a mean difference of
+    # 0.1 cm over nine tuning drives, one seed each.)
+    mmae_prior: str = "uniform"
     lane_width_gain: float = 0.05  # weight of each two-boundary measurement in the mean
     lane_width_range_m: tuple[float, float] = (2.5, 5.0)  # plausible widths; others ignored
 

@@ -8,6 +8,7 @@ from shared_runs import shared
 
 from lanekeep.loop.episode import Episode
 from lanekeep.scenario.schema import load_scenario, shipped_scenarios
+from lanekeep.scoring import statistics as stats
 
 PAPER_CASES = ("case1_building_shadows", "case2_sharp_turn", "case3_mild_turn_shade_bumps",
                "case4_half_shade_straight", "case5_wet_rain_turn")
@@ -73,7 +74,6 @@ def test_fused_rmse_within_10cm_on_clear_roads(name):
     assert report.sources["fused"].valid_share == 1.0
 
 
-TRACK_MARGIN_CM = 0.75
 PAPER_FRONT_MODELS = ("hough", "sliding_window")
 
 
@@ -89,53 +89,54 @@ def _two_model_run(name: str):
     return shared(f"two-models-{name}", run)
 
 
+def _fused_vs(reports: dict, source: str):
+    """Fused RMSE minus `source`'s, paired over the five cases (each at its file's seed):
+    lanekeep/scoring/statistics.py's t interval and verdict for the fused output."""
+    return stats.paired([r.sources["fused"].rmse_cm for r in reports.values()],
+                        [r.sources[source].rmse_cm for r in reports.values()])
+
+
+def _tables(reports: dict) -> str:
+    return "\n\n".join(f"{n}\n{r.table()}" for n, r in reports.items())
+
+
 @pytest.mark.slow
-def test_fused_stays_near_the_best_track_on_the_paper_cases(paper_reports):
-    """The default loop (three front models, LaneNet's among them): against each model's own
-    Kalman track at the same look-ahead, the fused output is within TRACK_MARGIN_CM of the best
-    track in every case: a regression guard on today's state, not a target ([lanenet-loop]
-    asks for <= in every scenario). Measured (`lanekeep bench`, with LaneNet a default front
-    model and the roll compensation): fused 1.00 / 2.53 / 1.54 / 0.73 / 1.24 cm against best
-    tracks 1.03 / 2.50 / 1.54 / 0.65 / 1.35. The best raw detections are LaneNet's at 1.18 /
-    1.10 / 1.34 / 0.60 / 1.38: the fused output beats them in cases 1 and 5 only, so the
-    paper's raw comparison is made with the paper's two models (the next tests)."""
-    for name, report in paper_reports.items():
-        sources = report.sources
-        fused = sources["fused"].rmse_cm
-        tracks = [v.rmse_cm for k, v in sources.items() if k.endswith(":track")]
-        assert len(tracks) == 3
-        assert fused <= min(tracks) + TRACK_MARGIN_CM, f"{name}\n{report.table()}"
-    tables = "\n\n".join(f"{n}\n{r.table()}" for n, r in paper_reports.items())
-    assert all(r.lane_departures == 0 for r in paper_reports.values()), tables
+def test_fused_is_not_worse_than_any_models_own_track_on_the_paper_cases(paper_reports):
+    """The default loop (three front models): the fused output against each model's own Kalman
+    track at the same look-ahead, paired over the five cases. A regression guard sized to the
+    noise (the cases' own spread), not a margin: a fused output made worse than a track on the
+    cases by more than their spread fails. Measured (2026-11-27, `lanekeep bench` on the five
+    cases): indistinguishable from every track, not "better" (docs/statistics.md has the
+    multi-seed verdicts)."""
+    for track in ("hough:track", "sliding_window:track", "lanenet:track"):
+        p = _fused_vs(paper_reports, track)
+        assert p.n == 5 and p.verdict != "worse", f"{track}: {p}\n{_tables(paper_reports)}"
+    assert all(r.lane_departures == 0 for r in paper_reports.values()), _tables(paper_reports)
+
+
+@pytest.fixture(scope="module")
+def two_model_reports():
+    return {name: _two_model_run(name) for name in PAPER_CASES}
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize("name", PAPER_CASES)
-def test_the_papers_two_models_fused_stay_near_their_best_track(name):
-    """As the paper's Tables 3-4 compare (the MMAE output of its two classical front models,
-    with a learned rear reference): in every case the fused output stays within
-    TRACK_MARGIN_CM of the best own track, and the car departs nowhere. One case a test, so
-    that test workers share the five runs."""
+def test_the_papers_two_models_keep_the_lane(name):
+    """The MMAE output of the paper's two classical front models (its Tables 3-4) drives every
+    case without a departure. One case a test, so that test workers share the five runs."""
     report = _two_model_run(name)
-    sources = report.sources
-    tracks = [v.rmse_cm for k, v in sources.items() if k.endswith(":track")]
-    assert sources["fused"].rmse_cm <= min(tracks) + TRACK_MARGIN_CM, report.table()
-    assert report.lane_departures == 0, report.table()
+    assert report.completed and report.lane_departures == 0, report.table()
 
 
 @pytest.mark.slow
-def test_fused_beats_the_papers_two_models_raw_on_the_paper_cases():
-    """The same runs against the models' own raw detections: the fused output beats the best
-    raw detections in at least 4 of 5 cases."""
-    reports = {name: _two_model_run(name) for name in PAPER_CASES}
-    raw_wins = []
-    for report in reports.values():
-        sources = report.sources
-        raws = [sources[k[: -len(":track")]].rmse_cm
-                for k in sources if k.endswith(":track")]
-        raw_wins.append(sources["fused"].rmse_cm <= min(raws))
-    tables = "\n\n".join(f"{n}\n{r.table()}" for n, r in reports.items())
-    assert sum(raw_wins) >= 4, tables
+def test_the_papers_two_models_fused_against_their_tracks_and_raw_detections(
+        two_model_reports):
+    """As the paper's Tables 3-4 compare, paired over the five cases: the fused output is not
+    worse than either model's own track, nor than either model's raw detections (the paper
+    claims "better" against raw; with five cases we measure what the test says)."""
+    for source in ("hough:track", "sliding_window:track", "hough", "sliding_window"):
+        p = _fused_vs(two_model_reports, source)
+        assert p.n == 5 and p.verdict != "worse", f"{source}: {p}\n{_tables(two_model_reports)}"
 
 
 def test_same_scenario_twice_gives_identical_metrics():

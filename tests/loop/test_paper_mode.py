@@ -17,6 +17,7 @@ from lanekeep.detectors.config import load_config
 from lanekeep.loop.episode import Episode
 from lanekeep.loop.paper_mode import PAPER_WINDOWS, front_detector_config, with_mode
 from lanekeep.scenario.schema import load_scenario
+from lanekeep.scoring import statistics as stats
 
 PAPER_CASES = ("case1_building_shadows", "case2_sharp_turn", "case3_mild_turn_shade_bumps",
                "case4_half_shade_straight", "case5_wet_rain_turn")
@@ -37,13 +38,16 @@ class PaperTrace:
                 np.asarray(self.selected), np.asarray(self.errors_m, dtype=float))
 
 
-def paper_run(name: str):
-    """The paper's loop on a paper case with its trace, once per session."""
-    return shared(f"paper-{name}", lambda: _paper_run(name))
+def paper_run(name: str, seed: int | None = None):
+    """The paper's loop on a paper case with its trace (at `seed`, None: the file's own, its
+    nominal drive), once per session."""
+    return shared(f"paper-{name}-{seed}", lambda: _paper_run(name, seed))
 
 
-def _paper_run(name: str):
+def _paper_run(name: str, seed: int | None = None):
     scenario = with_mode(load_scenario(name), "paper")
+    if seed is not None:
+        scenario = replace(scenario, seed=seed)
     trace = PaperTrace()
     with Episode(scenario) as episode:
         road, conditions = episode.world.road, episode.world.conditions
@@ -101,22 +105,41 @@ def test_paper_mode_keeps_the_lane_in_every_paper_case(name):
     assert report.completed and report.lane_departures == 0, report.table()
 
 
+CASE2_SEEDS = (2, 3, 4, 5, 6)  # the file's own seed (2), then four drawn drives
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("seed", CASE2_SEEDS)
+def test_paper_mode_keeps_the_lane_in_case2_on_every_seed(seed):
+    """The seeds the next test pairs: each drives the sharp turn without a departure (one
+    seed a test, so that test workers share the runs)."""
+    report, _ = paper_run("case2_sharp_turn", None if seed == 2 else seed)
+    assert report.completed and report.lane_departures == 0, report.table()
+
+
 @pytest.mark.slow
 def test_case2_model_2_is_worse_in_the_sharp_turn():
-    """Paper Table 3: model #2's RMSE 47.29 cm, model #1's 21.12 cm (2.24x). Ours: 1.16x
-    overall and 1.17x in the turn (measured; 1.30x and 1.36x before distant paint was drawn
-    filtered, lanekeep/world/paint.py: model #1, the long-range one, gained most from lines
-    that no longer break up 30-60 m ahead). (The paper's MMAE then follows model #1 through
-    the turn; ours does not, for its reference is model #2's own algorithm on the rear camera
-    and shares its bias in the turn: see docs/paper_mode.md. [lanenet-loop] replaces
-    that reference.)"""
-    report, trace = paper_run("case2_sharp_turn")
-    curvature, _, _, errors = trace.arrays()
-    turn = np.abs(curvature) > 0.01  # the 40 m arc and the steep ends of its clothoids
-    hough, sliding = report.sources["hough"].rmse_cm, report.sources["sliding_window"].rmse_cm
-    assert sliding > 1.1 * hough, report.table()
-    in_turn = np.sqrt(np.nanmean(errors[turn] ** 2, axis=0))
-    assert in_turn[SLIDING] > 1.1 * in_turn[HOUGH], in_turn
+    """Paper Table 3: model #2's RMSE 47.29 cm, model #1's 21.12 cm (2.24x). Ours, paired over
+    five seeds (lanekeep/scoring/statistics.py): model #2 `worse` over the episode and in the
+    turn alone. Measured 2026-11-27 (`lanekeep bench case2_sharp_turn --mode paper --seeds 5`):
+    +2.16 cm [+1.21, +3.12] over the episode, ratios 1.12-1.35 by seed. (The paper's MMAE
+    then follows model #1 through the turn; ours does not, for its reference is model #2's
+    own algorithm on the rear camera and shares its bias in the turn: see
+    docs/paper_mode.md.) Before this was a ratio on one seed, relaxed from 1.2 to 1.1."""
+    hough, sliding, turn_hough, turn_sliding = [], [], [], []
+    for seed in CASE2_SEEDS:
+        report, trace = paper_run("case2_sharp_turn", None if seed == 2 else seed)
+        curvature, _, _, errors = trace.arrays()
+        turn = np.abs(curvature) > 0.01  # the 40 m arc and the steep ends of its clothoids
+        in_turn = np.sqrt(np.nanmean(errors[turn] ** 2, axis=0))
+        hough.append(report.sources["hough"].rmse_cm)
+        sliding.append(report.sources["sliding_window"].rmse_cm)
+        turn_hough.append(100.0 * in_turn[HOUGH])
+        turn_sliding.append(100.0 * in_turn[SLIDING])
+    overall = stats.paired(sliding, hough)
+    assert overall.verdict == "worse", (overall, hough, sliding)
+    in_the_turn = stats.paired(turn_sliding, turn_hough)
+    assert in_the_turn.verdict == "worse", (in_the_turn, turn_hough, turn_sliding)
 
 
 @pytest.mark.slow
