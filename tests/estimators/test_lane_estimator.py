@@ -292,4 +292,4 @@ def test_an_estimator_built_on_its_own_runs_the_loop_an_episode_runs():
 
     assert EstimationConfig().estimator_settings() == EstimatorSettings()
     assert estimator_settings(EstimationConfig()) == EstimatorSettings()
-    assert EstimatorSettings().output == "precision"
+    assert EstimatorSettings().output == "select"  # re-decided over seeds: docs/statistics.md
