@@ -75,8 +75,12 @@ class EstimatorSettings:
     # measure (the estimator's running width) has read a wrong line (a passing car's edge) and
     # is taken as missed. On the tuning scenarios the rear pair stays within 16 cm of it except
     # where it follows a passing car's edge (the lead van: 4.8% of steps beyond 30 cm).
-    # None: every reading is compared (the paper's; paper mode sets it).
-    reference_width_tolerance_m: float | None = 0.2
+    # None: every reading is compared (the paper's). Re-decided 2026-11-27 as `output` above
+    # (`--set estimation.reference_width_tolerance_m=10.0`, no check, against 0.2): identical
+    # to the last digit on the five paper cases and on occlusion and highway_multilane (x
+    # seeds 1000-1004: the check never fired), so the paper's choice; 0.2 stays selectable for
+    # traffic that passes close behind the car (tools/tuning's lead van).
+    reference_width_tolerance_m: float | None = None
     # The MMAE's probabilities before the reference has spoken: "uniform" (the paper's) or
     # "precision" (each model's in proportion to its tracker R's inverse offset variance at
     # offset_lookahead_m). Re-decided 2026-11-27 as `output` above (`--set

@@ -267,7 +267,7 @@ def test_the_reference_width_tolerance_is_a_scenario_setting_paper_mode_leaves_o
     from lanekeep.loop.paper_mode import estimator_settings
     from lanekeep.scenario.schema import EstimationConfig, InvalidValue
 
-    assert estimator_settings(EstimationConfig()).reference_width_tolerance_m == 0.2
+    assert estimator_settings(EstimationConfig()).reference_width_tolerance_m is None  # paper's
     chosen = EstimationConfig(reference_width_tolerance_m=0.3)
     assert estimator_settings(chosen).reference_width_tolerance_m == 0.3
     paper = EstimationConfig(mode="paper", reference_width_tolerance_m=0.3)
