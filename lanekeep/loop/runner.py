@@ -58,8 +58,9 @@ def run_episode(scenario_name: str, seed: int | None = None, seconds: float | No
     if front_detectors is not None:
         scenario = dataclasses.replace(scenario, estimation=dataclasses.replace(
             scenario.estimation, front_detectors=tuple(front_detectors)))
-    scenario = dataclasses.replace(scenario, criteria=criteria_mod.with_overrides(
-        scenario.criteria, criteria))  # off_road_distance_m ends the episode itself
+    full_length = seconds is None or seconds >= scenario.duration_s
+    scenario = dataclasses.replace(scenario, criteria=criteria_mod.for_run(
+        scenario.criteria, criteria, full_length))  # off_road_distance_m ends the episode
     check_scenario(scenario, seconds)  # before the recording file is opened
     recorder = None
     if record_path:

@@ -95,6 +95,19 @@ def judge(report: EpisodeReport, config: CriteriaConfig) -> EpisodeReport:
     return dataclasses.replace(report, criteria=evaluate(report, config))
 
 
+def for_run(config: CriteriaConfig, overrides: dict | None, full_length: bool
+            ) -> CriteriaConfig:
+    """The criteria a run is judged by: the file's with the command line's in place, less the
+    file's fused RMSE limit when the run is cut short on purpose (`full_length` False:
+    `--seconds` below the scenario's duration). That limit is calibrated on whole episodes
+    (tools/calibrate_criteria.py), and the first seconds, while the trackers settle, weigh far
+    more in a short run. A limit given on the command line is judged whatever the length."""
+    judged = with_overrides(config, overrides)
+    if not full_length and "max_fused_rmse_m" not in (overrides or {}):
+        judged = dataclasses.replace(judged, max_fused_rmse_m=None)
+    return judged
+
+
 def failure_message(report: EpisodeReport) -> str:
     """One line naming each failed criterion with its value and limit ("" if all passed)."""
     parts = []

@@ -47,8 +47,10 @@ def run_cell(cell_id: str, table: dict, source: str, seconds: float | None) -> C
 
         scenario = with_mode(cell_scenario(table, source), None)
         check_scenario(scenario, seconds)
+        judged_by = criteria.for_run(scenario.criteria, None,
+                                     seconds is None or seconds >= scenario.duration_s)
         with Episode(scenario) as episode:
-            report = criteria.judge(episode.run(seconds), scenario.criteria)
+            report = criteria.judge(episode.run(seconds), judged_by)
         return CellResult(cell_id, report.status, report.to_dict(), "",
                           time.perf_counter() - start)
     except Exception as err:  # noqa: BLE001 - recorded as the cell's failure
