@@ -267,7 +267,7 @@ def test_the_reference_width_tolerance_is_a_scenario_setting_paper_mode_leaves_o
     from lanekeep.loop.paper_mode import estimator_settings
     from lanekeep.scenario.schema import EstimationConfig, InvalidValue
 
-    assert estimator_settings(EstimationConfig()).reference_width_tolerance_m is None  # paper's
+    assert estimator_settings(EstimationConfig()).reference_width_tolerance_m == 0.2
     chosen = EstimationConfig(reference_width_tolerance_m=0.3)
     assert estimator_settings(chosen).reference_width_tolerance_m == 0.3
     paper = EstimationConfig(mode="paper", reference_width_tolerance_m=0.3)
@@ -292,4 +292,4 @@ def test_an_estimator_built_on_its_own_runs_the_loop_an_episode_runs():
 
     assert EstimationConfig().estimator_settings() == EstimatorSettings()
     assert estimator_settings(EstimationConfig()) == EstimatorSettings()
-    assert EstimatorSettings().output == "select"  # re-decided over seeds: docs/statistics.md
+    assert EstimatorSettings().output == "precision"  # re-decided over seeds: docs/statistics.md
