@@ -145,7 +145,10 @@ def interval_table(docs: list[dict]) -> str:
     output's paired verdicts against the model tracks, departures as a rate with its exact
     interval, and how many episodes met the criteria."""
     scen_w = max([28, *(len(d["label"]) + 2 for d in docs)])
-    header = (f"{'scenario':<{scen_w}}{'n':>3}  {'fused RMSE [95% CI]':<22}{'best track':<22}"
+    model_w = max([8, *(len(k) - len(":track") for d in docs for k in d["sources"]
+                        if k.endswith(":track"))])
+    best_w = model_w + 10  # "0.48 (lanenet)"
+    header = (f"{'scenario':<{scen_w}}{'n':>3}  {'fused RMSE [95% CI]':<22}{'best track':<{best_w}}"
               f"{'fused vs tracks':<17}{'car RMS [95% CI]':<22}{'departed':<18}passed")
     lines = [header, "-" * len(header)]
     for d in docs:
@@ -154,14 +157,14 @@ def interval_table(docs: list[dict]) -> str:
                    else tracks[k]["rmse_cm"]) if tracks else None
         counts = stats.count_verdicts([p["verdict"] for p in d["paired"]["fused_vs"].values()])
         fused = d["sources"]["fused"]
-        best_text = (f"{tracks[best]['rmse_cm']:.2f} ({best.split(':')[0]})"
+        best_text = (f"{tracks[best]['rmse_cm']:.2f} ({best[: -len(':track')]})"
                      if best and tracks[best]["rmse_cm"] is not None else "-")
         lo, hi = d["departure_rate_ci95"]
         rate = (f"{d['departed_episodes']}/{d['n']} [{lo:.2f}, {hi:.2f}]" if hi is not None
                 else f"{d['departed_episodes']}/{d['n']}")
         lines.append(
             f"{d['label']:<{scen_w}}{d['n']:>3}  "
-            f"{interval_text(fused['rmse_cm'], fused['rmse_cm_ci95']):<22}{best_text:<22}"
+            f"{interval_text(fused['rmse_cm'], fused['rmse_cm_ci95']):<22}{best_text:<{best_w}}"
             f"{counts['better']}b {counts['worse']}w {counts['indistinguishable']}i"
             f"{'':<7}{interval_text(d['car_rms_cm'], d['car_rms_cm_ci95'], 1):<22}"
             f"{rate:<18}{d['passed_episodes']}/{d['n']}")
