@@ -210,20 +210,21 @@ def bench_documents(args: argparse.Namespace, jobs: list[BenchJob], reports: lis
     the scenarios first, then their model-only loops."""
     from lanekeep.report.seed_summary import summarise
 
+    first_job: dict[str, BenchJob] = {}
     by_label: dict[str, list] = {}
     for job, report in zip(jobs, reports, strict=True):
-        by_label.setdefault(job.label, []).append((job, report))
+        first_job.setdefault(job.label, job)
+        by_label.setdefault(job.label, []).append(report)
     overrides = {**dataclasses.asdict(plugins), "weights": args.weights}
     documents = {}
     for label, runs in by_label.items():
-        job = runs[0][0]
+        job = first_job[label]
         single = None
         if job.front_detectors is None and args.single_model:
-            single = {"+".join(j.front_detectors): [r for j, r in other]
-                      for other_label, other in by_label.items()
-                      for j in [other[0][0]]
-                      if j.front_detectors is not None and j.scenario == job.scenario}
-        documents[label] = summarise(label, [r for _, r in runs], scenarios[job.scenario],
+            single = {"+".join(other.front_detectors): by_label[other_label]
+                      for other_label, other in first_job.items()
+                      if other.front_detectors is not None and other.scenario == job.scenario}
+        documents[label] = summarise(label, runs, scenarios[job.scenario],
                                      overrides=overrides, mode=args.mode,
                                      single_model=single)
     return documents
