@@ -32,6 +32,14 @@ class StageClock:
         self.totals_s[stage] = self.totals_s.get(stage, 0.0) + (now - self._last)
         self._last = now
 
+    def add(self, stage: str, seconds: float) -> None:
+        """Time measured elsewhere (a stage that ran on another thread) goes to `stage`."""
+        self.totals_s[stage] = self.totals_s.get(stage, 0.0) + seconds
+
+    def skip(self) -> None:
+        """The time since the previous lap is nobody's (it was `add`ed stage by stage)."""
+        self._last = time.perf_counter()
+
     def reset(self) -> None:
         """Forget everything measured so far (e.g. after warm-up steps)."""
         self.totals_s.clear()

@@ -23,9 +23,24 @@ def worker_threads(workers: int) -> int:
     return max(1, (os.cpu_count() or 1) // max(workers, 1))
 
 
+# This process's share of the cores, for lanekeep's own threads (an episode runs its detectors
+# on two threads when it may use two cores: lanekeep/loop/detection.py). Unset: every core.
+THREADS_ENV = "LANEKEEP_THREADS"
+
+
+def process_threads() -> int:
+    """How many threads this process may keep busy: LANEKEEP_THREADS (set for each worker by
+    `set_thread_counts`, or by a user) or else the machine's cores."""
+    value = os.environ.get(THREADS_ENV, "").strip()
+    if value.isdigit() and int(value) > 0:
+        return int(value)
+    return os.cpu_count() or 1
+
+
 def set_thread_counts(threads: int) -> None:
-    """Thread counts of the renderer, torch and OpenCV; before EGL starts or torch is imported
-    (both read the environment once)."""
+    """Thread counts of the renderer, torch, OpenCV and lanekeep's own; before EGL starts or
+    torch is imported (both read the environment once)."""
+    os.environ[THREADS_ENV] = str(threads)
     os.environ["LP_NUM_THREADS"] = str(threads)  # Mesa llvmpipe, read when EGL starts
     os.environ["OMP_NUM_THREADS"] = str(threads)  # torch (LaneNet), read at its import
     os.environ.setdefault("MUJOCO_GL", "egl")

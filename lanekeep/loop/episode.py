@@ -27,11 +27,13 @@ from lanekeep.control.registry import ControlContext, Controller, make_controlle
 from lanekeep.core.interrupts import stop_point, stop_requested
 from lanekeep.core.signals import VehicleSignals
 from lanekeep.core.timing import StageClock
+from lanekeep.core.workers import process_threads
 from lanekeep.detectors.base import Detector, LaneEstimate
 from lanekeep.detectors.registry import make_detector
 from lanekeep.estimators.lane_estimator import EstimatorOutput, LaneEstimator
 from lanekeep.estimators.odometry import DeadReckoning
 from lanekeep.estimators.roll import RollFilter, corrected
+from lanekeep.loop.detection import DetectionRunner, group_jobs
 from lanekeep.loop.paper_mode import estimator_settings, front_detector_config, roll_compensation
 from lanekeep.report.record import EpisodeInfo, NullRecorder, Recorder
 from lanekeep.scenario.nuisance import with_nuisance
@@ -173,6 +175,7 @@ class Episode:
         self._percept: Percept | None = None  # sensed, not yet acted on
         self.detector_errors = 0
         self.clock = StageClock()  # wall time per stage (`lanekeep perf`)
+        self.detection = DetectionRunner(process_threads())
         self._tyre_geoms = [self.world.model.geom(n).id for n in TYRES]
         self._wall_start = time.perf_counter()
 
@@ -239,30 +242,28 @@ class Episode:
             self.clock.lap(f"effects_{name}")
         return frames
 
-    def _safe_detect(self, name: str, detector: Detector, frame: np.ndarray,
-                     events: list[str]) -> LaneEstimate:
-        """A detector that raises or returns garbage counts as a miss, with an event."""
-        try:
-            estimate = detector.detect(frame)
-        except Exception as err:  # noqa: BLE001 - any detector fault is a miss, not a crash
-            self.detector_errors += 1
-            events.append(f"detector {name} failed: {err}")
-            return LaneEstimate.invalid(f"error: {err}")
-        if not isinstance(estimate, LaneEstimate):
-            self.detector_errors += 1
-            events.append(f"detector {name} returned {type(estimate).__name__}")
-            return LaneEstimate.invalid("not a LaneEstimate")
-        return estimate
-
     def _detect(self, frames, events) -> dict[str, LaneEstimate]:
+        """Every detector's estimate of this step's frames (lanekeep/loop/detection.py: on two
+        threads when this process may use two cores); a detector that fails counts as a miss,
+        with an event, in the detectors' order whatever thread ran it."""
         est = self.scenario.estimation
+        named = [(name, detector, frames["front"]) for name, detector in self.front.items()]
+        named.append((REFERENCE, self.reference, frames[est.reference_camera]))
+        jobs = group_jobs(named)
+        results = self.detection.run(jobs)
+        by_name = {name: detected for job, job_results in zip(jobs, results, strict=True)
+                   for name, detected in zip(job.names, job_results, strict=True)}
         out = {}
-        for name, detector in self.front.items():
-            out[name] = self._safe_detect(name, detector, frames["front"], events)
-            self.clock.lap(f"detect_{name}")
-        out[REFERENCE] = self._safe_detect(REFERENCE, self.reference,
-                                           frames[est.reference_camera], events)
-        self.clock.lap("detect_reference")
+        for name, _, _ in named:
+            detected = by_name[name]
+            if detected.event:
+                self.detector_errors += 1
+                events.append(f"detector {name} {detected.event}")
+            out[name] = detected.estimate
+            # each detector's own time; on two threads these overlap (their sum exceeds the wall)
+            self.clock.add("detect_reference" if name == REFERENCE else f"detect_{name}",
+                           detected.seconds)
+        self.clock.skip()
         return out
 
     def _roll_corrected(self, estimates: dict[str, LaneEstimate], signals: VehicleSignals
@@ -391,6 +392,7 @@ class Episode:
                                    stop_reason=stop_reason, status=status)
 
     def close(self) -> None:
+        self.detection.close()
         self.rig.close()
         self.recorder.close()
 

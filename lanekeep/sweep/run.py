@@ -15,7 +15,7 @@ from collections.abc import Callable
 from concurrent.futures import FIRST_COMPLETED, wait
 from dataclasses import dataclass
 
-from lanekeep.core.workers import worker_pool
+from lanekeep.core.workers import THREADS_ENV, worker_pool
 from lanekeep.sweep.spec import Cell
 
 OnResult = Callable[["CellResult"], None]
@@ -103,7 +103,8 @@ def run_ray(cells: list[Cell], source: str, seconds: float | None, on_result: On
     with `num_cpus` CPUs (None: all). Every node needs lanekeep installed."""
     import ray
 
-    env = {"env_vars": {"LP_NUM_THREADS": "1", "MUJOCO_GL": os.environ.get("MUJOCO_GL", "egl")}}
+    env = {"env_vars": {"LP_NUM_THREADS": "1", THREADS_ENV: "1",
+                        "MUJOCO_GL": os.environ.get("MUJOCO_GL", "egl")}}
     started = not ray.is_initialized()
     if started:
         kwargs = {"address": address} if address else {"num_cpus": num_cpus}

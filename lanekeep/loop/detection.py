@@ -1,0 +1,149 @@
+"""One control step's detections, on two threads when the process may use two cores.
+
+Why: the detectors of a step are independent (each reads one frame and keeps its own state),
+and OpenCV and torch release the GIL, so on a 2-core machine the classical front detectors run
+beside the learned ones: the step waits for the longer half instead of the sum. Both threads
+take jobs from one list (longest first), so the split balances itself; every result goes back
+to its job's place, so the estimates, events and error counts come out in the same order and
+with the same values on one thread or two (tests/loop/test_parallel_detection.py).
+
+Learned detectors of one class and weights (front LaneNet and the LaneNet reference) run as
+one job: torch is never called from two threads at once, and the job may run them as one
+batch (`LaneNetDetector.detect_many`). A bench worker has one core (lanekeep/core/workers.py) and
+runs every job on its own thread, as before.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from collections.abc import Sequence
+from concurrent.futures import Future, ThreadPoolExecutor
+from dataclasses import dataclass
+
+import numpy as np
+
+from lanekeep.detectors.base import Detector, LaneEstimate
+
+
+@dataclass(frozen=True)
+class DetectJob:
+    """Detectors that run together: `names[i]` reads `frames[i]` with `detectors[i]`."""
+
+    names: tuple[str, ...]
+    detectors: tuple[Detector, ...]
+    frames: tuple[np.ndarray, ...]
+
+
+@dataclass(frozen=True)
+class Detected:
+    """What one detector gave: its estimate (invalid after a fault), the event that says why
+    it failed ("" when it did not), and the wall time of its job."""
+
+    estimate: LaneEstimate
+    event: str
+    seconds: float
+
+
+def safe_detect(detector: Detector, frame: np.ndarray) -> tuple[LaneEstimate, str]:
+    """A detector that raises or returns garbage counts as a miss, with an event."""
+    try:
+        estimate = detector.detect(frame)
+    except Exception as err:  # noqa: BLE001 - any detector fault is a miss, not a crash
+        return LaneEstimate.invalid(f"error: {err}"), f"failed: {err}"
+    if not isinstance(estimate, LaneEstimate):
+        return LaneEstimate.invalid("not a LaneEstimate"), f"returned {type(estimate).__name__}"
+    return estimate, ""
+
+
+def _is_learned(detector: Detector) -> bool:
+    model = getattr(detector, "model", None)
+    return model is not None and hasattr(model, "parameters")  # a torch module
+
+
+def _batch_key(detector: Detector) -> tuple:
+    return type(detector), getattr(detector, "weights_path", None)
+
+
+def _run_batch(detectors: list[Detector], frames: list[np.ndarray]
+               ) -> list[tuple[LaneEstimate, str]]:
+    """Detectors of one class and weights: one `detect_many` call where the class has one
+    (LaneNet), else one at a time; a batch that fails is run one at a time to find whose
+    fault it was."""
+    many = getattr(type(detectors[0]), "detect_many", None)
+    if many is not None and len(detectors) > 1:
+        try:
+            estimates = many(detectors, frames)
+            if all(isinstance(e, LaneEstimate) for e in estimates):
+                return [(e, "") for e in estimates]
+        except Exception:  # noqa: BLE001 - retried one at a time below
+            pass
+    return [safe_detect(d, f) for d, f in zip(detectors, frames, strict=True)]
+
+
+def run_job(job: DetectJob) -> list[Detected]:
+    """A job's detections, batched where its detectors can be, in the job's order."""
+    start = time.perf_counter()
+    batches: dict[tuple, list[int]] = {}
+    for i, detector in enumerate(job.detectors):
+        batches.setdefault(_batch_key(detector), []).append(i)
+    results: list[tuple[LaneEstimate, str]] = [None] * len(job.names)  # type: ignore[list-item]
+    for indices in batches.values():
+        done = _run_batch([job.detectors[i] for i in indices], [job.frames[i] for i in indices])
+        for i, result in zip(indices, done, strict=True):
+            results[i] = result
+    seconds = (time.perf_counter() - start) / len(job.names)
+    return [Detected(estimate, event, seconds) for estimate, event in results]
+
+
+def group_jobs(named: Sequence[tuple[str, Detector, np.ndarray]]) -> list[DetectJob]:
+    """One job per detector, except the learned ones (a torch module as `model`): one job for
+    them all, first (it is the longest). torch's thread count is one setting per process, so
+    no two learned detectors may run at once; in one job, those of one class and weights run
+    as one batch (`run_job`)."""
+    learned = [(n, d, f) for n, d, f in named if _is_learned(d)]
+    jobs = [DetectJob((name,), (detector,), (frame,))
+            for name, detector, frame in named if not _is_learned(detector)]
+    if learned:
+        jobs.insert(0, DetectJob(tuple(n for n, _, _ in learned),
+                                 tuple(d for _, d, _ in learned),
+                                 tuple(f for _, _, f in learned)))
+    return jobs
+
+
+class DetectionRunner:
+    """Runs a step's jobs on this thread and, with `threads` >= 2, one helper thread."""
+
+    def __init__(self, threads: int) -> None:
+        self._pool = (ThreadPoolExecutor(1, thread_name_prefix="lanekeep-detect")
+                      if threads >= 2 else None)
+
+    @property
+    def parallel(self) -> bool:
+        return self._pool is not None
+
+    def run(self, jobs: Sequence[DetectJob]) -> list[list[Detected]]:
+        """Each job's results, in the jobs' order."""
+        results: list[list[Detected] | None] = [None] * len(jobs)
+        if self._pool is None or len(jobs) < 2:
+            return [run_job(job) for job in jobs]
+        lock = threading.Lock()
+        queue = list(range(len(jobs)))
+
+        def drain() -> None:
+            while True:
+                with lock:
+                    if not queue:
+                        return
+                    index = queue.pop(0)
+                results[index] = run_job(jobs[index])
+
+        helper: Future = self._pool.submit(drain)
+        drain()
+        helper.result()
+        return [r for r in results if r is not None]
+
+    def close(self) -> None:
+        if self._pool is not None:
+            self._pool.shutdown(wait=True)
+            self._pool = None

@@ -1,0 +1,121 @@
+"""Detections on two threads give what one thread gives: the same estimates, events, error
+counts and report, in the same order (lanekeep/loop/detection.py)."""
+
+from __future__ import annotations
+
+import threading
+import time
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from lanekeep.core.workers import THREADS_ENV
+from lanekeep.detectors.base import LaneEstimate
+from lanekeep.loop.detection import DetectionRunner, DetectJob, group_jobs, run_job
+from lanekeep.loop.episode import Episode
+from lanekeep.scenario.schema import load_scenario
+
+
+class _Fake:
+    """A detector that sleeps (releasing the GIL, as OpenCV and torch do) and reports which
+    thread ran it; `fail` makes it raise."""
+
+    def __init__(self, offset: float, sleep_s: float = 0.0, fail: bool = False) -> None:
+        self.offset, self.sleep_s, self.fail = offset, sleep_s, fail
+        self.threads: list[str] = []
+
+    def reset(self) -> None:
+        pass
+
+    def detect(self, frame: np.ndarray) -> LaneEstimate:
+        self.threads.append(threading.current_thread().name)
+        time.sleep(self.sleep_s)
+        if self.fail:
+            raise RuntimeError("boom")
+        return LaneEstimate(valid=True, offset_m=self.offset, x_m=4.0)
+
+
+def _jobs(detectors) -> list[DetectJob]:
+    frame = np.zeros((4, 4, 3), np.uint8)
+    return group_jobs([(f"d{i}", d, frame) for i, d in enumerate(detectors)])
+
+
+def test_two_threads_share_the_jobs_and_keep_their_order():
+    detectors = [_Fake(0.1 * i, sleep_s=0.05, fail=(i == 2)) for i in range(4)]
+    runner = DetectionRunner(threads=2)
+    try:
+        start = time.perf_counter()
+        results = runner.run(_jobs(detectors))
+        wall = time.perf_counter() - start
+    finally:
+        runner.close()
+    assert [r[0].estimate.offset_m for r in results if r[0].estimate.valid] == \
+        pytest.approx([0.0, 0.1, 0.3])
+    assert [bool(r[0].event) for r in results] == [False, False, True, False]
+    assert results[2][0].event == "failed: boom" and not results[2][0].estimate.valid
+    ran_on = {t for d in detectors for t in d.threads}
+    assert len(ran_on) == 2, ran_on  # both threads took jobs
+    assert wall < 0.19, wall  # four 50 ms jobs in about two rounds, not four
+
+
+def test_one_thread_runs_every_job_itself():
+    detectors = [_Fake(0.1 * i) for i in range(3)]
+    runner = DetectionRunner(threads=1)
+    results = runner.run(_jobs(detectors))
+    runner.close()
+    assert not runner.parallel
+    assert [r[0].estimate.offset_m for r in results] == pytest.approx([0.0, 0.1, 0.2])
+    assert {t for d in detectors for t in d.threads} == {threading.current_thread().name}
+
+
+class _Model:
+    def parameters(self):  # what marks a torch module for `group_jobs`
+        return iter(())
+
+
+class _Learned(_Fake):
+    """Two of these share one model: they must run as one job, never on two threads."""
+
+    def __init__(self, offset: float, model: _Model) -> None:
+        super().__init__(offset)
+        self.model = model
+
+    @staticmethod
+    def detect_many(detectors, frames):
+        return [LaneEstimate(valid=True, offset_m=d.offset + 1.0, x_m=4.0) for d in detectors]
+
+
+def test_detectors_sharing_a_model_are_one_batched_job():
+    model = _Model()
+    frame = np.zeros((4, 4, 3), np.uint8)
+    named = [("a", _Fake(0.0), frame), ("b", _Learned(0.1, model), frame),
+             ("c", _Learned(0.2, model), frame)]
+    jobs = group_jobs(named)
+    assert [job.names for job in jobs] == [("b", "c"), ("a",)]
+    results = run_job(jobs[0])
+    assert [r.estimate.offset_m for r in results] == pytest.approx([1.1, 1.2])
+
+
+def _run(threads: int, monkeypatch) -> tuple[dict, list]:
+    monkeypatch.setenv(THREADS_ENV, str(threads))
+    scenario = replace(load_scenario("case3_mild_turn_shade_bumps"), duration_s=1.5)
+    with Episode(scenario, render_size=(640, 360)) as episode:
+        assert episode.detection.parallel == (threads >= 2)
+        steps = [episode.step() for _ in range(episode.total_steps)]
+        report = episode.report().to_dict()
+    estimates = [{name: (e.valid, e.offset_m, e.x_m, e.confidence, e.reason,
+                         None if e.left is None else tuple(e.left),
+                         None if e.right is None else tuple(e.right))
+                  for name, e in step.estimates.items()} for step in steps]
+    return report, [(estimates[k], steps[k].events, steps[k].steer) for k in range(len(steps))]
+
+
+def test_an_episode_on_two_threads_equals_one_on_one(monkeypatch):
+    report_1, steps_1 = _run(1, monkeypatch)
+    report_2, steps_2 = _run(2, monkeypatch)
+    for key in ("wall_s",):  # the only figure that may differ
+        report_1.pop(key, None)
+        report_2.pop(key, None)
+    assert steps_1 == steps_2
+    assert report_1 == report_2
