@@ -58,13 +58,19 @@ class HoughDetector(ClassicalDetector):
         return seg[keep]
 
     def _samples(self, seg: np.ndarray) -> np.ndarray:
+        """Points about every `sample_m` along each segment, both ends included, in order."""
         step = self.config.hough.sample_m
-        out = []
-        for x1, y1, x2, y2 in seg:
-            n = max(2, int(math.hypot(x2 - x1, y2 - y1) / step) + 1)
-            t = np.linspace(0.0, 1.0, n)
-            out.append(np.stack([x1 + t * (x2 - x1), y1 + t * (y2 - y1)], axis=1))
-        return np.concatenate(out) if out else np.zeros((0, 2))
+        if len(seg) == 0:
+            return np.zeros((0, 2))
+        counts = np.array([max(2, int(math.hypot(x2 - x1, y2 - y1) / step) + 1)
+                           for x1, y1, x2, y2 in seg])
+        # np.linspace(0, 1, n) of every segment in one pass: j * (1 / (n - 1)), the last 1.
+        ends = np.cumsum(counts)
+        j = np.arange(ends[-1], dtype=float) - np.repeat(ends - counts, counts)
+        t = j * np.repeat(1.0 / (counts - 1), counts)
+        t[ends - 1] = 1.0
+        x1, y1, x2, y2 = np.repeat(seg, counts, axis=0).T
+        return np.stack([x1 + t * (x2 - x1), y1 + t * (y2 - y1)], axis=1)
 
     def boundaries(self, seg: np.ndarray) -> tuple[Boundary | None, Boundary | None]:
         """Seed a boundary per side near the car, grow both with continuing segments, fit them."""
@@ -109,33 +115,40 @@ class HoughDetector(ClassicalDetector):
                 continue
             used[members] = True
             points.append(self._samples(seg[members]))
-        # Grow outwards: a segment joins the side whose current fit it continues best.
+        # Grow outwards: a segment joins the side whose current fit it continues best. A
+        # side's fit and reach change only when a segment joins it, so they are kept until
+        # then (the fit is the grow loop's cost: one per side per segment otherwise).
+        x_cam = float(self.camera.position_m[0])
+        fits = [None if p is None else fit_boundary(p, rules, x_cam) for p in points]
+        current = [None if p is None else self._provisional(f, p, heading)
+                   for f, p in zip(fits, points, strict=True)]
+        reached = [None if p is None else float((d * p[:, 0]).max()) for p in points]
         for j in np.argsort(dist):
             if used[j]:
                 continue
             best, best_side = np.inf, -1
-            for k, pts in enumerate(points):
-                if pts is None:
+            x1, y1, x2, y2 = seg[j]
+            far = max(d * x1, d * x2)
+            for k, coeffs in enumerate(current):
+                if coeffs is None:
                     continue
-                coeffs = self._provisional(pts, heading)
-                far = max(d * seg[j, 0], d * seg[j, 2])
-                reach = max(0.0, far - float((d * pts[:, 0]).max()))
+                reach = max(0.0, far - reached[k])
                 tol = cfg.grow_tolerance_m + 0.03 * reach
-                res = max(abs(seg[j, 1] - poly_eval(coeffs, seg[j, 0])),
-                          abs(seg[j, 3] - poly_eval(coeffs, seg[j, 2])))
+                res = max(abs(y1 - poly_eval(coeffs, x1)), abs(y2 - poly_eval(coeffs, x2)))
                 if res < tol and res < best:
                     best, best_side = res, k
             if best_side >= 0:
                 used[j] = True
-                points[best_side] = np.concatenate([points[best_side],
-                                                    self._samples(seg[j : j + 1])])
-        x_cam = float(self.camera.position_m[0])
-        fits = [None if p is None else fit_boundary(p, rules, x_cam) for p in points]
+                pts = np.concatenate([points[best_side], self._samples(seg[j : j + 1])])
+                points[best_side] = pts
+                fits[best_side] = fit_boundary(pts, rules, x_cam)
+                current[best_side] = self._provisional(fits[best_side], pts, heading)
+                reached[best_side] = float((d * pts[:, 0]).max())
         return parallel(fits[0], fits[1], rules, x_cam)
 
-    def _provisional(self, pts: np.ndarray, heading: float) -> np.ndarray:
+    @staticmethod
+    def _provisional(fit: Boundary | None, pts: np.ndarray, heading: float) -> np.ndarray:
         """The current guess of a growing boundary: its fit, or the lane direction through it."""
-        fit = fit_boundary(pts, self.config.lane, float(self.camera.position_m[0]))
         if fit is not None:
             return fit.coeffs
         x0, y0 = pts.mean(axis=0)

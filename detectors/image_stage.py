@@ -122,9 +122,8 @@ def reject_noise(mask: np.ndarray, max_fill: float, min_coherence: float) -> str
     fill = filled / mask.size
     if fill > max_fill:
         return f"binary image too full ({fill:.0%}): noise"
-    if filled:
-        opened = cv2.morphologyEx(mask, cv2.MORPH_OPEN, np.ones((2, 2), np.uint8))
-        coherence = cv2.countNonZero(opened) / filled
+    if filled and min_coherence > 0.0:  # a share is never below 0: no opening to test
+        coherence = cv2.countNonZero(_open_2x2(mask)) / filled
         if coherence < min_coherence:
             return f"binary image is speckle ({coherence:.0%} survives an opening): noise"
     return ""
@@ -138,12 +137,24 @@ def drop_speckle(mask: np.ndarray, min_coherence: float) -> tuple[np.ndarray, st
     opened mask (the coherent strokes: paint, edges) goes on instead of the whole frame being
     rejected, as a shaded road with clear paint was; a frame with nothing coherent is noise.
     """
-    if reject_noise(mask, 1.0, min_coherence) == "":
+    filled = cv2.countNonZero(mask)
+    if filled == 0 or min_coherence <= 0.0:
         return mask, ""
-    opened = cv2.morphologyEx(mask, cv2.MORPH_OPEN, np.ones((2, 2), np.uint8))
-    if cv2.countNonZero(opened) == 0:
+    opened = _open_2x2(mask)  # one opening for the test and the result
+    kept = cv2.countNonZero(opened)
+    if kept / filled >= min_coherence:
+        return mask, ""
+    if kept == 0:
         return mask, "binary image is all speckle: noise"
     return opened, ""
+
+
+def _open_2x2(mask: np.ndarray) -> np.ndarray:
+    """The mask's 2x2 opening: what survives of it is coherent strokes, not speckle."""
+    return cv2.morphologyEx(mask, cv2.MORPH_OPEN, _KERNEL_2X2)
+
+
+_KERNEL_2X2 = np.ones((2, 2), np.uint8)
 
 
 def binary_bird_eye(frame: np.ndarray, camera: CameraModel, view: BirdsEye, preprocess,
@@ -171,5 +182,5 @@ def binary_bird_eye(frame: np.ndarray, camera: CameraModel, view: BirdsEye, prep
     mask, noise = drop_speckle(mask, preprocess.min_coherence)
     if noise:
         return None, noise
-    bev = np.where(view.warp(mask) >= 128, 255, 0).astype(np.uint8)
+    _, bev = cv2.threshold(view.warp(mask), 127, 255, cv2.THRESH_BINARY)  # 0/255: >= 128
     return (bev if vehicles is None else vehicles.narrow(bev)), ""

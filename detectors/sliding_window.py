@@ -21,6 +21,8 @@ from lanekeep.detectors.base import LaneEstimate, poly_eval
 from lanekeep.detectors.boundaries import Boundary, fit_boundary, parallel
 from lanekeep.detectors.classical import ClassicalDetector
 
+_KERNEL_3X3 = np.ones((3, 3), np.uint8)  # the ridge's dilation
+
 
 class SlidingWindowDetector(ClassicalDetector):
     """Model #2 on one camera; remembers the last good fit to search around it."""
@@ -30,6 +32,10 @@ class SlidingWindowDetector(ClassicalDetector):
     def __init__(self, *args, **kwargs) -> None:
         super().__init__(*args, **kwargs)
         self._previous: list[np.ndarray | None] = [None, None]
+        # Lateral position (m) at the near edge of each bird's-eye column (the camera's left
+        # is +): fixed by the view, read by every histogram search.
+        cols = np.arange(self.view.cols)
+        _, self._near_y = self.view.to_ground(cols, np.full(len(cols), self.view.rows - 1))
 
     def reset(self) -> None:
         """Forget the previous frame's fit."""
@@ -39,8 +45,8 @@ class SlidingWindowDetector(ClassicalDetector):
     def binarise(self, roi: np.ndarray) -> np.ndarray:
         """Sobel-x on lightness | white lightness (both on a bright ridge) | yellow hue+sat."""
         cfg = self.config.sliding_window
-        hls = cv2.cvtColor(roi, cv2.COLOR_RGB2HLS)
-        hue, raw, sat = hls[..., 0], hls[..., 1], hls[..., 2]
+        # Contiguous planes: every test below reads them, and a strided view costs each one.
+        hue, raw, sat = cv2.split(cv2.cvtColor(roi, cv2.COLOR_RGB2HLS))
         row = np.ones((1, cfg.local_block_px), np.uint8)
         # A ridge is brighter than the darker of its row neighbours a block away (white
         # top-hat along the row): paint narrower than the block is, the lit edge of anything
@@ -57,26 +63,32 @@ class SlidingWindowDetector(ClassicalDetector):
             ridge = tophat >= cfg.min_lightness_gain
         grad = np.abs(cv2.Sobel(light, cv2.CV_16S, 1, 0, ksize=cfg.sobel_kernel))
         norm = {1: 1.0, 3: 4.0, 5: 48.0 / 4.0, 7: 640.0 / 10.0}[cfg.sobel_kernel]
-        ridge = cv2.dilate(ridge.astype(np.uint8), np.ones((3, 3), np.uint8)) > 0
-        edges = (grad >= cfg.sobel_min * norm) & ridge
+        ridge = cv2.dilate(ridge.view(np.uint8), _KERNEL_3X3).view(bool)
+        # Each cue must sit on the ridge: one test of the ridge for all three.
+        paint = grad >= cfg.sobel_min * norm
         # White paint is a bright ridge too: a snowy verge or a sunlit kerb is as light as
         # paint but as wide as the local block, so it reads as the background, not a stripe.
-        white = (light >= cfg.white_lightness) & (sat <= cfg.white_saturation_max) & ridge
+        paint |= (light >= cfg.white_lightness) & (sat <= cfg.white_saturation_max)
         lo, hi = cfg.yellow_hue
         # Yellow paint is a ridge as well: a yellow car's body is as yellow but wider.
-        yellow = ((hue >= lo) & (hue <= hi) & (sat >= cfg.yellow_saturation)
-                  & (light >= cfg.yellow_lightness) & ridge)
-        return ((edges | white | yellow) * 255).astype(np.uint8)
+        paint |= ((hue >= lo) & (hue <= hi) & (sat >= cfg.yellow_saturation)
+                  & (light >= cfg.yellow_lightness))
+        paint &= ridge
+        return paint.view(np.uint8) * np.uint8(255)
 
     def _compensate_shade(self, light: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Lightness scaled so the local background reads the configured target level, and
         the gain per pixel."""
         cfg = self.config.sliding_window
         block = (cfg.illumination_block_px, cfg.illumination_block_px)
-        background = cv2.blur(light, block).astype(np.float32)
-        gain = np.clip(cfg.illumination_target / np.maximum(background, 1.0), 1.0,
-                       cfg.illumination_max_gain)
-        return np.clip(light.astype(np.float32) * gain, 0, 255).astype(np.uint8), gain
+        gain = cv2.blur(light, block).astype(np.float32)  # the background, then its gain
+        np.maximum(gain, 1.0, out=gain)
+        np.divide(cfg.illumination_target, gain, out=gain)
+        np.clip(gain, 1.0, cfg.illumination_max_gain, out=gain)
+        scaled = light.astype(np.float32)
+        scaled *= gain
+        np.clip(scaled, 0, 255, out=scaled)
+        return scaled.astype(np.uint8), gain
 
     def _starts(self, bev: np.ndarray) -> list[float | None]:
         """Histogram peak column per side (left, right) nearest the car, or None.
@@ -97,12 +109,13 @@ class SlidingWindowDetector(ClassicalDetector):
         hist = (part > 0).sum(axis=0).astype(float)
         k = max(1, int(round(0.3 / w.m_per_col)))
         hist = np.convolve(hist, np.ones(k), mode="same")
-        cols = np.arange(self.view.cols)
-        # Lateral position at the near edge of each column (the camera's left is +1).
-        _, y = self.view.to_ground(cols, np.full(len(cols), self.view.rows - 1))
+        # The largest count within k columns either side of each column (the view's edges
+        # cut the reach short): a column at least that high is a local maximum.
+        padded = np.pad(hist, k, constant_values=-np.inf)
+        local_max = np.lib.stride_tricks.sliding_window_view(padded, 2 * k + 1).max(axis=1)
         out: list[float | None] = []
         for side in (1.0, -1.0):
-            lateral = side * y
+            lateral = side * self._near_y
             ok = ((lateral >= rules.min_half_width * rules.lane_width_m)
                   & (lateral <= rules.max_half_width * rules.lane_width_m)
                   & (hist >= cfg.min_peak_pixels))
@@ -111,24 +124,27 @@ class SlidingWindowDetector(ClassicalDetector):
                 out.append(None)
                 continue
             # Local maxima among the allowed columns; take the nearest to the car.
-            peaks = [i for i in idx if hist[i] >= hist[max(i - k, 0) : i + k + 1].max()]
-            if not peaks:
-                peaks = [int(idx[np.argmax(hist[idx])])]
-            out.append(float(min(peaks, key=lambda i: lateral[i])))
+            peaks = idx[hist[idx] >= local_max[idx]]
+            if len(peaks) == 0:
+                peaks = idx[[np.argmax(hist[idx])]]
+            out.append(float(peaks[np.argmin(lateral[peaks])]))
         return out
 
     def _slide(self, start_col: float, ys: np.ndarray, xs: np.ndarray) -> np.ndarray:
-        """Indices of the bird's-eye pixels (ys rows, xs cols) the sliding windows collect."""
+        """Indices of the bird's-eye pixels (ys rows, xs cols) the sliding windows collect.
+
+        `ys` ascend (np.nonzero's row-major order), so a window's rows are one slice of them.
+        """
         cfg, w = self.config.sliding_window, self.view.window
         margin = cfg.margin_m / w.m_per_col
         height = self.view.rows / cfg.n_windows
+        bottoms = self.view.rows - np.arange(cfg.n_windows) * height
+        firsts = np.searchsorted(ys, bottoms - height)  # each window's first pixel (row >= top)
+        ends = np.searchsorted(ys, bottoms)  # and the first past it (row >= bottom)
         centre, step = start_col, 0.0
         taken = []
-        for i in range(cfg.n_windows):
-            bottom = self.view.rows - i * height
-            top = bottom - height
-            inside = np.flatnonzero((ys >= top) & (ys < bottom)
-                                    & (np.abs(xs - centre) <= margin))
+        for first, end in zip(firsts, ends, strict=True):
+            inside = first + np.flatnonzero(np.abs(xs[first:end] - centre) <= margin)
             taken.append(inside)
             if len(inside) >= cfg.min_pixels:
                 new = float(xs[inside].mean())

@@ -47,13 +47,16 @@ def roi_px_per_m(view: BirdsEye, roi_rows: int) -> np.ndarray:
 
 
 def _runs(mask: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(row, first col, end col exclusive) of every run of True along the rows."""
-    padded = np.zeros((mask.shape[0], mask.shape[1] + 2), np.int8)
+    """(row, first col, end col exclusive) of every run of True along the rows.
+
+    One pass finds every change along the padded rows; in row-major order they alternate
+    start, end (each row opens and closes on padding), so no second search for the ends."""
+    h, w = mask.shape
+    padded = np.zeros((h, w + 2), bool)
     padded[:, 1:-1] = mask
-    diff = np.diff(padded, axis=1)
-    rows, starts = np.nonzero(diff == 1)
-    _, ends = np.nonzero(diff == -1)
-    return rows, starts, ends
+    changes = np.flatnonzero(padded[:, 1:] != padded[:, :-1])
+    rows, cols = np.divmod(changes, w + 1)
+    return rows[0::2], cols[0::2], cols[1::2]
 
 
 def vehicle_dark(grey: np.ndarray, dark_ratio: float) -> np.ndarray:

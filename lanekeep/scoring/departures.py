@@ -6,12 +6,13 @@ from __future__ import annotations
 import numpy as np
 
 from lanekeep.geometry.road import Road
+from lanekeep.scoring.truth import frenet
 from lanekeep.world.parts import WorldLayout
 
 
 def wheels_outside_lane(road: Road, lane: int, tyres_xy: np.ndarray) -> bool:
     """Whether any tyre centre lies beyond lane `lane`'s boundaries."""
-    _, r = road.local_coordinates(tyres_xy)
+    _, r = frenet(road, tyres_xy)  # solved once for this and `off_road_reason`
     centre = road.lane_center_r(lane)
     return bool(np.any(np.abs(np.asarray(r) - centre) > road.lane_width_m / 2.0))
 
@@ -22,7 +23,7 @@ def off_road_reason(road: Road, layout: WorldLayout, tyres_xy: np.ndarray,
     surface (the lanes and the asphalt shoulders the world laid with `layout`, or past the
     road's ends), or its centre more than `limit_m` from the ego lane's ([criteria]
     off_road_distance_m; None: no such limit)."""
-    s, r = road.local_coordinates(tyres_xy)
+    s, r = frenet(road, tyres_xy)
     s, r = np.asarray(s), np.asarray(r)
     lo = road.boundary_r(0) - layout.shoulder_m
     hi = road.boundary_r(road.n_lanes) + layout.shoulder_m

@@ -13,6 +13,7 @@ cannot follow a tight arc (on case2_sharp_turn's 40 m radius a 0-30 m fit is off
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -41,6 +42,26 @@ def _wrap(angle: float) -> float:
     return (angle + math.pi) % (2.0 * math.pi) - math.pi
 
 
+def frenet(road: Road, xy) -> tuple[np.ndarray | float, np.ndarray | float]:
+    """`road.local_coordinates(xy)` (Frenet s, r of world points), remembered for the last
+    few points asked: scoring asks for the same ones twice (the pose after a control period
+    is the pose the next period's frames are taken from; the tyres are judged both for a
+    lane departure and for leaving the road), and each answer is a nearest-point search and
+    a Newton solve. The arrays it returns are shared: read-only."""
+    xy = np.ascontiguousarray(xy, dtype=float)
+    s, r = _remembered_frenet(road, xy.tobytes(), xy.shape)
+    return (float(s), float(r)) if xy.ndim == 1 else (s, r)
+
+
+@functools.lru_cache(maxsize=8)
+def _remembered_frenet(road: Road, xy: bytes, shape: tuple[int, ...]
+                       ) -> tuple[np.ndarray, np.ndarray]:
+    s, r = (np.array(v, dtype=float)
+            for v in road.local_coordinates(np.frombuffer(xy).reshape(shape)))
+    s.flags.writeable = r.flags.writeable = False
+    return s, r
+
+
 def line_points(
     road: Road, x: float, y: float, yaw: float, r_line: float, xs, s_car: float | None = None
 ) -> np.ndarray:
@@ -56,7 +77,7 @@ def line_points(
     f = np.array([math.cos(yaw), math.sin(yaw)])
     left = np.array([-f[1], f[0]])
     if s_car is None:
-        s_car, _ = road.local_coordinates(p)
+        s_car, _ = frenet(road, p)
     s = s_car + xs
     for _ in range(30):
         d = road.position(s, r_line) - p
@@ -105,7 +126,7 @@ def lane_truth(
     lo, hi = fit_range_m
     if not hi > lo:
         raise ValueError(f"fit_range_m must be increasing, got {fit_range_m}")
-    s_car, r_car = road.local_coordinates(np.array([x, y], dtype=float))
+    s_car, r_car = frenet(road, (x, y))
     xs = np.linspace(lo, hi, max(3, math.ceil((hi - lo) / FIT_STEP_M) + 1))
     centre_r = road.lane_center_r(lane)
 
@@ -132,7 +153,7 @@ def lane_centre_fit(road: Road, x: float, y: float, yaw: float, lane: int,
 
     For drawing and for the step record only; ADE/FDE score against `lane_centre_at`."""
     lo, hi = fit_range_m
-    s_car, _ = road.local_coordinates(np.array([x, y], dtype=float))
+    s_car, _ = frenet(road, (x, y))
     xs = np.linspace(lo, hi, max(3, math.ceil((hi - lo) / FIT_STEP_M) + 1))
     points = line_points(road, x, y, yaw, road.lane_center_r(lane), xs, s_car=s_car)
     return _fit(points), float(s_car)
@@ -154,10 +175,22 @@ def lane_offsets(road: Road, x: float, y: float, yaw: float, lane: int, lookahea
     """The car's true offsets from lane `lane`'s centre at several look-aheads at once.
 
     The same numbers as `lane_truth(...).offset_m` for each look-ahead, from one Newton
-    solve instead of a full truth (three boundary fits) per look-ahead.
+    solve instead of a full truth (three boundary fits) per look-ahead. Remembered for the
+    last few poses: the car's offset at x = 0 after a control period is the offset at x = 0
+    that the next period draws, from the same pose.
     """
-    points = line_points(road, x, y, yaw, road.lane_center_r(lane), lookaheads_m, s_car=s_car)
-    return -points[:, 1]
+    xs = np.atleast_1d(np.asarray(lookaheads_m, dtype=float))
+    if s_car is None:
+        s_car, _ = frenet(road, (x, y))
+    return _remembered_offsets(road, float(x), float(y), float(yaw), lane, xs.tobytes(),
+                               xs.shape, float(s_car)).copy()
+
+
+@functools.lru_cache(maxsize=8)
+def _remembered_offsets(road: Road, x: float, y: float, yaw: float, lane: int, xs: bytes,
+                        shape: tuple[int, ...], s_car: float) -> np.ndarray:
+    at = np.frombuffer(xs).reshape(shape)
+    return -line_points(road, x, y, yaw, road.lane_center_r(lane), at, s_car=s_car)[:, 1]
 
 
 class LanePolylines:
@@ -170,7 +203,7 @@ class LanePolylines:
                  s_car: float | None = None) -> None:
         x, y, yaw = pose
         if s_car is None:
-            s_car, _ = road.local_coordinates(np.array([x, y], dtype=float))
+            s_car, _ = frenet(road, (x, y))
         s = s_car + np.arange(-behind_m, ahead_m + step_m, step_m)
         r = np.array([road.boundary_r(lane + 1), road.boundary_r(lane), road.lane_center_r(lane)])
         d = road.position(s[None, :], r[:, None]) - (x, y)

@@ -182,6 +182,26 @@ def test_detectors_import_no_mujoco():
 VAN_SCENARIO = "tools/tuning/tune_traffic_lead_van_three_lanes.toml"  # unscored: tuning data
 
 
+def test_wide_runs_are_dropped_as_a_row_by_row_scan_drops_them():
+    from lanekeep.detectors.vehicle_mask import drop_wide_runs
+
+    rng = np.random.default_rng(0)
+    for density in (0.02, 0.3, 0.8, 1.0):
+        bev = np.where(rng.random((40, 60)) < density, 255, 0).astype(np.uint8)
+        max_cols = rng.integers(1, 8, 40).astype(float)
+        expected = bev.copy()
+        for row in range(bev.shape[0]):
+            col = 0
+            while col < bev.shape[1]:
+                end = col
+                while end < bev.shape[1] and bev[row, end]:
+                    end += 1
+                if end - col > max_cols[row]:
+                    expected[row, col:end] = 0
+                col = max(end, col + 1)
+        np.testing.assert_array_equal(drop_wide_runs(bev, max_cols), expected)
+
+
 def test_runs_wider_than_paint_are_dropped_and_paint_is_kept():
     from lanekeep.detectors.vehicle_mask import drop_wide_runs
 

@@ -10,11 +10,13 @@ from lanekeep.scenario.schema import load_scenario
 from lanekeep.scoring.metrics import ADE_POINTS_M
 from lanekeep.scoring.truth import (
     LanePolylines,
+    frenet,
     lane_boundary_points,
     lane_centre_at,
     lane_centre_fit,
     lane_offsets,
     lane_truth,
+    line_points,
 )
 
 R_CURVE = 150.0
@@ -121,6 +123,22 @@ def test_lane_offsets_at_once_equal_one_truth_per_lookahead(curve):
     at_once = lane_offsets(curve, x, y, yaw, 0, lookaheads)
     one_by_one = [lane_truth(curve, x, y, yaw, 0, lookahead_m=a).offset_m for a in lookaheads]
     np.testing.assert_allclose(at_once, one_by_one, atol=1e-9)
+
+
+def test_remembered_answers_are_the_roads_own_and_cannot_be_changed(curve):
+    points = np.array([[30.0, 1.0], [120.0, -2.0], [200.0, 40.0]])
+    s_road, r_road = curve.local_coordinates(points)
+    for _ in range(2):  # the second answer is the remembered one
+        s, r = frenet(curve, points)
+        np.testing.assert_array_equal(s, s_road)
+        np.testing.assert_array_equal(r, r_road)
+        assert not s.flags.writeable and not r.flags.writeable
+    assert frenet(curve, points[1]) == curve.local_coordinates(points[1])
+    x, y, yaw = _pose(curve, 80.0, -1.85, 0.01)
+    first = lane_offsets(curve, x, y, yaw, 0, [0.0, 6.0])
+    first[:] = 99.0  # the caller's copy
+    centre = line_points(curve, x, y, yaw, curve.lane_center_r(0), [0.0, 6.0])
+    np.testing.assert_array_equal(lane_offsets(curve, x, y, yaw, 0, [0.0, 6.0]), -centre[:, 1])
 
 
 def test_centre_fit_alone_equals_the_full_truths_centre(curve):

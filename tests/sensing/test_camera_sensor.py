@@ -5,11 +5,12 @@ the ego hood in the front image only, and the `[camera]` keys validated."""
 
 import dataclasses
 
+import cv2
 import numpy as np
 import pytest
 
 from lanekeep.scenario.schema import CameraConfig, ScenarioError, load_scenario, parse_scenario
-from lanekeep.sensing.camera_sensor import MAX_GAIN, CameraSensor, tone_curve
+from lanekeep.sensing.camera_sensor import MAX_GAIN, CameraSensor, tone_curve, vignetting_map
 from lanekeep.sensing.cameras import CameraRig, RenderSettings
 from lanekeep.sensing.snapshot import place_on_road
 
@@ -30,6 +31,23 @@ def test_default_camera_adds_realistic_noise_to_a_flat_frame():
     centre = out[40:140, 80:240].astype(float)
     assert 0.7 < centre.std() < 3.0  # a few DN, as a good automotive camera at day
     assert abs(centre.mean() - 255 * tone_curve(105 / 255)) < 0.5  # zero-mean noise
+
+
+def test_the_chain_equals_a_straightforward_reference():
+    """Vignetting, then the signed noise added in int16 and clipped, then gain and tone: the
+    sensor's one-plane passes and its split noise bank give the same frame, bit for bit."""
+    sensor = _sensor(seed=2, auto_exposure=False, read_noise_dn=6.0, vignetting=0.3)
+    frame = np.random.default_rng(3).integers(0, 256, (H, W, 3), dtype=np.uint8)
+    got = sensor(frame, np.random.default_rng(4))
+    positive, negative = sensor.read_bank
+    assert ((positive == 0) | (negative == 0)).all()  # each pixel's noise has one sign
+    start = int(np.random.default_rng(4).integers(0, positive.shape[0] - H + 1))
+    noise = (positive.astype(np.int16) - negative)[start:start + H].reshape(H, W, 3)
+    lit = cv2.multiply(frame, vignetting_map(H, W, 0.3), scale=1.0 / 255.0)
+    tone = np.clip(np.round(255.0 * tone_curve(np.arange(256) / 255.0)), 0, 255).astype(np.uint8)
+    expected = tone[np.clip(lit.astype(np.int16) + noise, 0, 255)]
+    np.testing.assert_array_equal(got, expected)
+    assert got.shape == frame.shape and got.base is not frame.base  # a new frame
 
 
 def test_frames_differ_and_a_seed_repeats_them():
