@@ -93,8 +93,28 @@ def prepare_frame(frame: np.ndarray, config: LaneNetConfig) -> np.ndarray:
     alias thin far markings away.
     """
     if frame.shape[:2] != (config.height, config.width):
-        frame = cv2.resize(frame, (config.width, config.height), interpolation=cv2.INTER_AREA)
+        frame = _area_resize(frame, config.width, config.height)
     return np.ascontiguousarray(frame.transpose(2, 0, 1))
+
+
+def _area_resize(frame: np.ndarray, width: int, height: int) -> np.ndarray:
+    """`cv2.resize(frame, (width, height), interpolation=INTER_AREA)`, pixel for pixel, in less
+    time where the width shrinks by a power of two and the height by a fraction (1280x720 ->
+    320x176: 1.9 against 2.5 ms). OpenCV's general area resize of uint8 sums each output
+    pixel's source pixels times their area share in float32 and rounds once; across, a share of
+    1/2^n is exact, so those sums are exact, as are its float32 fast path's; down, a float image
+    takes the same weights in the same order, and the last rounding is OpenCV's own (ties to
+    even). Elsewhere (another factor across rounds its shares; a whole factor both ways takes
+    OpenCV's integer fast path; a growing height interpolates) it is the plain call
+    (tests/detectors/test_lanenet_speed_equivalence.py checks that the two are equal)."""
+    h, w = frame.shape[:2]
+    k = w // width
+    if (w % width or k < 2 or k & (k - 1) or h <= height or h % height == 0
+            or frame.dtype != np.uint8):
+        return cv2.resize(frame, (width, height), interpolation=cv2.INTER_AREA)
+    across = cv2.resize(frame.astype(np.float32), (width, h), interpolation=cv2.INTER_AREA)
+    return cv2.convertScaleAbs(cv2.resize(across, (width, height),
+                                          interpolation=cv2.INTER_AREA))
 
 
 def _block(c_in: int, c_out: int, stride: int = 1, dilation: int = 1) -> nn.Sequential:
