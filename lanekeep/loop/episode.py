@@ -249,7 +249,7 @@ class Episode:
         est = self.scenario.estimation
         named = [(name, detector, frames["front"]) for name, detector in self.front.items()]
         named.append((REFERENCE, self.reference, frames[est.reference_camera]))
-        jobs = group_jobs(named)
+        jobs = group_jobs(named, self.detection.parallel)
         results = self.detection.run(jobs)
         by_name = {name: detected for job, job_results in zip(jobs, results, strict=True)
                    for name, detected in zip(job.names, job_results, strict=True)}

@@ -94,7 +94,9 @@ def test_detectors_sharing_a_model_are_one_batched_job():
     jobs = group_jobs(named)
     assert [job.names for job in jobs] == [("b", "c"), ("a",)]
     results = run_job(jobs[0])
-    assert [r.estimate.offset_m for r in results] == pytest.approx([1.1, 1.2])
+    assert [r.estimate.offset_m for r in results] == pytest.approx([1.1, 1.2])  # the batch
+    # on two threads each learned detector is a job of its own, still first
+    assert [job.names for job in group_jobs(named, parallel=True)] == [("b",), ("c",), ("a",)]
 
 
 def _run(threads: int, monkeypatch) -> tuple[dict, list]:
