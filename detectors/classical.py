@@ -3,7 +3,8 @@
 A classical detector is its binarisation of the region of interest (`binarise`) and its way of
 finding the two boundaries in the binary bird's-eye view (`find_boundaries`); everything
 around them, the ground window and look-ahead, the shared image stage (crop, scale, rain
-streaks, noise tests, warp) and the assembly into a `LaneEstimate`, is here once.
+streaks, noise tests, warp) and the assembly into a `LaneEstimate`, is here once. Models that
+read the same frame share its region of interest (`image_stage.SHARED_ROIS`).
 """
 
 from __future__ import annotations
@@ -14,7 +15,12 @@ from lanekeep.detectors.base import LaneEstimate
 from lanekeep.detectors.birds_eye import detector_view
 from lanekeep.detectors.boundaries import Boundary, assemble, support_confidence
 from lanekeep.detectors.config import DetectorsConfig, GroundWindow, load_config
-from lanekeep.detectors.image_stage import binary_bird_eye
+from lanekeep.detectors.image_stage import (
+    SHARED_ROIS,
+    RegionOfInterest,
+    RoiMemo,
+    binary_bird_eye,
+)
 from lanekeep.detectors.vehicle_mask import VehicleFilter
 from lanekeep.geometry.camera_model import CameraModel
 
@@ -36,6 +42,8 @@ class ClassicalDetector:
         self.config = config or load_config()
         self.view, self.x_ref = detector_view(camera, self.config, distortion)
         self.vehicles = VehicleFilter.of(self.view, self.config.preprocess)
+        # Where the region of interest is shared with the other models (None: not shared).
+        self.rois: RoiMemo | None = SHARED_ROIS
 
     @property
     def window(self) -> GroundWindow:
@@ -45,8 +53,9 @@ class ClassicalDetector:
     def reset(self) -> None:
         """Forget state carried between frames (none unless a model keeps some)."""
 
-    def binarise(self, roi: np.ndarray) -> np.ndarray:
-        """Paint candidates (0/255) in the region of interest at the working scale."""
+    def binarise(self, roi: RegionOfInterest) -> np.ndarray:
+        """Paint candidates (0/255) in the region of interest at the working scale (its
+        arrays are shared with the other models: read them, never write)."""
         raise NotImplementedError
 
     def find_boundaries(self, bev: np.ndarray) -> tuple[Boundary | None, Boundary | None]:
@@ -58,7 +67,7 @@ class ClassicalDetector:
 
     def detect(self, frame: np.ndarray) -> LaneEstimate:
         bev, noise = binary_bird_eye(frame, self.camera, self.view, self.config.preprocess,
-                                     self.binarise, self.vehicles)
+                                     self.binarise, self.vehicles, self.rois)
         if bev is None:
             self.reset()
             return LaneEstimate.invalid(noise, self.x_ref)

@@ -20,6 +20,7 @@ import numpy as np
 from lanekeep.detectors.base import poly_eval
 from lanekeep.detectors.boundaries import Boundary, fit_boundary, parallel
 from lanekeep.detectors.classical import ClassicalDetector
+from lanekeep.detectors.image_stage import RegionOfInterest
 
 
 class HoughDetector(ClassicalDetector):
@@ -28,10 +29,10 @@ class HoughDetector(ClassicalDetector):
     default_name = "hough"
 
     # -- stages -------------------------------------------------------------------------------
-    def binarise(self, roi: np.ndarray) -> np.ndarray:
+    def binarise(self, roi: RegionOfInterest) -> np.ndarray:
         """Paint candidates: brighter than the local mean by adaptive_c and above min_grey."""
         cfg = self.config.hough
-        grey = cv2.cvtColor(roi, cv2.COLOR_RGB2GRAY)
+        grey = roi.grey
         mask = cv2.adaptiveThreshold(grey, 255, cv2.ADAPTIVE_THRESH_MEAN_C, cv2.THRESH_BINARY,
                                      cfg.adaptive_block_px, -cfg.adaptive_c)
         mask[grey < cfg.min_grey] = 0

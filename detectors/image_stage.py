@@ -2,12 +2,16 @@
 
 `binary_bird_eye(frame, ...)` takes a camera frame to the binary bird's-eye view a model looks
 for boundaries in, with each model's own binarisation passed in; or says why the frame's
-binary image is noise rather than paint.
+binary image is noise rather than paint. The part before the binarisation (`RegionOfInterest`)
+is the same for both models on the same frame, so they share it (`RoiMemo`).
 """
 
 from __future__ import annotations
 
 import functools
+import threading
+from collections.abc import Callable
+from dataclasses import dataclass
 
 import cv2
 import numpy as np
@@ -157,21 +161,112 @@ def _open_2x2(mask: np.ndarray) -> np.ndarray:
 _KERNEL_2X2 = np.ones((2, 2), np.uint8)
 
 
+@dataclass(frozen=True)
+class RegionOfInterest:
+    """A frame's region of interest as both models binarise it: the rows below the ground
+    window's far edge at the working scale with rain opened away (`rgb`), its grey levels,
+    and where no paint can be (`covered`: what other vehicles cover or stands beside
+    vehicle-dark; None when that cue is off). Shared between models: read-only."""
+
+    rgb: np.ndarray
+    grey: np.ndarray
+    covered: np.ndarray | None
+
+    def hide(self, mask: np.ndarray) -> np.ndarray:
+        """A binary ROI without the pixels where no paint can be."""
+        if self.covered is None:
+            return mask
+        out = mask.copy()
+        out[self.covered] = 0
+        return out
+
+
+def region_of_interest(frame: np.ndarray, view: BirdsEye, preprocess,
+                       vehicles: VehicleFilter | None = None) -> RegionOfInterest:
+    """Crop, scale and destreak a frame, and find what vehicles cover in it (the part of the
+    image stage that does not depend on the model)."""
+    rgb = crop_and_scale(frame, view.crop_top, preprocess.scale)
+    rgb = open_along_rows(rgb, destreak_pixels(preprocess, frame.shape[0]))
+    grey = cv2.cvtColor(rgb, cv2.COLOR_RGB2GRAY)
+    covered = None if vehicles is None else vehicles.covered(grey)
+    for array in (rgb, grey, covered):
+        if array is not None:
+            array.flags.writeable = False  # this array object only, never the frame itself
+    return RegionOfInterest(rgb, grey, covered)
+
+
+class RoiMemo:
+    """The region of interest of the latest frames, computed once for the models that read
+    the same frame with the same image stage (hough and sliding_window on the front camera,
+    each step).
+
+    A region is reused only for the same frame object (a frame is kept alive while it is
+    remembered, so its identity cannot pass to another), with the same shape and image stage
+    settings (crop row, `Preprocess`, the vehicle cue's per-row geometry), and only while the
+    rows it reads still hold the pixels it was made from (a copy is compared, so a frame
+    changed in place is computed afresh). Thread-safe: the models may run on two threads at
+    once (lanekeep/loop/detection.py); one that asks while another computes the same region
+    waits for it rather than computing it again. `slots` bounds the frames kept.
+    """
+
+    def __init__(self, slots: int = 4) -> None:
+        self._slots = slots
+        self._lock = threading.Lock()
+        self._entries: list[_MemoEntry] = []  # most recent first
+
+    def get(self, frame: np.ndarray, view: BirdsEye, preprocess,
+            vehicles: VehicleFilter | None = None) -> RegionOfInterest:
+        """`region_of_interest(frame, view, preprocess, vehicles)`, computed once per frame."""
+        key = (frame.shape, view.crop_top, preprocess,
+               None if vehicles is None else (vehicles.preprocess, vehicles.px_per_m.tobytes()))
+        with self._lock:
+            entry = next((e for e in self._entries if e.frame is frame and e.key == key), None)
+            if entry is None:
+                entry = _MemoEntry(frame, key)
+                self._entries.insert(0, entry)
+                del self._entries[self._slots:]
+        with entry.lock:
+            source = frame[view.crop_top:]  # the only rows a region reads
+            if entry.roi is None or not _same_pixels(entry.pixels, source):
+                pixels = source.copy()
+                roi = region_of_interest(frame, view, preprocess, vehicles)
+                entry.pixels, entry.roi = pixels, roi  # together: a failure leaves neither
+            return entry.roi
+
+
+class _MemoEntry:
+    """One remembered frame: its key, a copy of the rows its region read, the region."""
+
+    def __init__(self, frame: np.ndarray, key: tuple) -> None:
+        self.frame, self.key = frame, key
+        self.lock = threading.Lock()
+        self.pixels: np.ndarray | None = None
+        self.roi: RegionOfInterest | None = None
+
+
+def _same_pixels(a: np.ndarray, b: np.ndarray) -> bool:
+    """Exactly equal arrays (uint8 frames: a max |difference| of 0, one SIMD pass)."""
+    return a.shape == b.shape and cv2.norm(a, b, cv2.NORM_INF) == 0.0
+
+
+SHARED_ROIS = RoiMemo()  # the classical models' memo (ClassicalDetector.detect)
+
+
 def binary_bird_eye(frame: np.ndarray, camera: CameraModel, view: BirdsEye, preprocess,
-                    binarise, vehicles: VehicleFilter | None = None
+                    binarise: Callable[[RegionOfInterest], np.ndarray],
+                    vehicles: VehicleFilter | None = None, memo: RoiMemo | None = None
                     ) -> tuple[np.ndarray | None, str]:
     """A frame's binary bird's-eye view (0/255), or None and why its binary image is noise.
 
-    The image stage both models share; `binarise` is each model's own thresholding of the ROI.
-    `vehicles` (detectors/vehicle_mask.py) drops what other vehicles cover and runs wider
-    than paint.
+    The image stage both models share; `binarise` is each model's own thresholding of the
+    region of interest. `vehicles` (detectors/vehicle_mask.py) drops what other vehicles cover
+    and runs wider than paint. `memo` (None: compute here) shares the region of interest with
+    the other models that read the same frame.
     """
     check_frame(frame, camera)
-    roi = crop_and_scale(frame, view.crop_top, preprocess.scale)
-    roi = open_along_rows(roi, destreak_pixels(preprocess, frame.shape[0]))
-    mask = binarise(roi)
-    if vehicles is not None:
-        mask = vehicles.hide_vehicles(mask, roi)
+    roi = (region_of_interest(frame, view, preprocess, vehicles) if memo is None
+           else memo.get(frame, view, preprocess, vehicles))
+    mask = roi.hide(binarise(roi))
     # Fill first (a flooded mask is noise whatever it holds); the speckle test after the rain
     # streaks are gone, for a 1-px streak fails the opening just as sensor noise does.
     noise = reject_noise(mask, preprocess.max_fill, 0.0)

@@ -20,6 +20,7 @@ import numpy as np
 from lanekeep.detectors.base import LaneEstimate, poly_eval
 from lanekeep.detectors.boundaries import Boundary, fit_boundary, parallel
 from lanekeep.detectors.classical import ClassicalDetector
+from lanekeep.detectors.image_stage import RegionOfInterest
 
 _KERNEL_3X3 = np.ones((3, 3), np.uint8)  # the ridge's dilation
 
@@ -42,11 +43,11 @@ class SlidingWindowDetector(ClassicalDetector):
         self._previous = [None, None]
 
     # -- stages -------------------------------------------------------------------------------
-    def binarise(self, roi: np.ndarray) -> np.ndarray:
+    def binarise(self, roi: RegionOfInterest) -> np.ndarray:
         """Sobel-x on lightness | white lightness (both on a bright ridge) | yellow hue+sat."""
         cfg = self.config.sliding_window
         # Contiguous planes: every test below reads them, and a strided view costs each one.
-        hue, raw, sat = cv2.split(cv2.cvtColor(roi, cv2.COLOR_RGB2HLS))
+        hue, raw, sat = cv2.split(cv2.cvtColor(roi.rgb, cv2.COLOR_RGB2HLS))
         row = np.ones((1, cfg.local_block_px), np.uint8)
         # A ridge is brighter than the darker of its row neighbours a block away (white
         # top-hat along the row): paint narrower than the block is, the lit edge of anything

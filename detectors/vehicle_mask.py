@@ -127,21 +127,21 @@ class VehicleFilter:
         return cls(preprocess, roi_px_per_m(view, roi_rows),
                    max_run_cols(view, preprocess.max_paint_width_m, preprocess.paint_blur_px))
 
-    def hide_vehicles(self, mask: np.ndarray, roi: np.ndarray) -> np.ndarray:
-        """The binary ROI without the pixels that vehicles cover."""
+    def covered(self, grey: np.ndarray) -> np.ndarray | None:
+        """Bool mask of the working ROI (its grey levels) where no paint can be: what vehicles
+        cover and what lies beside vehicle-dark; None when the cue is off."""
         p = self.preprocess
-        if p.vehicle_dark_ratio <= 0.0 or len(self.px_per_m) != mask.shape[0]:
-            return mask
-        dark = vehicle_dark(cv2.cvtColor(roi, cv2.COLOR_RGB2GRAY), p.vehicle_dark_ratio)
+        if p.vehicle_dark_ratio <= 0.0 or len(self.px_per_m) != grey.shape[0]:
+            return None
+        dark = vehicle_dark(grey, p.vehicle_dark_ratio)
         hidden = hidden_by_vehicles(dark, self.px_per_m, p.vehicle_min_width_m,
                                     p.vehicle_max_width_m, p.vehicle_margin_m)
         # Paint lies on the road: a bright ridge beside something vehicle-dark (a hub cap in
         # its tyre, a chrome strip under a window) is not paint.
         near = cv2.dilate(dark.view(np.uint8), np.ones((1, 2 * p.vehicle_edge_px + 1), np.uint8))
-        out = mask.copy()
-        out[near > 0] = 0
+        out = near > 0
         if hidden is not None:
-            out[hidden] = 0
+            out |= hidden
         return out
 
     def narrow(self, bev: np.ndarray) -> np.ndarray:

@@ -9,6 +9,7 @@ has gone wrong.
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Sequence
 
 import numpy as np
@@ -31,7 +32,7 @@ def corroborated(measurements: Sequence[np.ndarray | None],
     per_measurement = r if r.ndim == 3 else np.broadcast_to(r, (len(measurements), 3, 3))
     if per_measurement.shape != (len(measurements), 3, 3):
         raise ValueError(f"expected one 3x3 R or one per measurement, got shape {r.shape}")
-    threshold = float(chi2.ppf(probability, len(points_m)))
+    threshold = _chi2_quantile(probability, len(points_m))
     z = [None if m is None else h @ np.asarray(m, dtype=float) for m in measurements]
     agree = [False] * len(z)
     for i, a in enumerate(z):
@@ -44,3 +45,10 @@ def corroborated(measurements: Sequence[np.ndarray | None],
             if float(d @ np.linalg.solve(s, d)) <= threshold:
                 agree[i] = agree[j] = True
     return agree
+
+
+@functools.lru_cache(maxsize=16)
+def _chi2_quantile(probability: float, dof: int) -> float:
+    """`chi2.ppf(probability, dof)`, remembered: the gate's probability and number of points
+    are settings, and scipy's quantile costs more than the rest of a step's consensus."""
+    return float(chi2.ppf(probability, dof))

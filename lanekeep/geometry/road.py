@@ -164,6 +164,24 @@ class Road:
 
     def position(self, s, r=0.0) -> np.ndarray:
         """World XY of Frenet (s, r); shape broadcast(s, r) + (2,)."""
+        return self._locate(s, r)[0]
+
+    def geometry_at(self, s, r=0.0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """`position(s, r)`, `heading_at(s)` and `curvature_at(s)` (as arrays, broadcast over
+        s and r) from one search of the tables: each Newton step on the road (the Frenet
+        projection, the truth's line points) asks for all three at the same s.
+
+        The same numbers as the three calls: the node table's segment of a clipped s is the
+        segment `_seg_index` finds (every segment starts at a node and none of its nodes
+        reaches the next segment's start), and beyond the ends, where the curvature is 0, s
+        clipped or not falls in the same end segment.
+        """
+        xy, th, s, seg = self._locate(s, r)
+        k = self._k0[seg] + self._dk[seg] * (s - self._s0[seg])
+        return xy, th, np.where((s < 0.0) | (s > self.length_m), 0.0, k)
+
+    def _locate(self, s, r) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """World XY of Frenet (s, r), the heading there, s (broadcast) and its segment."""
         s, r = np.broadcast_arrays(np.asarray(s, dtype=float), np.asarray(r, dtype=float))
         sc = np.clip(s, 0.0, self.length_m)
         j = np.clip(np.searchsorted(self._node_s, sc, side="right") - 1, 0, len(self._node_seg) - 1)
@@ -172,7 +190,7 @@ class Road:
         th = self._theta(sc, seg)
         along = s - sc  # extrapolation beyond the ends, straight
         cos, sin = np.cos(th), np.sin(th)
-        return xy + np.stack([along * cos - r * sin, along * sin + r * cos], -1)
+        return xy + np.stack([along * cos - r * sin, along * sin + r * cos], -1), th, s, seg
 
     def local_coordinates(self, xy) -> tuple[np.ndarray, np.ndarray]:
         """Frenet (s, r) of world points `xy` (..., 2): the nearest centreline point and offset.
@@ -190,18 +208,18 @@ class Road:
             d2 = ((q[:, None, :] - self._coarse_xy[None, :, :]) ** 2).sum(-1)
             s[i : i + block] = self._coarse_s[np.argmin(d2, axis=1)]
         for _ in range(12):
-            d = p - self.position(s)
-            th = np.asarray(self.heading_at(s))
+            xy, th, k = self.geometry_at(s)
+            d = p - xy
             t = np.stack([np.cos(th), np.sin(th)], -1)
             along = (d * t).sum(-1)
             r = d[:, 1] * t[:, 0] - d[:, 0] * t[:, 1]
-            slope = np.maximum(1.0 - np.asarray(self.curvature_at(s)) * r, 0.2)
+            slope = np.maximum(1.0 - k * r, 0.2)
             ds = along / slope
             s = s + ds
             if np.all(np.abs(ds) < 1e-10):
                 break
-        d = p - self.position(s)
-        th = np.asarray(self.heading_at(s))
+        xy, th, _, _ = self._locate(s, 0.0)
+        d = p - xy
         r = d[:, 1] * np.cos(th) - d[:, 0] * np.sin(th)
         if not shape:
             return float(s[0]), float(r[0])

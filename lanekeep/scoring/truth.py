@@ -80,9 +80,10 @@ def line_points(
         s_car, _ = frenet(road, p)
     s = s_car + xs
     for _ in range(30):
-        d = road.position(s, r_line) - p
+        xy, heading, curvature = road.geometry_at(s, r_line)  # one table search for all three
+        d = xy - p
         g = d @ f - xs
-        slope = (1.0 - road.curvature_at(s) * r_line) * np.cos(road.heading_at(s) - yaw)
+        slope = (1.0 - curvature * r_line) * np.cos(heading - yaw)
         ds = g / np.maximum(slope, 0.1)
         s = s - ds
         if np.all(np.abs(ds) < 1e-10):
