@@ -116,3 +116,24 @@ def test_speed_controller_holds_15mps_on_clear_straight(straight_world):
     settled = np.array(speeds[100:])  # last 10 s
     assert np.all(np.abs(settled - 15.0) <= 0.2), (settled.min(), settled.max())
     assert physics_steps_per_control(world) == 20
+
+
+@pytest.mark.parametrize("name", ["clear_curve", "night"])
+def test_the_cameras_ground_is_drawn_last_and_the_contact_plane_is_unseen(name):
+    """The cameras' ground is the world's last geom (the depth test skips what the road covers)
+    and the contact plane keeps geom 0 in a group no camera draws; the rendering grid is
+    coarse under directional light and fine where the car's headlamps light the grass."""
+    from lanekeep.world.build import GROUND_GRID_LIT_M, GROUND_GRID_M
+    from lanekeep.world.groups import GROUP_UNSEEN
+
+    world = build(load_scenario(name))
+    model = world.model
+    contact, visual = model.geom("ground"), model.geom("ground_visual")
+    world_geoms = [i for i in range(model.ngeom) if model.geom_bodyid[i] == 0]
+    assert contact.id == 0 and visual.id == world_geoms[-1]
+    assert model.geom_group[contact.id] == GROUP_UNSEEN
+    assert model.geom_contype[visual.id] == 0 and model.geom_conaffinity[visual.id] == 0
+    np.testing.assert_allclose(model.geom_size[visual.id][:2], model.geom_size[contact.id][:2])
+    spot = any(t == mujoco.mjtLightType.mjLIGHT_SPOT for t in model.light_type)
+    assert spot == (name == "night")
+    assert model.geom_size[visual.id][2] == (GROUND_GRID_LIT_M if spot else GROUND_GRID_M)
