@@ -23,6 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from lanekeep.core.busy import all_cores_busy
 from lanekeep.detectors.base import Detector, LaneEstimate
 
 
@@ -142,9 +143,10 @@ class DetectionRunner:
                     index = queue.pop(0)
                 results[index] = run_job(jobs[index])
 
-        helper: Future = self._pool.submit(drain)
-        drain()
-        helper.result()
+        with all_cores_busy():  # the recorder's writer waits (lanekeep/core/busy.py)
+            helper: Future = self._pool.submit(drain)
+            drain()
+            helper.result()
         return [r for r in results if r is not None]
 
     def close(self) -> None:

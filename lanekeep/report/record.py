@@ -52,6 +52,7 @@ from typing import Any, Protocol
 import cv2
 import numpy as np
 
+from lanekeep.core.busy import CORES_FREE
 from lanekeep.core.interrupts import stop_signals_held
 from lanekeep.report.blueprint import blueprint, scenario_document
 from lanekeep.report.overlay import (
@@ -76,7 +77,6 @@ from lanekeep.report.palette import (
     colour,
 )
 from lanekeep.scoring.truth import LanePolylines
-from lanekeep.sensing.cameras import RENDERER_IDLE
 
 APPLICATION_ID = "lanekeep"
 TRUTH_BEHIND_M, TRUTH_AHEAD_M, TRUTH_STEP_M = 25.0, 45.0, 0.5
@@ -278,7 +278,7 @@ class RerunRecorder:
             if self._error is not None:
                 continue  # keep draining so that the episode never blocks on a full queue
             kind, payload, masks = item
-            RENDERER_IDLE.wait()  # see lanekeep.sensing.cameras: never beside a render
+            CORES_FREE.wait()  # lanekeep/core/busy.py: never beside a render or detections
             try:
                 if kind == "static":
                     self._log_static(payload)
@@ -430,7 +430,7 @@ class RerunRecorder:
     def _log_cameras(self, step, truth: _Truth) -> None:
         rr, rec, cameras = self._rr, self._rec, self._view.cameras
         for cam_name, frame in step.frames.items():
-            RENDERER_IDLE.wait()
+            CORES_FREE.wait()
             rec.log(f"cameras/{cam_name}/image", self._jpeg(frame))
             x_range = camera_x_range(cameras[cam_name])
             strips = [strip for b in truth.lines.boundaries(*x_range)

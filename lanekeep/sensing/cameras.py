@@ -11,13 +11,12 @@ x forward, y left, z up), so the projection here and the render always agree.
 
 from __future__ import annotations
 
-import threading
-from contextlib import contextmanager
 from dataclasses import dataclass
 
 import mujoco
 import numpy as np
 
+from lanekeep.core.busy import all_cores_busy
 from lanekeep.geometry.lens import Lens, is_distorted
 from lanekeep.sensing.gl_backend import RendererUnavailable
 from lanekeep.sensing.weather import needs_depth
@@ -59,22 +58,6 @@ class RenderSettings:
                    show_hood=scenario.camera.show_hood, depth=depth,
                    distortion=(("front", tuple(scenario.camera.distortion)),
                                ("rear", tuple(scenario.camera.rear_distortion))))
-
-
-# Set while no MuJoCo render runs in this process. Mesa's llvmpipe rasterises with a thread per
-# core and waits for the slowest: a busy background thread (the recorder's writer) made a
-# 21 ms render take 56 ms on two cores. Background work waits for this before each piece.
-RENDERER_IDLE = threading.Event()
-RENDERER_IDLE.set()
-
-
-@contextmanager
-def _rendering():
-    RENDERER_IDLE.clear()
-    try:
-        yield
-    finally:
-        RENDERER_IDLE.set()
 
 
 class CameraRig:
@@ -136,7 +119,7 @@ class CameraRig:
         renderer.update_scene(data, camera=camera, scene_option=self._rgb_option[camera])
         renderer.scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = self.settings.shadows
         renderer.scene.flags[mujoco.mjtRndFlag.mjRND_FOG] = self.settings.fog
-        with _rendering():
+        with all_cores_busy():  # background work waits (lanekeep/core/busy.py)
             rgb = renderer.render()
         lens = self.lenses.get(camera)
         return rgb if lens is None else lens(rgb)
@@ -147,7 +130,7 @@ class CameraRig:
         pixel (rows and columns from step_px // 2), read from the depth buffer (~3 ms)."""
         rgb = self.render_rgb(data, camera)
         renderer = self._renderers[camera]
-        with _rendering():
+        with all_cores_busy():  # background work waits (lanekeep/core/busy.py)
             mujoco.mjr_readPixels(None, self._depth_raw, renderer._rect, renderer._mjr_context)
         # The buffer is bottom-up and in reversed-Z (as mujoco.Renderer linearises it).
         raw = self._depth_raw[::-1]
@@ -166,7 +149,7 @@ class CameraRig:
         try:
             renderer.update_scene(data, camera=camera, scene_option=self._seg_option[camera])
             renderer.scene.flags[mujoco.mjtRndFlag.mjRND_FOG] = False  # ids must stay exact
-            with _rendering():
+            with all_cores_busy():  # background work waits (lanekeep/core/busy.py)
                 seg = renderer.render()
         finally:
             renderer.disable_segmentation_rendering()
