@@ -30,7 +30,6 @@ with the results of `detect` bit for bit; it takes 1.1x less time than two `dete
 from __future__ import annotations
 
 import hashlib
-import threading
 from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass, fields, replace
@@ -77,11 +76,6 @@ MIRRORED_SLOTS = [SLOTS.index(n.replace("left", "?").replace("right", "left").re
 
 
 
-_ONE_THREAD_LOCK = threading.Lock()
-_ONE_THREAD_USERS = 0  # detectors inside `_one_thread` now (an episode runs two at once)
-_THREADS_BEFORE = 0  # the process's thread count when the first of them entered
-
-
 @contextmanager
 def _one_thread() -> Iterator[None]:
     """One intra-op thread for the network: oneDNN's convolutions sum in an order that depends
@@ -91,23 +85,19 @@ def _one_thread() -> Iterator[None]:
     core is busy it hurts: each parallel call waits for the second thread's time slice. So
     every torch computation of a frame runs inside this, the batch's mirror flip too (outside,
     back-to-back frames took 3x as long, median, on a 2-core machine with its other core
-    busy). torch's thread count is one per process and an episode may run two detectors on
-    two threads (lanekeep/loop/detection.py): the first to enter sets it to one and the last
-    to leave restores it, so neither ever runs on more than one."""
-    global _ONE_THREAD_USERS, _THREADS_BEFORE
-    with _ONE_THREAD_LOCK:
-        if _ONE_THREAD_USERS == 0:
-            _THREADS_BEFORE = torch.get_num_threads()
-            if _THREADS_BEFORE != 1:
-                torch.set_num_threads(1)
-        _ONE_THREAD_USERS += 1
+    busy). torch's intra-op thread count belongs to the calling thread (OpenMP's setting is
+    per thread; a new thread starts from the last count set anywhere), so this sets and
+    restores the count of the thread it runs on: an episode's two detection threads
+    (lanekeep/loop/detection.py) each run their network on one."""
+    before = torch.get_num_threads()
+    if before == 1:
+        yield
+        return
+    torch.set_num_threads(1)
     try:
         yield
     finally:
-        with _ONE_THREAD_LOCK:
-            _ONE_THREAD_USERS -= 1
-            if _ONE_THREAD_USERS == 0 and _THREADS_BEFORE != 1:
-                torch.set_num_threads(_THREADS_BEFORE)
+        torch.set_num_threads(before)
 
 
 class WeightsError(ValueError):

@@ -32,13 +32,16 @@ class StageClock:
         self.totals_s[stage] = self.totals_s.get(stage, 0.0) + (now - self._last)
         self._last = now
 
-    def add(self, stage: str, seconds: float) -> None:
-        """Time measured elsewhere (a stage that ran on another thread) goes to `stage`."""
-        self.totals_s[stage] = self.totals_s.get(stage, 0.0) + seconds
-
-    def skip(self) -> None:
-        """The time since the previous lap is nobody's (it was `add`ed stage by stage)."""
-        self._last = time.perf_counter()
+    def share(self, own_s: dict[str, float]) -> None:
+        """The time since the previous lap went to stages that ran side by side (each took
+        `own_s[stage]` on its own thread): each gets a share of that wall time in proportion
+        to its own, so the stages still add up to the step's wall time."""
+        now = time.perf_counter()
+        wall, total = now - self._last, sum(own_s.values())
+        for stage, own in own_s.items():
+            share = wall * own / total if total > 0 else wall / len(own_s)
+            self.totals_s[stage] = self.totals_s.get(stage, 0.0) + share
+        self._last = now
 
     def reset(self) -> None:
         """Forget everything measured so far (e.g. after warm-up steps)."""
