@@ -11,7 +11,9 @@ from __future__ import annotations
 
 import multiprocessing
 import os
+from collections.abc import Iterator
 from concurrent.futures import ProcessPoolExecutor
+from contextlib import contextmanager
 from multiprocessing.context import SpawnContext
 
 from lanekeep.core.interrupts import ignore_stop_signals
@@ -37,6 +39,33 @@ def process_threads() -> int:
     return os.cpu_count() or 1
 
 
+_RUNNING = None  # in a bench worker: the pool's count of episodes running now (a shared Value)
+
+
+def threads_now() -> int:
+    """How many threads an episode starting a step may keep busy: in a bench worker the cores
+    shared among the episodes running now (so the last episode of a bench, alone, gets both
+    cores instead of leaving one idle), elsewhere `process_threads()`."""
+    if _RUNNING is None:
+        return process_threads()
+    return max(1, (os.cpu_count() or 1) // max(1, _RUNNING.value))
+
+
+@contextmanager
+def episode_running() -> Iterator[None]:
+    """Counts an episode as running in the pool's shared count (a no-op outside a bench)."""
+    if _RUNNING is None:
+        yield
+        return
+    with _RUNNING.get_lock():
+        _RUNNING.value += 1
+    try:
+        yield
+    finally:
+        with _RUNNING.get_lock():
+            _RUNNING.value -= 1
+
+
 def set_thread_counts(threads: int) -> None:
     """Thread counts of the renderer, torch, OpenCV and lanekeep's own; before EGL starts or
     torch is imported (both read the environment once)."""
@@ -49,11 +78,14 @@ def set_thread_counts(threads: int) -> None:
     cv2.setNumThreads(threads)
 
 
-def init_worker(threads: int) -> None:
-    """Runs first in every worker: its thread counts, and stop signals left to the parent (an
-    idle worker that died of Ctrl-C would break the pool for all)."""
+def init_worker(threads: int, running=None) -> None:
+    """Runs first in every worker: its thread counts, stop signals left to the parent (an
+    idle worker that died of Ctrl-C would break the pool for all), and the pool's shared count
+    of running episodes (`threads_now`), if it keeps one."""
+    global _RUNNING
     ignore_stop_signals()
     set_thread_counts(threads)
+    _RUNNING = running
 
 
 def spawn_context() -> SpawnContext:

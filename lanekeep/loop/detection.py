@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import threading
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass
 
@@ -117,21 +117,24 @@ def group_jobs(named: Sequence[tuple[str, Detector, np.ndarray]], parallel: bool
 
 
 class DetectionRunner:
-    """Runs a step's jobs on this thread and, with `threads` >= 2, one helper thread."""
+    """Runs a step's jobs on this thread and, while `threads()` says two or more, on one helper
+    thread too (a bench worker's share changes when the other episodes end: workers.py)."""
 
-    def __init__(self, threads: int) -> None:
-        self._pool = (ThreadPoolExecutor(1, thread_name_prefix="lanekeep-detect")
-                      if threads >= 2 else None)
+    def __init__(self, threads: Callable[[], int]) -> None:
+        self._threads = threads
+        self._pool: ThreadPoolExecutor | None = None
 
-    @property
-    def parallel(self) -> bool:
-        return self._pool is not None
+    def parallel_now(self) -> bool:
+        """Whether this step's jobs run on two threads (ask once per step)."""
+        return self._threads() >= 2
 
-    def run(self, jobs: Sequence[DetectJob]) -> list[list[Detected]]:
+    def run(self, jobs: Sequence[DetectJob], parallel: bool) -> list[list[Detected]]:
         """Each job's results, in the jobs' order."""
         results: list[list[Detected] | None] = [None] * len(jobs)
-        if self._pool is None or len(jobs) < 2:
+        if not parallel or len(jobs) < 2:
             return [run_job(job) for job in jobs]
+        if self._pool is None:
+            self._pool = ThreadPoolExecutor(1, thread_name_prefix="lanekeep-detect")
         lock = threading.Lock()
         queue = list(range(len(jobs)))
 

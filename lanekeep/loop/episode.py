@@ -27,7 +27,7 @@ from lanekeep.control.registry import ControlContext, Controller, make_controlle
 from lanekeep.core.interrupts import stop_point, stop_requested
 from lanekeep.core.signals import VehicleSignals
 from lanekeep.core.timing import StageClock
-from lanekeep.core.workers import process_threads
+from lanekeep.core.workers import threads_now
 from lanekeep.detectors.base import Detector, LaneEstimate
 from lanekeep.detectors.registry import make_detector
 from lanekeep.estimators.lane_estimator import EstimatorOutput, LaneEstimator
@@ -175,7 +175,7 @@ class Episode:
         self._percept: Percept | None = None  # sensed, not yet acted on
         self.detector_errors = 0
         self.clock = StageClock()  # wall time per stage (`lanekeep perf`)
-        self.detection = DetectionRunner(process_threads())
+        self.detection = DetectionRunner(threads_now)
         self._tyre_geoms = [self.world.model.geom(n).id for n in TYRES]
         self._wall_start = time.perf_counter()
 
@@ -249,8 +249,9 @@ class Episode:
         est = self.scenario.estimation
         named = [(name, detector, frames["front"]) for name, detector in self.front.items()]
         named.append((REFERENCE, self.reference, frames[est.reference_camera]))
-        jobs = group_jobs(named, self.detection.parallel)
-        results = self.detection.run(jobs)
+        parallel = self.detection.parallel_now()
+        jobs = group_jobs(named, parallel)
+        results = self.detection.run(jobs, parallel)
         by_name = {name: detected for job, job_results in zip(jobs, results, strict=True)
                    for name, detected in zip(job.names, job_results, strict=True)}
         out, own_s = {}, {}

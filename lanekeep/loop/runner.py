@@ -17,7 +17,13 @@ from lanekeep.core.interrupts import (
     stop_signals_held,
     stop_signals_interrupt,
 )
-from lanekeep.core.workers import init_worker, spawn_context, worker_pool, worker_threads
+from lanekeep.core.workers import (
+    episode_running,
+    init_worker,
+    spawn_context,
+    worker_pool,
+    worker_threads,
+)
 from lanekeep.loop.checks import check_scenario
 from lanekeep.loop.overrides import PluginOverrides
 from lanekeep.report.json_io import report_from_dict
@@ -108,7 +114,7 @@ def _bench_one(job: BenchJob, seconds: float | None, plots: str | None,
         if _STEPS is not None:
             _STEPS.put((index, done))
 
-    with stop_signals_interrupt():  # only while an episode runs (lanekeep/core/interrupts.py)
+    with stop_signals_interrupt(), episode_running():  # lanekeep/core/interrupts.py, workers.py
         if _STOP is not None and _STOP.is_set():  # queued before the bench was stopped
             return None
         return run_episode(job.scenario, job.seed, seconds, plots_dir, record, mode=job.mode,
@@ -122,12 +128,13 @@ _STOP = None  # in a bench worker: the parent's "stop" event (multiprocessing.Ev
 _STEPS = None  # in a bench worker: the parent's queue of (job index, steps done)
 
 
-def _init_worker(threads: int, stop, steps=None) -> None:
+def _init_worker(threads: int, stop, steps=None, running=None) -> None:
     """Runs first in every bench worker (lanekeep/core/workers.py), and keeps the parent's
-    `stop` event (no episode starts once it is set) and `steps` queue (its episodes' progress)."""
+    `stop` event (no episode starts once it is set), `steps` queue (its episodes' progress)
+    and count of running episodes (an episode alone at the end runs on both cores)."""
     global _STOP, _STEPS
     _STOP, _STEPS = stop, steps
-    init_worker(threads)
+    init_worker(threads, running)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -207,8 +214,8 @@ def run_bench(jobs: list[BenchJob], workers: int, seconds: float | None = None,
     start = time.perf_counter()
     reports: list[EpisodeReport | None] = [None] * len(jobs)
     context = spawn_context()
-    stop, steps = context.Event(), context.Queue()
-    pool = worker_pool(workers, _init_worker, (worker_threads(workers), stop, steps))
+    stop, steps, running = context.Event(), context.Queue(), context.Value("i", 0)
+    pool = worker_pool(workers, _init_worker, (worker_threads(workers), stop, steps, running))
     futures = {}
     expected = job_steps(jobs, seconds)
     progress = _StepProgress(expected, steps, on_steps)

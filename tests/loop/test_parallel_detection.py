@@ -43,10 +43,10 @@ def _jobs(detectors) -> list[DetectJob]:
 
 def test_two_threads_share_the_jobs_and_keep_their_order():
     detectors = [_Fake(0.1 * i, sleep_s=0.05, fail=(i == 2)) for i in range(4)]
-    runner = DetectionRunner(threads=2)
+    runner = DetectionRunner(lambda: 2)
     try:
         start = time.perf_counter()
-        results = runner.run(_jobs(detectors))
+        results = runner.run(_jobs(detectors), runner.parallel_now())
         wall = time.perf_counter() - start
     finally:
         runner.close()
@@ -61,10 +61,10 @@ def test_two_threads_share_the_jobs_and_keep_their_order():
 
 def test_one_thread_runs_every_job_itself():
     detectors = [_Fake(0.1 * i) for i in range(3)]
-    runner = DetectionRunner(threads=1)
-    results = runner.run(_jobs(detectors))
+    runner = DetectionRunner(lambda: 1)
+    results = runner.run(_jobs(detectors), runner.parallel_now())
     runner.close()
-    assert not runner.parallel
+    assert not runner.parallel_now()
     assert [r[0].estimate.offset_m for r in results] == pytest.approx([0.0, 0.1, 0.2])
     assert {t for d in detectors for t in d.threads} == {threading.current_thread().name}
 
@@ -103,7 +103,7 @@ def _run(name: str, threads: int, monkeypatch) -> tuple[dict, list]:
     monkeypatch.setenv(THREADS_ENV, str(threads))
     scenario = replace(load_scenario(name), duration_s=1.5)
     with Episode(scenario, render_size=(640, 360)) as episode:
-        assert episode.detection.parallel == (threads >= 2)
+        assert episode.detection.parallel_now() == (threads >= 2)
         steps = [episode.step() for _ in range(episode.total_steps)]
         report = episode.report().to_dict()
     estimates = [{name: (e.valid, e.offset_m, e.x_m, e.confidence, e.reason,

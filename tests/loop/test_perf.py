@@ -87,3 +87,24 @@ def test_stage_clock_splits_the_time_between_laps(monkeypatch):
     clock.start()  # 10.0
     clock.lap("render")  # 10.5
     assert clock.mean_ms() == {"render": 375.0, "detect": 375.0}
+
+
+def test_an_episode_alone_in_a_bench_gets_the_cores_the_finished_ones_left(monkeypatch):
+    """A bench worker's share of the cores follows the episodes running now: with as many
+    running as cores each has one thread; the last one left has them all."""
+    import multiprocessing
+    import os
+
+    from lanekeep.core import workers
+
+    cpus = os.cpu_count() or 1
+    running = multiprocessing.get_context("spawn").Value("i", 0)
+    monkeypatch.setattr(workers, "_RUNNING", running)
+    running.value = cpus - 1  # the others
+    with workers.episode_running():
+        assert running.value == cpus
+        assert workers.threads_now() == 1
+        running.value = 0  # they finished
+        assert workers.threads_now() == cpus
+        running.value = 1
+    assert running.value == 0
