@@ -218,17 +218,28 @@ def build_set(condition: str, recipe: EvalRecipe) -> dict[str, np.ndarray]:
 
 
 def renderer_fingerprint() -> str:
-    """Hash of the code and models that draw a set (the package's modules and MJCF files): a
-    cached set made by other code is rendered again rather than silently scored (any change
-    counts, so a cache outlives no edit of the package)."""
-    root = Path(__file__).resolve().parent
-    from lanekeep.mjcf import CAR_XML
-
+    """Hash of the code and models that draw a set (every module of the lanekeep package, its
+    subpackages included, and the MJCF files): a cached set made by other code is rendered
+    again rather than silently scored (any change counts, so a cache outlives no edit of the
+    package). Only this folder's modules were hashed once, and the world, camera and scenario
+    code had moved to lanekeep/world, lanekeep/sensing and lanekeep/scenario: a changed
+    renderer then read the old renders."""
     digest = hashlib.sha256()
-    for path in sorted([*root.glob("*.py"), *Path(CAR_XML).parent.glob("*.xml")]):
-        digest.update(path.name.encode())
+    for name, path in fingerprinted_files():
+        digest.update(name.encode())
         digest.update(path.read_bytes())
     return digest.hexdigest()
+
+
+def fingerprinted_files() -> list[tuple[str, Path]]:
+    """(name, path) of every file `renderer_fingerprint` hashes, sorted by name."""
+    import lanekeep
+    from lanekeep.mjcf import CAR_XML
+
+    root = Path(lanekeep.__file__).resolve().parent
+    paths = [(p.relative_to(root).as_posix(), p) for p in root.rglob("*.py")]
+    paths += [(f"mjcf/{p.name}", p) for p in Path(CAR_XML).parent.glob("*.xml")]
+    return sorted(paths)
 
 
 def set_key(condition: str, recipe: EvalRecipe) -> str:

@@ -270,3 +270,14 @@ def test_eval_runs_lanenet_from_a_weights_file(tmp_path):
     s = doc["conditions"]["clear"]["detectors"]["lanenet"]
     assert s["frames"] == 3 and s["ms"] > 0 and s["gt_boxes"] > 0
     assert s["ap"] is not None and 0.0 <= s["ap"] <= 1.0
+
+
+def test_the_eval_cache_key_covers_the_code_that_renders_a_set():
+    """A cached test set is rendered again after any edit of the world, camera or scenario
+    code, not only of lanekeep/evaluation (the key once hashed that folder alone)."""
+    from lanekeep.evaluation.eval_sets import fingerprinted_files
+
+    names = {name for name, _ in fingerprinted_files()}
+    for needed in ("world/build.py", "sensing/cameras.py", "sensing/camera_sensor.py",
+                   "scenario/schema.py", "evaluation/eval_sets.py", "mjcf/car.xml"):
+        assert needed in names, needed
