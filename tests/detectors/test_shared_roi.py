@@ -97,6 +97,19 @@ def _detectors(cameras, memo):
     return out
 
 
+def _count_regions(monkeypatch) -> list:
+    """The frames `region_of_interest` is computed for from now on (it still computes)."""
+    calls = []
+    fresh = image_stage.region_of_interest
+
+    def counted(*args, **kwargs):
+        calls.append(args[0])
+        return fresh(*args, **kwargs)
+
+    monkeypatch.setattr(image_stage, "region_of_interest", counted)
+    return calls
+
+
 def test_the_band_gives_the_vehicle_cue_something_to_hide(scene):
     """The banded frames exercise the shared vehicle mask (else the tests below hold less)."""
     frames, cameras = scene
@@ -109,14 +122,8 @@ def test_the_band_gives_the_vehicle_cue_something_to_hide(scene):
 
 def test_a_remembered_region_equals_a_fresh_one_and_is_computed_once(scene, monkeypatch):
     frames, cameras = scene
-    calls = []
     fresh = image_stage.region_of_interest
-
-    def counted(*args, **kwargs):
-        calls.append(args[0])
-        return fresh(*args, **kwargs)
-
-    monkeypatch.setattr(image_stage, "region_of_interest", counted)
+    calls = _count_regions(monkeypatch)
     memo = RoiMemo()
     for images in frames:
         for cam, frame in images.items():
@@ -191,14 +198,7 @@ def test_two_models_at_once_on_two_threads(scene, monkeypatch):
     run them): their estimates are those of one thread without sharing, and each frame's
     region is computed once."""
     frames, cameras = scene
-    calls = []
-    fresh = image_stage.region_of_interest
-
-    def counted(*args, **kwargs):
-        calls.append(args[0])
-        return fresh(*args, **kwargs)
-
-    monkeypatch.setattr(image_stage, "region_of_interest", counted)
+    calls = _count_regions(monkeypatch)
     alone, shared = _detectors(cameras, None), _detectors(cameras, RoiMemo())
     steps = [{cam: f.copy() for cam, f in images.items()} for images in frames * 3]
     expected = [{name: alone[name, "front"].detect(images["front"]) for name in MODELS}
