@@ -31,6 +31,12 @@ import os
 
 os.environ.setdefault("MUJOCO_GL", "egl")
 
+# Every numeric library capped at AVX2 before it loads, so that two machines give the same
+# numbers (lanekeep/core/reproducibility.py; LANEKEEP_PIN=0 opts out).
+from lanekeep.core.reproducibility import pin_kernels as _pin_kernels  # noqa: E402
+
+_pin_kernels()
+
 __version__ = "0.1.0"
 
 # The repository keeps detectors/, estimators/ and mjcf/ beside this folder; an install maps

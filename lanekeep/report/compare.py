@@ -204,6 +204,12 @@ def _notes(a: Run, b: Run, labels: Sequence[str]) -> list[str]:
     va, vb = a.first().get("lanekeep_version"), b.first().get("lanekeep_version")
     if va != vb:
         notes.append(f"lanekeep version differs: {a.name} {va}, {b.name} {vb}")
+    kernels = kernel_differences(a.first().get("reproducibility"),
+                                 b.first().get("reproducibility"))
+    if kernels:
+        notes.append(f"kernel settings differ ({', '.join(kernels)}): the two runs would not "
+                     "agree to the bit even without a change; a verdict still holds, an exact "
+                     "tie does not (docs/reproducibility.md#across-machines)")
     for run in (a, b):
         for label in labels:
             for seed, e in sorted(run.episodes(label).items()):
@@ -214,6 +220,23 @@ def _notes(a: Run, b: Run, labels: Sequence[str]) -> list[str]:
         notes.append("one seed per label: no interval, every per-label verdict "
                      "indistinguishable (run bench with --seeds N)")
     return notes
+
+
+def kernel_differences(a: dict | None, b: dict | None) -> list[str]:
+    """Which parts of two reports' `reproducibility` settings differ (renderer, torch,
+    opencv, numpy, env, pinned); [] when either report predates the key."""
+    if not isinstance(a, dict) or not isinstance(b, dict):
+        return []
+    return [k for k in ("pinned", "renderer", "torch", "opencv", "numpy", "env")
+            if _kernels_only(a.get(k)) != _kernels_only(b.get(k))]
+
+
+def _kernels_only(value: Any) -> Any:
+    """A setting without its thread counts: the loop gives the same numbers on any number of
+    threads (docs/reproducibility.md), so those do not make two runs incomparable."""
+    if isinstance(value, dict):
+        return {k: v for k, v in value.items() if k != "threads" and not k.endswith("_THREADS")}
+    return value
 
 
 def run_settings(doc: dict) -> dict[str, Any]:

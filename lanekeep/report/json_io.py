@@ -11,6 +11,9 @@ Each document carries where it came from (METADATA_KEYS):
                      whose `source` is no readable file: of its canonical form, the dataclass
                      repr with `source` blanked)
   seed               the seed the episode ran with (a `--seed` override, not the file's)
+  reproducibility    the kernel settings in effect (renderer, torch, OpenCV, numpy and its BLAS,
+                     the pinning variables; lanekeep/core/reproducibility.py): two reports agree
+                     to the bit only where these agree
 
 Files are written atomically: to a temporary file beside the target, then renamed over it, so
 a reader never sees a half-written file and an interrupted write leaves the old file (or none).
@@ -27,10 +30,12 @@ import typing
 from pathlib import Path
 from typing import Any
 
+from lanekeep.core.reproducibility import settings_now
 from lanekeep.scoring.metrics import EpisodeReport, SourceReport
 
 SCHEMA_VERSION = 2  # 2: bench documents summarise seeds (lanekeep/report/seed_summary.py)
-METADATA_KEYS = ("schema_version", "lanekeep_version", "scenario_sha256", "seed")
+METADATA_KEYS = ("schema_version", "lanekeep_version", "scenario_sha256", "seed",
+                 "reproducibility")
 
 
 def strict(obj: Any) -> Any:
@@ -98,6 +103,7 @@ def with_metadata(document: dict, scenario, seed: int | None = None) -> dict:
         "lanekeep_version": lanekeep_version(),
         "scenario_sha256": scenario_sha256(scenario),
         "seed": seed if seed is not None else document.get("seed", scenario.seed),
+        "reproducibility": settings_now(),
     }
     return {**head, **{k: v for k, v in document.items() if k not in head}}
 

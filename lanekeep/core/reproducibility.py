@@ -1,0 +1,164 @@
+"""What decides the low bits of a result on this machine, and the pins that make two x86-64
+machines with AVX2 agree bit for bit.
+
+A closed loop grows a one-ulp difference into another drive within seconds, so a laptop, a CI
+runner and a Ray worker give comparable numbers only if every kernel rounds alike. Measured
+with tools/stage_hashes.py (docs/reproducibility.md): oneDNN's AVX-512 convolutions (LaneNet),
+numpy's AVX-512 loops and OpenBLAS's per-CPU kernels each change a detection; llvmpipe, OpenCV,
+MKL and ATen's own kernels did not, from AVX2 to AVX-512. `pin_kernels()` caps each library at
+AVX2 through the environment variables they read when they load; `import lanekeep` calls it
+first, so it takes effect wherever lanekeep is imported before numpy and torch (the CLI, bench
+workers, Ray tasks). `LANEKEEP_PIN=0` leaves the libraries to choose; a variable the user set
+wins. Every report carries `settings_now()` (its `reproducibility` key): two reports whose
+settings differ are not expected to agree to the bit.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import functools
+import os
+import sys
+from typing import Any
+
+PIN_ENV = "LANEKEEP_PIN"
+
+# The highest ISA every kernel may use: AVX2 (+FMA), which every x86-64 CPU since 2013-2015
+# has. Names for numpy 2.4 (X86_V4, AVX512_*) and numpy 1.26 (AVX512F, ...); unknown names
+# are ignored by numpy.
+PINNED: dict[str, str] = {
+    "ONEDNN_MAX_CPU_ISA": "AVX2",          # torch's convolutions (LaneNet)
+    "ATEN_CPU_CAPABILITY": "avx2",         # torch's own vectorised ops
+    "NPY_DISABLE_CPU_FEATURES": "X86_V4 AVX512_ICL AVX512_SPR AVX512F AVX512CD AVX512_KNL "
+                                "AVX512_KNM AVX512_SKX AVX512_CLX AVX512_CNL",
+    "OPENBLAS_CORETYPE": "Haswell",        # numpy's and scipy's BLAS/LAPACK kernels and blocking
+    "GALLIUM_OVERRIDE_CPU_CAPS": "avx",    # llvmpipe's shaders: AVX2 at most
+    "LP_NATIVE_VECTOR_WIDTH": "256",       # llvmpipe's vector width (its default with AVX)
+}
+# OpenCV's AVX-512 dispatch targets and the CPU flags (/proc/cpuinfo) each needs. OpenCV warns
+# on every import about a name this CPU lacks, so only the ones present are disabled.
+_SKX = ("avx512f", "avx512cd", "avx512bw", "avx512dq", "avx512vl")
+OPENCV_AVX512: dict[str, tuple[str, ...]] = {
+    "AVX512F": ("avx512f",),
+    "AVX512-COMMON": ("avx512f", "avx512cd"),
+    "AVX512-SKX": _SKX,
+    "AVX512-CNL": (*_SKX, "avx512ifma", "avx512vbmi"),
+    "AVX512-CLX": (*_SKX, "avx512_vnni"),
+    "AVX512-ICL": (*_SKX, "avx512ifma", "avx512vbmi", "avx512_vbmi2", "avx512_bitalg",
+                   "avx512_vpopcntdq", "avx512_vnni"),
+}
+CV_CPU_AVX_512F = 13  # cv::CPU_AVX_512F
+
+# Which libraries had loaded before the pin (their variables were read already).
+_loaded_before_pin: list[str] = []
+
+def pinning_enabled() -> bool:
+    return os.environ.get(PIN_ENV, "1").strip().lower() not in ("0", "false", "no", "off")
+
+
+def pin_kernels() -> None:
+    """Cap every numeric library at AVX2 (see the module's docstring); the user's own values
+    of these variables are kept. Call before numpy, torch, cv2 and the renderer load."""
+    if not pinning_enabled():
+        return
+    _loaded_before_pin[:] = [m for m in ("numpy", "torch", "cv2") if m in sys.modules]
+    for key, value in PINNED.items():
+        os.environ.setdefault(key, value)
+    opencv = opencv_disable(_cpu_flags())
+    if opencv:
+        os.environ.setdefault("OPENCV_CPU_DISABLE", opencv)
+
+
+def _cpu_flags() -> set[str]:
+    try:
+        with open("/proc/cpuinfo") as cpuinfo:
+            for line in cpuinfo:
+                if line.startswith("flags"):
+                    return set(line.split(":", 1)[1].split())
+    except OSError:
+        pass
+    return set()
+
+
+def opencv_disable(flags: set[str]) -> str:
+    """OPENCV_CPU_DISABLE's value for a CPU with these flags: its AVX-512 targets."""
+    return ",".join(name for name, needs in OPENCV_AVX512.items()
+                    if all(flag in flags for flag in needs))
+
+
+# Environment variables that choose kernels, read by the libraries when they load.
+KERNEL_ENV = ("LP_NATIVE_VECTOR_WIDTH", "LP_NUM_THREADS", "ATEN_CPU_CAPABILITY",
+              "ONEDNN_MAX_CPU_ISA", "DNNL_MAX_CPU_ISA", "MKL_ENABLE_INSTRUCTIONS", "MKL_CBWR",
+              "OPENCV_CPU_DISABLE", "NPY_DISABLE_CPU_FEATURES", "OPENBLAS_CORETYPE",
+              "OMP_NUM_THREADS", "GALLIUM_OVERRIDE_CPU_CAPS", PIN_ENV)
+
+
+@functools.cache
+def gl_renderer() -> str:
+    """The OpenGL renderer string, e.g. "llvmpipe (LLVM 15.0.6, 256 bits)": llvmpipe names its
+    vector width there. Made from a tiny offscreen context once per process."""
+    import mujoco
+    from OpenGL import GL
+
+    model = mujoco.MjModel.from_xml_string("<mujoco><worldbody/></mujoco>")
+    renderer = mujoco.Renderer(model, 8, 8)
+    try:
+        renderer._gl_context.make_current()
+        return GL.glGetString(GL.GL_RENDERER).decode()
+    finally:
+        renderer.close()
+
+
+def _numpy_dispatch() -> list[str]:
+    """The SIMD targets numpy dispatches to here (its baseline plus the enabled extras)."""
+    try:
+        from numpy._core import _multiarray_umath as umath
+    except ImportError:  # numpy < 2
+        from numpy.core import _multiarray_umath as umath
+    features = umath.__cpu_features__
+    return list(umath.__cpu_baseline__) + [d for d in umath.__cpu_dispatch__ if features.get(d)]
+
+
+def _openblas_core() -> str | None:
+    """The core type OpenBLAS chose (or was told), from the library numpy loaded."""
+    import numpy  # noqa: F401 - loads its OpenBLAS
+
+    try:
+        with open("/proc/self/maps") as maps:
+            paths = {line.split()[-1] for line in maps if "openblas" in line.lower()}
+    except OSError:
+        return None
+    for path in sorted(paths):
+        lib = ctypes.CDLL(path)
+        for name in ("scipy_openblas_get_corename64_", "scipy_openblas_get_corename",
+                     "openblas_get_corename"):
+            fn = getattr(lib, name, None)
+            if fn is not None:
+                fn.restype = ctypes.c_char_p
+                return fn().decode()
+    return None
+
+
+def settings_now(renderer: bool = True) -> dict[str, Any]:
+    """The settings in effect in this process (what a report's `reproducibility` key holds)."""
+    import cv2
+    import numpy as np
+    import torch
+
+    unpinned = list(_loaded_before_pin)
+    out: dict[str, Any] = {
+        "pinned": pinning_enabled() and not unpinned,
+        "loaded_before_pin": unpinned,
+        "renderer": gl_renderer() if renderer else None,
+        "torch": {"version": torch.__version__,
+                  "cpu_capability": torch.backends.cpu.get_cpu_capability(),
+                  "mkldnn": bool(torch.backends.mkldnn.enabled),
+                  "threads": torch.get_num_threads()},
+        "opencv": {"version": cv2.__version__, "optimized": bool(cv2.useOptimized()),
+                   "avx512": bool(cv2.checkHardwareSupport(CV_CPU_AVX_512F)),
+                   "threads": cv2.getNumThreads()},
+        "numpy": {"version": np.__version__, "simd": _numpy_dispatch(),
+                  "blas_core": _openblas_core()},
+        "env": {k: os.environ[k] for k in KERNEL_ENV if k in os.environ},
+    }
+    return out

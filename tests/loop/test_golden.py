@@ -1,0 +1,55 @@
+"""The golden runs (lanekeep/loop/golden.py, tests/data/golden/): this machine computes what
+the committed files say, to the bit, and a changed renderer or kernel setting is caught and
+named by its first differing stage.
+
+Each check runs in its own process: `import lanekeep` must come before numpy for the kernel
+pins to take effect, which a test session cannot promise."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+TOOL = ROOT / "tools" / "golden.py"
+ONE = "case4_half_shade_straight"
+
+
+def _check(*args: str, **env: str) -> subprocess.CompletedProcess:
+    environment = {**os.environ, **env}
+    return subprocess.run([sys.executable, str(TOOL), "--check", *args], cwd=ROOT,
+                          env=environment, capture_output=True, text=True, timeout=600)
+
+
+def test_golden_runs_match_this_machine():
+    done = _check()
+    assert done.returncode == 0, (
+        "the golden runs differ on this machine: if a change meant to alter results, "
+        "regenerate with `python tools/golden.py --write` and say why in the commit; if not, "
+        "this machine or a library computes differently (docs/reproducibility.md)\n"
+        + done.stdout + done.stderr)
+    assert done.stdout.count(": identical") == 4
+
+
+@pytest.mark.parametrize(("env", "stage"), [
+    # llvmpipe without AVX and FMA (an older CPU): the renders change
+    ({"GALLIUM_OVERRIDE_CPU_CAPS": "sse4.1"}, "stage render_front"),
+    # oneDNN on SSE4.1 kernels: LaneNet's convolutions sum in another order
+    ({"ONEDNN_MAX_CPU_ISA": "SSE41"}, "stage detections (lanenet, reference)"),
+], ids=["renderer", "torch-kernels"])
+def test_golden_check_names_the_first_stage_a_setting_changes(env, stage):
+    done = _check("--only", ONE, **env)
+    assert done.returncode == 1, done.stdout + done.stderr
+    assert f"{ONE}: DIFFERS" in done.stdout
+    assert stage in done.stdout, done.stdout
+    assert "settings differ from the golden file's in: " in done.stdout
+
+
+def test_golden_tool_refuses_an_unknown_case():
+    done = _check("--only", "no_such_case")
+    assert done.returncode == 2
+    assert done.stderr.strip().startswith("golden: error: no golden case no_such_case")
