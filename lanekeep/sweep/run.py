@@ -13,6 +13,7 @@ import os
 import time
 from collections.abc import Callable
 from concurrent.futures import FIRST_COMPLETED, wait
+from contextlib import contextmanager
 from dataclasses import dataclass
 
 from lanekeep.core.workers import THREADS_ENV, worker_pool
@@ -103,6 +104,34 @@ def run_ray(cells: list[Cell], source: str, seconds: float | None, on_result: On
     with `num_cpus` CPUs (None: all). Every node needs lanekeep installed."""
     import ray
 
+    with ray_session(address, num_cpus):
+        task = ray.remote(num_cpus=1, max_retries=0)(_ray_cell)
+        refs: dict = {}
+        try:
+            refs = {task.remote(c.cell_id, c.table, source, seconds): c for c in cells}
+            pending = list(refs)
+            while pending:
+                done, pending = ray.wait(pending, num_returns=1, timeout=0.5)
+                for ref in done:
+                    try:
+                        result = ray.get(ref)
+                    except Exception as err:  # noqa: BLE001 - a task whose worker died
+                        result = CellResult(refs[ref].cell_id, "failed", None,
+                                            " ".join(f"{type(err).__name__}: {err}".split()
+                                                     )[:500], 0.0)
+                    on_result(result)
+        except BaseException:
+            for ref in refs:
+                ray.cancel(ref, force=True)
+            raise
+
+
+@contextmanager
+def ray_session(address: str | None = None, num_cpus: int | None = None):
+    """Ray connected for what runs inside (one start for many `run_ray` calls, e.g. the
+    batches of a search); a Ray already connected is used and left as it is."""
+    import ray
+
     env = {"env_vars": {"LP_NUM_THREADS": "1", THREADS_ENV: "1",
                         "MUJOCO_GL": os.environ.get("MUJOCO_GL", "egl")}}
     started = not ray.is_initialized()
@@ -110,25 +139,8 @@ def run_ray(cells: list[Cell], source: str, seconds: float | None, on_result: On
         kwargs = {"address": address} if address else {"num_cpus": num_cpus}
         ray.init(runtime_env=env, include_dashboard=False, log_to_driver=False,
                  configure_logging=False, **kwargs)
-    task = ray.remote(num_cpus=1, max_retries=0)(_ray_cell)
-    refs: dict = {}
     try:
-        refs = {task.remote(c.cell_id, c.table, source, seconds): c for c in cells}
-        pending = list(refs)
-        while pending:
-            done, pending = ray.wait(pending, num_returns=1, timeout=0.5)
-            for ref in done:
-                try:
-                    result = ray.get(ref)
-                except Exception as err:  # noqa: BLE001 - a task whose worker died
-                    result = CellResult(refs[ref].cell_id, "failed", None,
-                                        " ".join(f"{type(err).__name__}: {err}".split())[:500],
-                                        0.0)
-                on_result(result)
-    except BaseException:
-        for ref in refs:
-            ray.cancel(ref, force=True)
-        raise
+        yield
     finally:
         if started:
             ray.shutdown()
