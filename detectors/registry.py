@@ -39,7 +39,7 @@ from __future__ import annotations
 
 import importlib
 import inspect
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from contextvars import ContextVar
 from dataclasses import dataclass
@@ -128,6 +128,14 @@ def check_detector(name: str, key: str = "") -> None:
 def known_detectors() -> list[str]:
     """Built-in names and those installed distributions register as entry points."""
     return sorted(set(DETECTORS) | set(LAZY) | set(plugins.entry_point_names(plugins.DETECTORS)))
+
+
+def front_labels(names: Sequence[str]) -> list[str]:
+    """The labels reports, recordings and the agent faces give the front detectors `names`: a
+    plug-in given by import path by its own `name` (lanekeep/core/plugins.py `plugin_labels`),
+    never a built-in's name nor a report's own columns ("fused", "reference")."""
+    return plugins.plugin_labels(names, plugins.DETECTORS,
+                                 {*known_detectors(), "fused", "reference"})
 
 
 def takes_weights(name: str) -> bool:

@@ -28,6 +28,8 @@ from pathlib import Path
 
 EXIT_OK, EXIT_FAILURE, EXIT_BAD_INPUT = 0, 1, 2
 MIN_IMAGE_PX = 64
+# What a folder given to `detect` contributes: its files with these suffixes (any case).
+IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff", ".webp")
 
 
 def _error(command: str, message: str) -> int:
@@ -147,6 +149,24 @@ def _overlay_path(folder: str, image: str) -> Path:
     return Path(folder) / (Path(image).stem + ".png")
 
 
+def expand_folders(paths: list[str]) -> tuple[list[str], list[str]]:
+    """(images, problems): each folder in `paths` replaced by its images (IMAGE_SUFFIXES, not
+    hidden, not in subfolders) sorted by name; a folder with none is a problem."""
+    images, problems = [], []
+    for path in paths:
+        if not Path(path).is_dir():
+            images.append(path)
+            continue
+        found = sorted(str(p) for p in Path(path).iterdir()
+                       if p.is_file() and not p.name.startswith(".")
+                       and p.suffix.lower() in IMAGE_SUFFIXES)
+        if not found:
+            problems.append(f"{path}: a folder with no images in it "
+                            f"({', '.join(IMAGE_SUFFIXES)})")
+        images.extend(found)
+    return images, problems
+
+
 def _input_problems(args: argparse.Namespace, camera_file) -> list[str]:
     """Every problem with the inputs and outputs of `detect`, found before anything runs."""
     from lanekeep.realcam.image_io import read_image
@@ -221,7 +241,8 @@ def cmd_detect(args: argparse.Namespace) -> int:
         return _error("detect", str(err))
     dash = config.dashcam
     # All inputs first: a bad one stops the command before any detection or output.
-    problems = _input_problems(args, camera_file)
+    args.images, problems = expand_folders(args.images)
+    problems += _input_problems(args, camera_file)
     weights_problem = _weights_problem(args, config)
     problems += [weights_problem] if weights_problem else []
     if not problems and args.overlay:
@@ -353,14 +374,17 @@ def register(subparsers) -> None:
         "detect", help="run a lane detector on real road photos",
         description="Without --camera the camera is an unknown 1.5 m high dashcam with a "
                     "60 deg horizontal field of view whose pitch is taken from each image's "
-                    "vanishing point (detectors.toml [dashcam]). All images are checked before "
+                    "vanishing point (detectors.toml [dashcam]). A folder stands for its "
+                    "images (PNG, JPEG, BMP, TIFF, WebP; not its subfolders) in sorted order. "
+                    "All images are checked before "
                     "any is processed: if one is missing, empty, truncated, corrupt, not an "
                     "image, too small or (with --camera) not the camera file's size, or the "
                     "--overlay folder cannot be written, or the weights file cannot be loaded, "
                     "each problem is one error line, "
                     "nothing is detected or written, and the exit code is 2.")
-    p.add_argument("images", nargs="+",
-                   help="image files (PNG, JPEG; truncated or corrupt ones are rejected)")
+    p.add_argument("images", nargs="+", metavar="IMAGE_OR_FOLDER",
+                   help="image files (PNG, JPEG; truncated or corrupt ones are rejected) or "
+                        "folders of them")
     p.add_argument("--detector", default="sliding_window", metavar="NAME",
                    help=f"{', '.join(known_detectors())}, or an import path "
                         f"package.module:Class (default: sliding_window)")

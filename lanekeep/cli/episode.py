@@ -4,6 +4,11 @@ calls are in lanekeep/loop/runner.py, the tables in lanekeep/report/tables.py).
 `--weights FILE` gives every learned detector (LaneNet) of the episodes that file; it is loaded
 once before anything runs or is written (as is the shipped file when a scenario uses LaneNet
 without --weights), and a bad one is one line "lanekeep CMD: error: FILE: why", exit 2.
+
+`--size WxH` renders both cameras at that size (sugar for `--set camera.width=W --set
+camera.height=H`: the detectors' camera models follow the render). Progress goes to stderr
+(lanekeep/core/progress.py) unless `--quiet`; the tables fit 100 columns unless `--wide`;
+outputs follow lanekeep/cli/outputs.py (`--json -` is stdout, folders are created).
 """
 
 from __future__ import annotations
@@ -11,9 +16,16 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import math
+import re
 import sys
 from pathlib import Path
 
+from lanekeep.cli.outputs import (
+    check_outputs,
+    human_stream,
+    write_json_output,
+    write_junit_output,
+)
 from lanekeep.cli.plugins import add_options as add_plugin_options
 from lanekeep.cli.plugins import overrides_from_args
 from lanekeep.core.config_io import ConfigError
@@ -21,11 +33,13 @@ from lanekeep.core.interrupts import (
     stop_signals_held,
 )
 from lanekeep.loop.checks import check_scenario, check_weights_option
+from lanekeep.loop.overrides import PluginOverrides
 from lanekeep.loop.runner import BenchInterrupted, BenchJob, job_steps, run_bench, run_episode
-from lanekeep.report.json_io import report_document, write_json
+from lanekeep.report.json_io import report_document
 from lanekeep.report.tables import (
     bench_verdict,
     drift_table,
+    episode_table,
     interval_table,
     paired_table,
     single_model_table,
@@ -52,6 +66,28 @@ def check_options(args: argparse.Namespace) -> None:
             raise ConfigError("", option, f"{rule}, got {value}")
 
 
+SIZE_PX = (64, 4096)  # the sides --size takes (64: as `lanekeep detect`'s smallest photo)
+
+
+def parse_size(text: str) -> tuple[int, int]:
+    """`--size WxH` as (width, height) in pixels; ConfigError naming the option otherwise."""
+    match = re.fullmatch(r"\s*(\d+)\s*[xX]\s*(\d+)\s*", text)
+    lo, hi = SIZE_PX
+    if not match or not all(lo <= int(v) <= hi for v in match.groups()):
+        raise ConfigError("", "--size", f"must be WIDTHxHEIGHT in pixels, each {lo}..{hi} "
+                                        f"(e.g. 640x360), got {text!r}")
+    return int(match[1]), int(match[2])
+
+
+def with_size(plugins: PluginOverrides, args: argparse.Namespace) -> PluginOverrides:
+    """The command line's scenario changes with `--size` first, as `--set camera.width=W
+    --set camera.height=H` (an explicit `--set` of either key comes later and wins)."""
+    if args.size is None:
+        return plugins
+    width, height = parse_size(args.size)
+    return dataclasses.replace(plugins, settings=(("camera.width", width),
+                                                  ("camera.height", height),
+                                                  *plugins.settings))
 
 
 def weights_error(command: str, args: argparse.Namespace, scenarios: list[Scenario]
@@ -67,56 +103,30 @@ def weights_error(command: str, args: argparse.Namespace, scenarios: list[Scenar
     return None
 
 
-
-
 def _cmd_run(args: argparse.Namespace) -> int:
     from lanekeep.scenario.schema import load_scenario
 
     check_options(args)
     overrides = criteria_mod.overrides_from_args(args)
-    plugins = overrides_from_args(args)
+    plugins = with_size(overrides_from_args(args), args)
     scenario = plugins.apply(load_scenario(args.scenario))
     code = weights_error("run", args, [scenario])
     if code is not None:
         return code
+    check_outputs(args)
     report = run_episode(args.scenario, args.seed, args.seconds, args.plots, args.record,
-                         args.record_every, args.jpeg_quality, progress=sys.stderr.isatty(),
+                         args.record_every, args.jpeg_quality, progress=not args.quiet,
                          mode=args.mode, weights=args.weights, criteria=overrides,
                          plugins=plugins)
+    out = human_stream(args)
     print(f"scenario {report.scenario} (seed {report.seed}): {report.duration_s:.1f} s simulated "
-          f"in {report.wall_s:.1f} s")
-    print(report.table())
+          f"in {report.wall_s:.1f} s", file=out)
+    print(episode_table(report, args.wide), file=out)
     if args.json:
-        write_json(args.json, report_document(report, scenario))
+        write_json_output(args.json, report_document(report, scenario))
     if report.status == "interrupted":
         return 130
     return 0 if report.passed else 1  # a stopped episode fails its "status" criterion
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
-
 
 
 def bench_seeds(args: argparse.Namespace, scenario: Scenario) -> list[int | None]:
@@ -136,7 +146,7 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     if args.seeds is not None and args.seeds < 1:
         raise ConfigError("", "--seeds", f"must be >= 1, got {args.seeds}")
     overrides = criteria_mod.overrides_from_args(args)
-    plugins = overrides_from_args(args)
+    plugins = with_size(overrides_from_args(args), args)
     names = args.scenarios or shipped_scenarios()
     # as each episode will run them: the mode first (its own front models), then the command
     # line's detectors; fail fast on a bad name
@@ -150,6 +160,7 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     code = weights_error("bench", args, list(scenarios.values()))
     if code is not None:
         return code
+    check_outputs(args)
     if args.record_dir:
         Path(args.record_dir).mkdir(parents=True, exist_ok=True)
     many = (args.seeds or 1) > 1
@@ -161,9 +172,11 @@ def _cmd_bench(args: argparse.Namespace) -> int:
                  for model in scenarios[name].estimation.front_detectors
                  for seed in seeds[name]]
     from lanekeep.core.progress import set_progress, step_bar
-    from lanekeep.report.junit import write_junit
 
-    bar = step_bar(sum(job_steps(jobs, args.seconds)), f"bench ({len(jobs)} episodes)")
+    periods = {scenario.control_period_s for scenario in scenarios.values()}
+    bar = step_bar(sum(job_steps(jobs, args.seconds)), f"bench ({len(jobs)} episodes)",
+                   enabled=False if args.quiet else None,
+                   step_s=periods.pop() if len(periods) == 1 else None)
     try:
         with bar:
             done_reports, wall = run_bench(
@@ -175,32 +188,35 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     reports = {job.episode_label: r for job, r in zip(jobs, done_reports, strict=True)}
     documents = bench_documents(args, jobs, done_reports, scenarios, plugins)
     if args.json:  # first: a failing table must not lose the episodes
-        write_json(args.json, documents)
+        write_json_output(args.json, documents)
     if args.junit:
-        write_junit(args.junit, reports, wall)
+        write_junit_output(args.junit, reports, wall)
+    out = human_stream(args)
     main_labels = [job.episode_label for job in main_jobs]
     if not many:
         for label in main_labels:
             r = reports[label]
-            print(f"\n== {label} (seed {r.seed}, {r.duration_s:.0f} s, wall {r.wall_s:.0f} s) ==")
-            print(r.table())
-        print("\n" + summary_table([reports[label] for label in main_labels]))
-        print("\n" + drift_table([reports[label] for label in main_labels]))
+            print(f"\n== {label} (seed {r.seed}, {r.duration_s:.0f} s, wall {r.wall_s:.0f} s) ==",
+                  file=out)
+            print(episode_table(r, args.wide), file=out)
+        print("\n" + summary_table([reports[label] for label in main_labels], args.wide),
+              file=out)
+        print("\n" + drift_table([reports[label] for label in main_labels]), file=out)
         if args.single_model:
-            print("\n" + single_model_table(jobs, reports))
+            print("\n" + single_model_table(jobs, reports), file=out)
     main_docs = [documents[name_label] for name_label in dict.fromkeys(
         job.label for job in main_jobs)]
     print(f"\nover {args.seeds} seeds each" + (f", {args.seed} on" if args.seed is not None
                                                  else ", from each file's own seed on")
-          if many else "")
-    print(interval_table(main_docs))
+          if many else "", file=out)
+    print(interval_table(main_docs, args.wide), file=out)
     if many or args.single_model:
-        print("\n" + paired_table(main_docs))
+        print("\n" + paired_table(main_docs), file=out)
     print(f"\nbench wall time: {wall:.1f} s for {len(jobs)} episodes "
-          f"with {args.workers} workers")
+          f"with {args.workers} workers", file=out)
     lines, code = bench_verdict(reports, main_labels,
                                 "episodes (scenario x seed)" if many else "scenarios")
-    print("\n".join(lines))
+    print("\n".join(lines), file=out)
     return code
 
 
@@ -238,19 +254,18 @@ def _bench_interrupted(args: argparse.Namespace, jobs: list[BenchJob],
         kept = {job.episode_label: (job, r) for job, r in zip(jobs, stop.reports, strict=True)
                 if r is not None}
         if args.json:
-            write_json(args.json, {label: report_document(r, scenarios[job.scenario])
-                                   for label, (job, r) in kept.items()})
+            write_json_output(args.json, {label: report_document(r, scenarios[job.scenario])
+                                          for label, (job, r) in kept.items()})
         if args.junit:
-            from lanekeep.report.junit import write_junit
-
-            write_junit(args.junit, {job.episode_label: kept.get(job.episode_label,
-                                                                  (job, None))[1]
-                                     for job in jobs}, stop.wall_s)
+            write_junit_output(args.junit, {job.episode_label: kept.get(job.episode_label,
+                                                                         (job, None))[1]
+                                            for job in jobs}, stop.wall_s)
         print(file=sys.stderr)
+        out = human_stream(args)
         for label, (_, r) in kept.items():
             state = "complete" if r.completed else f"stopped: {r.stop_reason}"
-            print(f"\n== {label} (seed {r.seed}, {r.duration_s:.0f} s, {state}) ==")
-            print(r.table())
+            print(f"\n== {label} (seed {r.seed}, {r.duration_s:.0f} s, {state}) ==", file=out)
+            print(episode_table(r, args.wide), file=out)
         partial = [label for label, (_, r) in kept.items() if not r.completed]
         not_run = [job.episode_label for job in jobs if job.episode_label not in kept]
         print(f"bench interrupted after {stop.wall_s:.1f} s: {len(kept) - len(partial)} "
@@ -260,31 +275,22 @@ def _bench_interrupted(args: argparse.Namespace, jobs: list[BenchJob],
     return 130
 
 
-
-
-
-
-
-
-
-
-
-
-
-
 def register(sub) -> None:
     p = sub.add_parser("run", help="run one closed-loop episode and print its table")
     p.add_argument("scenario", help="shipped scenario name or path to a .toml file")
     p.add_argument("--seed", type=int, default=None, help="override the scenario's seed")
     p.add_argument("--seconds", type=float, default=None, help="stop after S simulated seconds")
-    p.add_argument("--json", default=None, help="write the report as JSON")
-    p.add_argument("--plots", default=None, help="folder for PNG plots")
-    p.add_argument("--record", default=None, help="write a rerun recording (.rrd)")
+    p.add_argument("--json", metavar="FILE", default=None,
+                   help="write the report as JSON; '-': to stdout (the tables go to stderr)")
+    p.add_argument("--plots", metavar="DIR", default=None, help="folder for PNG plots")
+    p.add_argument("--record", metavar="FILE", default=None,
+                   help="write a rerun recording (.rrd)")
     p.add_argument("--record-every", type=int, default=1, help="record every N-th step")
     p.add_argument("--jpeg-quality", type=int, default=75, help="JPEG quality of recorded images")
     p.add_argument("--mode", choices=ESTIMATION_MODES, default=None,
                    help="estimation mode: 'default' (ours) or 'paper' (paper 001's own loop, "
                         "lanekeep/loop/paper_mode.py); default: the scenario file's")
+    add_display_options(p)
     add_weights_option(p)
     criteria_mod.add_options(p)
     add_plugin_options(p)
@@ -295,7 +301,8 @@ def register(sub) -> None:
     p = sub.add_parser("bench", help="run many scenarios in parallel; paper-style tables",
                        epilog=KEYS_HELP, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("scenarios", nargs="*", help="scenario names (default: all shipped)")
-    p.add_argument("--workers", type=int, default=2)
+    p.add_argument("--workers", type=int, default=2,
+                   help="episodes run at once, each in its own process (default: 2)")
     p.add_argument("--seed", type=int, default=None,
                    help="the seed of every episode (default: each file's); with --seeds, the "
                         "first seed")
@@ -306,11 +313,16 @@ def register(sub) -> None:
                         "metric gets its mean, sd and 95%% interval and the fused output a "
                         "paired verdict against each model's own track. Seeds 0-999 are the "
                         "bench's (scored), 1000 and up the tuning tools' (docs/statistics.md)")
-    p.add_argument("--seconds", type=float, default=None)
-    p.add_argument("--json", default=None,
-                   help="write one document per scenario over its seeds (keys below)")
-    p.add_argument("--plots", default=None, help="folder; one subfolder of PNGs per scenario")
-    p.add_argument("--record-dir", default=None, help="write one .rrd per scenario here")
+    p.add_argument("--seconds", type=float, default=None,
+                   help="stop every episode after S simulated seconds (default: each "
+                        "scenario's duration)")
+    p.add_argument("--json", metavar="FILE", default=None,
+                   help="write one document per scenario over its seeds (keys below); '-': "
+                        "to stdout (the tables go to stderr)")
+    p.add_argument("--plots", metavar="DIR", default=None,
+                   help="folder; one subfolder of PNGs per scenario")
+    p.add_argument("--record-dir", metavar="DIR", default=None,
+                   help="write one .rrd per scenario here")
     p.add_argument("--mode", choices=ESTIMATION_MODES, default=None,
                    help="estimation mode for every episode ('default' or 'paper'); "
                         "default: each scenario file's")
@@ -321,10 +333,25 @@ def register(sub) -> None:
     p.add_argument("--junit", metavar="FILE", default=None,
                    help="write JUnit XML for CI: one test case per episode (and per "
                         "single-model run), a <failure> naming each criterion not met")
+    add_display_options(p)
     add_weights_option(p)
     criteria_mod.add_options(p)
     add_plugin_options(p)
     p.set_defaults(func=_cmd_bench)
+
+
+def add_display_options(p: argparse.ArgumentParser) -> None:
+    """--size, --quiet and --wide, alike on `run` and `bench`."""
+    p.add_argument("--size", metavar="WxH", default=None,
+                   help="render both cameras at W x H pixels (e.g. 640x360; the detectors' "
+                        "camera models follow); sugar for --set camera.width=W --set "
+                        "camera.height=H; default: the scenario's (1280x720)")
+    p.add_argument("--quiet", action="store_true",
+                   help="no progress on stderr (otherwise a bar on a terminal, a line every "
+                        "few seconds elsewhere)")
+    p.add_argument("--wide", action="store_true",
+                   help="the full tables (about 190 columns) instead of the compact ones that "
+                        "fit 100 columns")
 
 
 def add_weights_option(p: argparse.ArgumentParser) -> None:

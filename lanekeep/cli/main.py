@@ -27,10 +27,27 @@ def _cmd_scenarios(args: argparse.Namespace) -> int:
     from lanekeep.scenario.schema import load_scenario, shipped_scenarios
 
     names = shipped_scenarios()
+    if args.json:
+        from lanekeep.report.json_io import dumps
+
+        sys.stdout.write(dumps([_scenario_summary(load_scenario(name)) for name in names]))
+        return EXIT_OK
     width = max(len(n) for n in names)
     for name in names:
         print(f"{name:<{width}}  {load_scenario(name).description}")
     return EXIT_OK
+
+
+def _scenario_summary(scenario) -> dict:
+    """`scenarios --json`: what picks a scenario for a run (keys in docs/reports.md)."""
+    return {"name": scenario.name, "description": scenario.description,
+            "path": scenario.source, "seed": scenario.seed, "duration_s": scenario.duration_s,
+            "target_speed_mps": scenario.target_speed_mps,
+            "road_length_m": scenario.road.length_m, "n_lanes": scenario.road.n_lanes,
+            "time_of_day": scenario.conditions.time_of_day,
+            "camera": f"{scenario.camera.width}x{scenario.camera.height}",
+            "front_detectors": list(scenario.estimation.front_detectors),
+            "mode": scenario.estimation.mode}
 
 
 def _cmd_render(args: argparse.Namespace) -> int:
@@ -57,6 +74,10 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True)
 
     p = sub.add_parser("scenarios", help="list the shipped scenarios")
+    p.add_argument("--json", action="store_true",
+                   help="a JSON array on stdout: each scenario's name, description, file, "
+                        "seed, duration, speed, road length, lanes, light, camera size, "
+                        "front detectors and estimation mode")
     p.set_defaults(func=_cmd_scenarios)
 
     p = sub.add_parser("render", help="render front/rear RGB and segmentation PNGs of a scenario")
@@ -78,13 +99,13 @@ def build_parser() -> argparse.ArgumentParser:
 
 def _optional_command_modules() -> list:
     """Subcommands that live in their own modules (detect, calibrate, run, bench, perf, eval,
-    view, sweep, compare)."""
+    view, sweep, compare, falsify)."""
     import importlib
 
     modules = []
     for name in ("lanekeep.cli.detect", "lanekeep.cli.episode", "lanekeep.cli.perf",
                  "lanekeep.cli.eval", "lanekeep.cli.view", "lanekeep.cli.sweep",
-                 "lanekeep.cli.compare"):
+                 "lanekeep.cli.compare", "lanekeep.cli.falsify"):
         try:
             modules.append(importlib.import_module(name))
         except ModuleNotFoundError as err:

@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import importlib
 import re
-from collections.abc import Callable
+from collections.abc import Callable, Collection, Sequence
 from dataclasses import dataclass
 from importlib import metadata
 
@@ -127,3 +127,30 @@ def resolve(name: str, kind: PluginKind, builtin: dict[str, Callable], key: str 
     offered = known() if known is not None else sorted({*builtin, *entry_point_names(kind)})
     raise ConfigError("", key, f"unknown {kind.noun} {name!r} (known: {', '.join(offered)}; "
                                f"or an import path package.module:Class)")
+
+
+
+# A plug-in's own `name` that can label it: no colon (an import path's mark), no spaces.
+_LABEL = re.compile(r"[A-Za-z0-9_][A-Za-z0-9_.-]*")
+
+
+def plugin_labels(names: Sequence[str], kind: PluginKind,
+                  reserved: Collection[str] = ()) -> list[str]:
+    """How reports, tables and recordings call the plug-ins `names`: a built-in's or an entry
+    point's name as given; one given by import path by the class's own `name` attribute (its
+    contract, docs/plugins.md), as its author calls it, unless that is no plain word, is
+    `reserved` (a built-in's name, a report's own column), names another of `names` or
+    labels one already, or the path does not import; then by its import path. A function of
+    the names alone, so that whoever reads a scenario finds the episode's labels."""
+    labels: list[str] = []
+    for name in names:
+        own = None
+        if is_import_path(name):
+            try:
+                own = getattr(load_import_path(name, kind), "name", None)
+            except ConfigError:
+                own = None
+        ok = (isinstance(own, str) and _LABEL.fullmatch(own) is not None
+              and own not in {*reserved, *names, *labels})
+        labels.append(own if ok else name)
+    return labels

@@ -1,7 +1,10 @@
-"""Progress bars of `run` and `bench` (tqdm): steps done, elapsed and remaining time.
+"""Progress of `run` and `bench` (tqdm): steps done, elapsed and remaining time.
 
-Why one module: both commands want the same bar, drawn on stderr only when stderr is a
-terminal, so that a CI log or a redirected file holds no carriage-return noise.
+Why one module: both commands want the same feedback on stderr. On a terminal it is tqdm's bar,
+redrawn in place; elsewhere (a CI log, `2> file`, a pipe) a redrawn bar would be carriage-return
+noise and silence would look like a hang, so the same tqdm counter prints a plain line every
+LINE_INTERVAL_S seconds instead: simulated seconds (or steps) done, wall time and the time left.
+`--quiet` turns both off.
 """
 
 from __future__ import annotations
@@ -10,12 +13,58 @@ import sys
 
 from tqdm import tqdm
 
+LINE_INTERVAL_S = 5.0  # seconds between two progress lines when stderr is no terminal
 
-def step_bar(total: int, label: str, enabled: bool | None = None) -> tqdm:
-    """A bar over `total` control steps; `enabled` None: only when stderr is a terminal."""
-    if enabled is None:
-        enabled = sys.stderr.isatty()
-    return tqdm(total=total, desc=label, unit="step", file=sys.stderr, disable=not enabled,
+
+class ProgressLines(tqdm):
+    """tqdm's counter, rate and throttling (`mininterval`), shown as whole lines: one per
+    `LINE_INTERVAL_S` and a last one when it closes, nothing redrawn or cleared."""
+
+    def __init__(self, *args, step_s: float | None = None, **kwargs) -> None:
+        self.step_s = step_s  # simulated seconds per step; None: counted in steps
+        self._shown_n: int | None = None
+        super().__init__(*args, **kwargs)
+
+    def line(self) -> str:
+        """"bench: 12.0/40.0 s simulated (30%), wall 0:25, about 0:58 left"."""
+        n, total, elapsed = self.n, self.total or 0, self.format_dict["elapsed"]
+        if self.step_s is not None:
+            done = f"{n * self.step_s:.1f}/{total * self.step_s:.1f} s simulated"
+        else:
+            done = f"{n}/{total} steps"
+        share = f" ({100.0 * n / total:.0f}%)" if total else ""
+        wall = f"{self.desc}: {done}{share}, wall {self.format_interval(elapsed)}"
+        if total and n >= total:
+            return wall
+        left = self.format_interval(elapsed * (total - n) / n) if n else "?"
+        return f"{wall}, about {left} left"
+
+    def display(self, msg: str | None = None, pos: int | None = None) -> bool:
+        if msg is not None:  # tqdm clearing its line: a log has nothing to clear
+            return False
+        self.fp.write(self.line() + "\n")
+        self.fp.flush()
+        self._shown_n = self.n
+        return True
+
+    def close(self) -> None:
+        if not self.disable and self.n != self._shown_n:
+            self.display()  # where it ended, unless that was the last line shown
+        super().close()
+
+
+def step_bar(total: int, label: str, enabled: bool | None = None,
+             step_s: float | None = None) -> tqdm:
+    """Progress over `total` control steps of `step_s` simulated seconds each.
+
+    `enabled` None: a bar when stderr is a terminal, else a line every LINE_INTERVAL_S
+    seconds; True: the bar wherever stderr goes; False: nothing (`--quiet`, bench workers).
+    """
+    if enabled is None and not sys.stderr.isatty():
+        return ProgressLines(total=total, desc=label, unit="step", file=sys.stderr,
+                             leave=False, mininterval=LINE_INTERVAL_S,
+                             maxinterval=LINE_INTERVAL_S, step_s=step_s)
+    return tqdm(total=total, desc=label, unit="step", file=sys.stderr, disable=enabled is False,
                 dynamic_ncols=True, leave=True,
                 bar_format="{desc}: {percentage:3.0f}%|{bar}| {n_fmt}/{total_fmt} steps "
                            "[{elapsed}<{remaining}, {rate_fmt}]")

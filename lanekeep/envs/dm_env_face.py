@@ -19,6 +19,7 @@ import dm_env
 import numpy as np
 from dm_env import specs
 
+from lanekeep.detectors.registry import front_labels
 from lanekeep.envs import agent_view
 from lanekeep.loop.episode import Episode, Percept
 from lanekeep.scenario.schema import Scenario, load_scenario
@@ -44,7 +45,7 @@ class LaneKeepEnv(dm_env.Environment):
             scenario = dataclasses.replace(scenario, duration_s=duration_s)
         self.scenario = scenario
         self.render_size = render_size or (scenario.camera.width, scenario.camera.height)
-        self.models = list(scenario.estimation.front_detectors)
+        self.models = front_labels(scenario.estimation.front_detectors)
         self._slot = agent_view.EpisodeSlot(self)
         self._reset_next = True
         self._seed = scenario.seed

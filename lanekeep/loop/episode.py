@@ -29,7 +29,7 @@ from lanekeep.core.signals import VehicleSignals
 from lanekeep.core.timing import StageClock
 from lanekeep.core.workers import threads_now
 from lanekeep.detectors.base import Detector, LaneEstimate
-from lanekeep.detectors.registry import make_detector
+from lanekeep.detectors.registry import front_labels, make_detector
 from lanekeep.estimators.lane_estimator import EstimatorOutput, LaneEstimator
 from lanekeep.estimators.odometry import DeadReckoning
 from lanekeep.estimators.roll import RollFilter, corrected
@@ -137,11 +137,13 @@ class Episode:
         # One effects pipeline per camera: lens drops and the auto-exposure keep state.
         self.effects = make_effects(scenario, self.world, self.rig, self.rng)
         self.dt_s = scenario.control_period_s
+        # keyed by label: a plug-in given by import path by its own `name` (core/plugins.py)
+        labels = front_labels(est.front_detectors)
         self.front: dict[str, Detector] = {
-            name: make_detector(name, self.rig.cameras["front"],
-                                front_detector_config(name, est.mode),
-                                self.rig.distortion("front"))
-            for name in est.front_detectors
+            label: make_detector(name, self.rig.cameras["front"],
+                                 front_detector_config(name, est.mode),
+                                 self.rig.distortion("front"))
+            for label, name in zip(labels, est.front_detectors, strict=True)
         }
         self.reference: Detector = make_detector(est.reference_detector,
                                                    self.rig.cameras[est.reference_camera],

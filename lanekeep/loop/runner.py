@@ -44,10 +44,10 @@ def run_episode(scenario_name: str, seed: int | None = None, seconds: float | No
     `mode` ("default" | "paper") and `front_detectors` (e.g. ("hough",) for a model-only
     loop) override the scenario file's; None keeps them. `weights` is the file of every
     learned detector in the episode (None: their shipped one). `criteria`: the command line's
-    criteria (lanekeep/scoring/criteria.py), in place of the file's. `progress`: a step bar on
-    stderr (a terminal only); `on_step(done, total)` is called after every step. `plugins`:
-    the command line's detectors and controller (lanekeep/cli/plugins.py), before
-    `front_detectors`.
+    criteria (lanekeep/scoring/criteria.py), in place of the file's. `progress`: progress on
+    stderr (a bar on a terminal, else a line every few seconds: lanekeep/core/progress.py);
+    `on_step(done, total)` is called after every step. `plugins`: the command line's
+    detectors and controller (lanekeep/cli/plugins.py), before `front_detectors`.
     """
     import lanekeep  # noqa: F401 - EGL before mujoco
     from lanekeep.detectors.registry import detector_weights
@@ -79,7 +79,8 @@ def run_episode(scenario_name: str, seed: int | None = None, seconds: float | No
     with detector_weights(weights), Episode(scenario, recorder=recorder) as episode:
         trace = EpisodeTrace(list(episode.front))
         total = episode.total_steps if seconds is None else int(round(seconds / episode.dt_s))
-        bar = step_bar(total, scenario.name, enabled=None if progress else False)
+        bar = step_bar(total, scenario.name, enabled=None if progress else False,
+                       step_s=episode.dt_s)
 
         def each_step(result, total: int) -> None:
             trace.add(result)

@@ -28,3 +28,10 @@ SPARE_COLOURS = ((200, 150, 0), (0, 160, 150), (150, 110, 60), (230, 90, 140))
 def colour(name: str, index: int = 0) -> tuple[int, int, int]:
     """Fixed colour per source, so a model has the same colour in every view."""
     return COLOURS.get(name, SPARE_COLOURS[index % len(SPARE_COLOURS)])
+
+
+def matplotlib_colour(name: str, index: int = 0) -> tuple[float, float, float]:
+    """`colour` as matplotlib takes it (RGB in 0..1), for the PNG plots of runs and sweeps
+    alike; a model's own track (`hough:track`) shares its model's colour (drawn dashed)."""
+    r, g, b = colour(name.removesuffix(":track"), index)
+    return r / 255, g / 255, b / 255

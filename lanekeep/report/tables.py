@@ -1,9 +1,16 @@
-"""The bench's terminal tables: per-scenario summary, frame-to-frame drift, the model-only
-loops, and the closing verdict lines with the exit code."""
+"""The terminal tables of `run` and `bench`: an episode's errors per source, the per-scenario
+summary, frame-to-frame drift, the model-only loops, the intervals over seeds, and the closing
+verdict lines with the exit code.
+
+By default every table fits a terminal of WIDTH columns (sources as rows, the less used columns
+left out); `wide=True` (`--wide`) gives the full tables, which run to ~190 columns.
+"""
 
 from __future__ import annotations
 
 import math
+import re
+import textwrap
 from typing import Protocol
 
 from lanekeep.report.seed_summary import interval_text
@@ -20,6 +27,56 @@ class LoopJob(Protocol):
 
     @property
     def label(self) -> str: ...
+
+
+WIDTH = 100  # columns the default tables fit
+# (row label, SourceReport attribute) of an episode's table, in the paper's Table 3-4 order
+EPISODE_METRICS = (("RMSE", "rmse_cm"), ("max", "max_cm"), ("ADE", "ade_cm"), ("FDE", "fde_cm"),
+                   ("drift", "drift_cm"), ("valid %", "valid_share"))
+
+
+def episode_table(report: EpisodeReport, wide: bool = False) -> str:
+    """One episode's errors (cm) per source, then the car's line, the footnote and the
+    criteria. Compact (default): one row per source, so that any number of detectors fits
+    WIDTH columns; wide: the paper's layout, one column per source (EpisodeReport.table)."""
+    full = report.table()
+    if wide:
+        return full
+    names = list(report.sources)
+    name_w = max(12, *(len(n) + 2 for n in names))
+    header = f"{'(cm)':<{name_w}}" + "".join(f"{label:>9}" for label, _ in EPISODE_METRICS)
+    lines = [header]
+    for name in names:
+        source = report.sources[name]
+        cells = []
+        for _, key in EPISODE_METRICS:
+            value = getattr(source, key) * (100.0 if key == "valid_share" else 1.0)
+            cells.append(f"{'-' if math.isnan(value) else f'{value:.2f}':>9}")
+        lines.append(f"{name:<{name_w}}" + "".join(cells))
+    # The lines below the grid are the full table's: the car, the footnote, the criteria.
+    rest = full.splitlines()
+    rest = rest[next(i for i, line in enumerate(rest) if line.startswith("car: ")):]
+    for line in rest:
+        lines.extend(_fold(line))
+    return "\n".join(lines)
+
+
+def _fold(line: str) -> list[str]:
+    """`line` in lines of at most WIDTH columns, broken after a "; " or before a "  [note]"
+    where it can be (between two facts rather than inside one), the rest indented by two."""
+    if len(line) <= WIDTH:
+        return [line]
+    indent = line[: len(line) - len(line.lstrip())] + "  "
+    pieces = re.split(r"(?<=;) |  (?=\[)", line)
+    out = [pieces[0]]
+    for piece in pieces[1:]:
+        if len(out[-1]) + 1 + len(piece) <= WIDTH:
+            out[-1] += " " + piece
+        else:
+            out.append(indent + piece)
+    return [folded for piece in out for folded in
+            (textwrap.wrap(piece, WIDTH, subsequent_indent=indent, break_on_hyphens=False)
+             or [""])]
 
 
 def bench_verdict(reports: dict[str, EpisodeReport], main_labels: list[str],
@@ -54,10 +111,11 @@ def _verdict(r: EpisodeReport) -> str:
     return ("pass" if r.passed else "FAIL") if r.criteria else "-"
 
 
-def summary_table(reports: list[EpisodeReport]) -> str:
+def summary_table(reports: list[EpisodeReport], wide: bool = False) -> str:
     """One line per scenario: fused vs the best front model's own track (like for like: both
     Kalman estimates at the same look-ahead) and its best raw detection; reference; safety;
-    the criteria's verdict. Columns are as wide as their longest name: nothing is cut."""
+    the criteria's verdict. Columns are as wide as their longest name: nothing is cut.
+    Compact (default): without the best raw detection and the MMAE switches."""
     rows = []
     for r in reports:
         tracks = [k for k in r.sources if k.endswith(":track")]
@@ -67,20 +125,28 @@ def summary_table(reports: list[EpisodeReport]) -> str:
     name_w = max(len(n) for n in names)
     scen_w = max([28, *(len(r.scenario) + 2 for r in reports)])
     best_w = name_w + 11  # "%8.1f (name)"
-    header = (f"{'scenario':<{scen_w}}{'fused':>8}{'best track':>{best_w}}{'best raw':>{best_w}}"
-              f"{'reference':>11}{'car RMS':>9}{'depart':>8}{'switch':>8}  result")
+    if not wide:
+        scen_w, best_w = max([10, *(len(r.scenario) + 2 for r in reports)]), name_w + 10
+    header = (f"{'scenario':<{scen_w}}{'fused':>8}{'best track':>{best_w}}"
+              + (f"{'best raw':>{best_w}}" if wide else "")
+              + f"{'reference':>11}{'car RMS':>9}{'depart':>8}"
+              + (f"{'switch':>8}" if wide else "") + "  result")
     lines = [header, "-" * len(header)]
+    value_w = best_w - name_w - 3  # "value (name)"
     for r, (track_name, track), (raw_name, raw) in rows:
         lines.append(
             f"{r.scenario:<{scen_w}}{r.sources['fused'].rmse_cm:>8.1f}"
-            f"{track:>8.1f} ({track_name.split(':')[0]:>{name_w}})"
-            f"{raw:>8.1f} ({raw_name:>{name_w}})"
-            f"{r.sources['reference'].rmse_cm:>11.1f}{r.car_rms_cm:>9.1f}"
-            f"{r.lane_departures:>8d}{r.mmae_switches:>8d}  {_verdict(r)}"
+            f"{track:>{value_w}.1f} ({track_name.split(':')[0]:>{name_w}})"
+            + (f"{raw:>{value_w}.1f} ({raw_name:>{name_w}})" if wide else "")
+            + f"{r.sources['reference'].rmse_cm:>11.1f}{r.car_rms_cm:>9.1f}"
+            f"{r.lane_departures:>8d}" + (f"{r.mmae_switches:>8d}" if wide else "")
+            + f"  {_verdict(r)}"
         )
-    lines.append("(offset RMSE in cm; track = a model's own Kalman track at the fused output's "
-                 "look-ahead; raw = its detections, on the steps it had one; fused = the MMAE "
-                 "output)")
+    note = ("(offset RMSE in cm; track = a model's own Kalman track at the fused output's "
+            "look-ahead; fused = the MMAE output"
+            + ("; raw = its detections, on the steps it had one)" if wide else
+               "; --wide adds each model's raw detections and the MMAE switches)"))
+    lines.extend(textwrap.wrap(note, max(WIDTH, len(header))))
     return "\n".join(lines)
 
 
@@ -139,11 +205,14 @@ def single_model_table(jobs: list[LoopJob], reports: dict[str, EpisodeReport]) -
     return "\n".join(lines)
 
 
-def interval_table(docs: list[dict]) -> str:
+def interval_table(docs: list[dict], wide: bool = False) -> str:
     """One line per scenario over its seeds (lanekeep/report/seed_summary.py documents):
     fused RMSE and the car's RMS with 95% intervals, the best own track by mean, the fused
     output's paired verdicts against the model tracks, departures as a rate with its exact
-    interval, and how many episodes met the criteria."""
+    interval, and how many episodes met the criteria. Compact (default): without the best
+    track and the departures' interval."""
+    if not wide:
+        return _compact_interval_table(docs)
     scen_w = max([28, *(len(d["label"]) + 2 for d in docs)])
     model_w = max([8, *(len(k) - len(":track") for d in docs for k in d["sources"]
                         if k.endswith(":track"))])
@@ -176,6 +245,33 @@ def interval_table(docs: list[dict]) -> str:
     lines.append("(cm; mean over seeds [95% t interval]; departed = episodes with a lane "
                  "departure [Clopper-Pearson 95%]; a verdict needs the paired 95% interval to "
                  "exclude 0)")
+    return "\n".join(lines)
+
+
+def _compact_interval_table(docs: list[dict]) -> str:
+    scen_w = max([10, *(len(d["label"]) + 2 for d in docs)])
+    header = (f"{'scenario':<{scen_w}}{'n':>3}  {'fused RMSE [95% CI]':<20}{'vs tracks':<11}"
+              f"{'car RMS [95% CI]':<18}{'departed':<10}passed")
+    lines = [header, "-" * len(header)]
+    for d in docs:
+        counts = stats.count_verdicts([p["verdict"] for p in d["paired"]["fused_vs"].values()])
+        fused = d["sources"]["fused"]
+        verdicts = f"{counts['better']}b {counts['worse']}w {counts['indistinguishable']}i"
+        lines.append(
+            f"{d['label']:<{scen_w}}{d['n']:>3}  "
+            f"{interval_text(fused['rmse_cm'], fused['rmse_cm_ci95']):<20}{verdicts:<11}"
+            f"{interval_text(d['car_rms_cm'], d['car_rms_cm_ci95'], 1):<18}"
+            f"{str(d['departed_episodes']) + '/' + str(d['n']):<10}"
+            f"{d['passed_episodes']}/{d['n']}")
+    total = stats.count_verdicts([p["verdict"] for d in docs
+                                  for p in d["paired"]["fused_vs"].values()])
+    lines.append(f"fused vs each model's own track, paired over seeds: {total['better']} "
+                 f"better, {total['worse']} worse, {total['indistinguishable']} "
+                 "indistinguishable")
+    lines.extend(textwrap.wrap(
+        "(b / w / i per scenario; cm; mean over seeds [95% t interval]; departed = episodes "
+        "with a lane departure; a verdict needs the paired 95% interval to exclude 0; --wide "
+        "adds the best track and the departures' Clopper-Pearson interval)", WIDTH))
     return "\n".join(lines)
 
 

@@ -20,6 +20,7 @@ from lanekeep.scenario.schema import Scenario, ScenarioError
 from lanekeep.sensing.cameras import CameraRig, RenderSettings
 from lanekeep.sensing.image_effects import ImageEffects
 from lanekeep.world.build import World, build
+from lanekeep.world.parts import WorldLayout
 
 
 def place_on_road(world: World, s_m: float, offset_m: float = 0.0, heading_deg: float = 0.0,
@@ -68,13 +69,24 @@ def camera_frame(rig: CameraRig, world: World, cam: str, effects: ImageEffects |
     return rgb if effects is None else effects(rgb, rng, speed_mps=speed_mps, depth_m=depth)
 
 
+def paved_offsets(scenario: Scenario, layout: WorldLayout | None = None
+                  ) -> tuple[float, float]:
+    """The offsets (m, + = left) from the ego lane's centre that keep the car's centre on the
+    paved surface: the lanes and the asphalt shoulders `build` lays (`layout`)."""
+    road, shoulder_m = scenario.road, (layout or WorldLayout()).shoulder_m
+    centre = (road.ego_lane + 0.5 - 0.5 * road.n_lanes) * road.lane_width_m  # Road.lane_center_r
+    edge = 0.5 * road.n_lanes * road.lane_width_m + shoulder_m
+    return -edge - centre, edge - centre
+
+
 def render_snapshot(scenario: Scenario, out_dir: Path, at_s: float | None = None,
                     offset_m: float = 0.0, heading_deg: float = 0.0,
                     effects: bool = True) -> list[Path]:
     """Writes front.png, rear.png, front_seg.png, rear_seg.png; returns their paths.
 
     Raises:
-      ConfigError: `at_s` is off the road (key "--at"); ScenarioError: the start is.
+      ConfigError: `at_s` is off the road (key "--at"), or `offset_m` puts the car's centre
+        off the paved surface (key "--offset"); ScenarioError: the start is off the road.
     """
     s = scenario.start.s_m if at_s is None else at_s
     length = scenario.road.length_m
@@ -83,6 +95,11 @@ def render_snapshot(scenario: Scenario, out_dir: Path, at_s: float | None = None
         if at_s is None:
             raise ScenarioError(scenario.source or scenario.name, "start.s_m", f"{s:g} m {where}")
         raise ConfigError("", "--at", f"{s:g} m {where}")
+    low, high = paved_offsets(scenario)
+    if not low <= offset_m <= high:  # a picture of the verge is no view of the road
+        raise ConfigError("", "--offset", f"{offset_m:g} m puts the car off the road: the "
+                                          f"paved surface spans {low:+.2f}..{high:+.2f} m "
+                                          f"from the ego lane's centre")
     world = build(scenario)
     place_on_road(world, s, offset_m, heading_deg)
     out_dir.mkdir(parents=True, exist_ok=True)

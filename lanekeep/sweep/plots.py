@@ -1,10 +1,11 @@
 """PNG plots of a sweep's results: each metric against each swept parameter, a heat map for two.
 
 Line plots: one line per source (each detector's raw detections, its ":track" dashed, the
-reference, the fused output) at the mean over seeds, with the min-max band over seeds, so a
-reader sees both the trend and how much a seed moves it. The other parameters' values each get
-their own panel (up to MAX_PANELS, else they are pooled into the band). A two-parameter sweep
-also gets heat maps of the mean over seeds, one panel per source.
+reference, the fused output; in the run plots' colours, lanekeep/report/palette.py) at the
+mean over seeds, with the min-max band over seeds, so a reader sees both the trend and how
+much a seed moves it. The other parameters' values each get their own panel (up to
+MAX_PANELS, else they are pooled into the band). A two-parameter sweep also gets heat maps of
+the mean over seeds, one panel per source.
 """
 
 from __future__ import annotations
@@ -15,6 +16,7 @@ import re
 from pathlib import Path
 from typing import Any
 
+from lanekeep.report.palette import matplotlib_colour
 from lanekeep.sweep.run import FINISHED
 from lanekeep.sweep.spec import EPISODE_METRICS, SweepSpec
 
@@ -97,7 +99,8 @@ def _line_plot(spec: SweepSpec, rows: list[dict], metric: str, index: int,
                 low.append(min(vals) if vals else math.nan)
                 high.append(max(vals) if vals else math.nan)
             style = "--" if label.endswith(":track") else "-"
-            line, = ax.plot(xs, mean, style, marker="o", label=label, color=f"C{n}")
+            line, = ax.plot(xs, mean, style, marker="o", label=label,
+                            color=matplotlib_colour(label, n))
             ax.fill_between(xs, low, high, color=line.get_color(), alpha=0.15, linewidth=0)
         if labels is not None:
             ax.set_xticks(xs, labels, rotation=20, ha="right")

@@ -23,6 +23,7 @@ import pytest
 from lanekeep.cli.main import main
 from lanekeep.control.registry import ControlContext, known_controllers, make_controller
 from lanekeep.core.config_io import ConfigError
+from lanekeep.core.plugins import DETECTORS, plugin_labels
 from lanekeep.detectors.registry import known_detectors, make_detector
 from lanekeep.scenario.schema import load_scenario
 
@@ -100,9 +101,11 @@ def test_a_detector_outside_the_package_runs_as_a_front_model(tmp_path, plugin_d
                     "--front-detectors", f"hough,{MOD}:MedianHough", "--json", str(out))
     assert done.returncode == 0, done.stderr
     sources = json.loads(out.read_text())["sources"]
-    assert set(sources) >= {"hough", f"{MOD}:MedianHough", f"{MOD}:MedianHough:track"}
+    # labelled by its own `name`, as its author calls it, not by its import path
+    assert list(sources) == ["hough", "hough:track", "median_hough", "median_hough:track",
+                             "fused", "reference"]
     # it wraps a Hough detector of its own: valid on the frames the scenario's Hough is
-    mine, hough = sources[f"{MOD}:MedianHough"], sources["hough"]
+    mine, hough = sources["median_hough"], sources["hough"]
     assert mine["valid_share"] == hough["valid_share"] > 0
     assert 0 < mine["rmse_cm"] < 50.0
 
@@ -145,6 +148,20 @@ def test_an_import_path_detector_is_built_as_the_registered_ones(plugin_dir, mon
     assert detector.x_ref == make_detector("hough", front).x_ref
     with pytest.raises(ConfigError, match=f"'{MOD}:NotADetector'.*not a Detector.*detect"):
         make_detector(f"{MOD}:NotADetector", front)
+
+
+def test_a_plug_in_given_by_import_path_is_labelled_by_its_own_name(plugin_dir, monkeypatch):
+    monkeypatch.syspath_prepend(str(plugin_dir))
+    mine = f"{MOD}:MedianHough"
+    assert plugin_labels(["hough", mine], DETECTORS) == ["hough", "median_hough"]
+    # its name taken (a built-in's or a report's column, a name given beside it, the label
+    # of another), no `name`, or a path that does not import: the import path
+    assert plugin_labels(["hough", mine], DETECTORS, reserved={"median_hough"}) == [
+        "hough", mine]
+    assert plugin_labels(["median_hough", mine], DETECTORS) == ["median_hough", mine]
+    assert plugin_labels([mine, mine], DETECTORS) == ["median_hough", mine]
+    assert plugin_labels([f"{MOD}:PurePursuit", "no_such_module:X"], DETECTORS) == [
+        f"{MOD}:PurePursuit", "no_such_module:X"]
 
 
 def _one_clear_line(capsys, code: int, *needles: str) -> str:

@@ -5,7 +5,6 @@ bench's step progress bar."""
 from __future__ import annotations
 
 import math
-from functools import partial
 from pathlib import Path
 
 import pytest
@@ -84,21 +83,16 @@ def test_an_empty_bench_is_still_a_valid_document(tmp_path):
 
 
 @pytest.mark.slow
-def test_bench_junit_has_one_case_per_scenario_and_exits_1_on_a_failure(
-        tmp_path, capsys, monkeypatch):
+def test_bench_junit_has_one_case_per_scenario_and_exits_1_on_a_failure(tmp_path, capsys):
     """Two reduced-size scenarios: a straight that meets its criteria and the sharp turn at
     30 m/s, which leaves the road. Exit 1; one valid test case each, the turn's a failure; the
-    step bar (forced on: stderr is no terminal here) reaches the bench's total, which the
-    early end of the turn shrank."""
-    import lanekeep.core.progress
-
+    progress (lines: stderr is no terminal here) reaches the bench's total, which the early
+    end of the turn shrank."""
     straight, turn = tmp_path / "straight.toml", tmp_path / "turn.toml"
     straight.write_text(_small(load_scenario("clear_straight").source)
                         + "\n[criteria]\nmax_lane_departures = 0\nmax_car_lateral_error_m = 0.5\n")
     turn.write_text(_small(load_scenario("sharp_turn").source).replace(
         "target_speed_mps = 15.0", "target_speed_mps = 30.0"))
-    monkeypatch.setattr(lanekeep.core.progress, "step_bar",
-                        partial(lanekeep.core.progress.step_bar, enabled=True))
     out = tmp_path / "bench.xml"
     code = main(["bench", str(straight), str(turn), "--seconds", "8", "--workers", "1",
                  "--junit", str(out)])
@@ -111,10 +105,11 @@ def test_bench_junit_has_one_case_per_scenario_and_exits_1_on_a_failure(
     captured = capsys.readouterr()
     assert "FAILED turn: status off_road" in captured.out
     assert "criteria: 1 of 2 scenarios passed" in captured.out
-    last = captured.err.replace("\r", "\n").strip().splitlines()[-1]
-    done, total = last.split(" steps")[0].split()[-1].split("/")
-    assert done == total and int(total) < 160  # 2 x 80 steps planned; the turn ended early
-    assert "<" in last  # elapsed<remaining
+    assert f"wrote {out}" in captured.err
+    last = [line for line in captured.err.splitlines() if line.startswith("bench (2 ")][-1]
+    done, total = last.split(" s simulated")[0].split()[-1].split("/")
+    assert done == total and float(total) < 16.0  # 2 x 8 s planned; the turn ended early
+    assert "(100%), wall " in last
 
 
 def _small(source: str) -> str:
@@ -132,6 +127,31 @@ def test_the_step_bar_shows_elapsed_and_remaining_and_takes_a_shrinking_total(ca
     assert (bar.n, bar.total) == (60, 80)
     last = capsys.readouterr().err.replace("\r", "\n").strip().splitlines()[-1]
     assert "60/80 steps" in last and "<" in last
-    with step_bar(10, "quiet") as bar:  # stderr is no terminal under pytest: no bar
+    with step_bar(10, "quiet", enabled=False) as bar:  # --quiet, a bench worker: nothing
         bar.update(10)
     assert capsys.readouterr().err == ""
+
+
+def test_without_a_terminal_progress_is_whole_lines_every_few_seconds(capsys, monkeypatch):
+    """stderr is no terminal under pytest: no bar redrawn with carriage returns but a line
+    per LINE_INTERVAL_S (0 here: every update) in simulated seconds, and the last on close."""
+    import lanekeep.core.progress as progress
+
+    monkeypatch.setattr(progress, "LINE_INTERVAL_S", 0.0)
+    with progress.step_bar(40, "clear_curve", step_s=0.25) as bar:
+        for _ in range(4):
+            progress.set_progress(bar, bar.n + 10)
+    err = capsys.readouterr().err
+    assert "\r" not in err
+    lines = err.splitlines()
+    assert lines[0].startswith("clear_curve: 0.0/10.0 s simulated (0%), wall ")
+    assert lines[1].startswith("clear_curve: 2.5/10.0 s simulated (25%), wall ")
+    assert lines[1].endswith(" left") and not lines[-1].endswith(" left")
+    assert lines[-1].startswith("clear_curve: 10.0/10.0 s simulated (100%), wall ")
+    assert len(lines) == len(set(lines)) == 5  # the last one is not repeated on close
+    monkeypatch.setattr(progress, "LINE_INTERVAL_S", 3600.0)
+    with progress.step_bar(7, "bench (2 episodes)") as bar:  # no step length: steps
+        progress.set_progress(bar, 7)
+    assert capsys.readouterr().err.splitlines() == [
+        "bench (2 episodes): 0/7 steps (0%), wall 00:00, about ? left",
+        "bench (2 episodes): 7/7 steps (100%), wall 00:00"]

@@ -100,7 +100,10 @@ def test_summary_tables_never_cut_a_name():
                "a_detector_with_a_long_name:track": report.sources["hough"],
                "fused": report.sources["fused"], "reference": report.sources["reference"]}
     report = judge(EpisodeReport(**{**report.__dict__, "sources": sources}), LIMITS)
-    table = summary_table([report])
+    table = summary_table([report])  # compact: the best track only
+    assert long in table and table.count("a_detector_with_a_long_name") == 1
+    assert table.splitlines()[2].endswith("pass")
+    table = summary_table([report], wide=True)  # and the best raw detection
     assert long in table and table.count("a_detector_with_a_long_name") == 2
     assert table.splitlines()[2].endswith("pass")
     jobs = [BenchJob(long), BenchJob(long, front_detectors=("a_detector_with_a_long_name",))]
@@ -157,7 +160,9 @@ def test_a_passing_scenario_exits_0_and_an_override_makes_it_fail(tmp_path, caps
                                                      "car_lateral_error_m", "fused_rmse_m"]
     captured = capsys.readouterr()
     assert "criteria: PASS" in captured.out
-    assert "steps [" not in captured.err  # no progress bar: stderr is no terminal here
+    # stderr is no terminal here: progress lines, not a bar redrawn with carriage returns
+    assert "steps [" not in captured.err and "\r" not in captured.err
+    assert "s simulated (100%)" in captured.err
     assert main(["run", str(path), "--seconds", "3", "--json", str(out),
                  "--max-fused-rmse", "0.001"]) == 1
     doc = json.loads(out.read_text())
