@@ -6,11 +6,16 @@ that reads only the observation (the MMAE output's lane and the wheel-speed sign
 """
 
 import argparse
+import sys
 
-import gymnasium
 import numpy as np
 
-import lanekeep  # noqa: F401  (registers "lanekeep/LaneKeep-v0")
+try:
+    import gymnasium
+except ModuleNotFoundError:  # one line, not a traceback
+    sys.exit("gym_loop.py: error: needs Gymnasium: pip install -e '.[gym]'")
+
+import lanekeep  # noqa: F401, E402  (registers "lanekeep/LaneKeep-v0")
 
 
 def policy(obs: dict, target_speed_mps: float) -> np.ndarray:

@@ -6,65 +6,112 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
+from lanekeep.detectors.registry import front_labels
+from lanekeep.report.palette import FUSED, REFERENCE, TRUTH
 
 # -- the blueprint ------------------------------------------------------------------------------
+TIMELINE = "sim_time"  # the default timeline: simulated seconds (the recording also has `step`)
+KEY_ORIGIN = "key"  # the colour key (record.py logs it): one key instead of a legend per plot
+
+
+def _plot(origin: str, name: str, **kwargs):
+    """A time-series panel without its legend: legends are drawn over the plot (they hid the
+    first fifth of every curve); the colours are the same in every panel and the key says
+    which is which."""
+    import rerun.blueprint as rrb
+
+    return rrb.TimeSeriesView(origin=origin, name=name,
+                              plot_legend=rrb.PlotLegend(visible=False), **kwargs)
+
+
 def blueprint(scenario):
-    """Cameras side by side; then offsets and errors | the road map and the 3D follow view |
-    probabilities, MMAE residuals, car (offset, steer) and speed, each unit in its own plot;
-    events below."""
+    """Cameras and the 3D follow view on top; below, the road map with the colour key |
+    offsets, errors and MMAE residuals (cm) | MMAE probabilities, the car's offset (cm),
+    steer, throttle and speed, each unit in its own plot; events at the bottom. Time runs in
+    simulated seconds."""
     import rerun.blueprint as rrb
 
     x, y, yaw = scenario.start_pose()
     eye = [x - 25.0 * math.cos(yaw), y - 25.0 * math.sin(yaw), 45.0]
-    top = rrb.Spatial3DView(
+    follow = rrb.Spatial3DView(
         origin="world", name="follow view (3D)",
         eye_controls=rrb.EyeControls3D(kind=rrb.Eye3DKind.Orbital, position=eye,
                                        look_target=[x, y, 0.0], eye_up=[0.0, 0.0, 1.0],
                                        tracking_entity="world/car"),
     )
-    legend = rrb.PlotLegend(corner=rrb.Corner2D.LeftTop)
     # Each model's own Kalman track is recorded too ("hough:track"), but left out of the default
-    # offsets / errors plots: it shares its model's colour and would double their legends (the
-    # selection panel adds it back).
-    hidden = [f"- $origin/{m}:track" for m in scenario.estimation.front_detectors]
+    # offsets / errors plots: it shares its model's colour (the selection panel adds it back).
+    models = front_labels(scenario.estimation.front_detectors)
+    hidden = [f"- $origin/{m}:track" for m in models]
+    names = key_names(models)
     return rrb.Blueprint(
         rrb.Vertical(
             rrb.Horizontal(
                 rrb.Spatial2DView(origin="cameras/front", name="front camera"),
                 rrb.Spatial2DView(origin="cameras/rear", name="rear camera"),
+                follow,
             ),
+            # Plots need height: egui's plots label their y grid in steps of a power of ten,
+            # and a short plot of a 10 cm range labels only its "0".
             rrb.Horizontal(
                 rrb.Vertical(
-                    rrb.TimeSeriesView(origin="plots/offset", name="offsets (m, + = car left)",
-                                       contents=["+ $origin/**", *hidden], plot_legend=legend),
-                    rrb.TimeSeriesView(origin="plots/error", name="errors (m, estimate - truth)",
-                                       contents=["+ $origin/**", *hidden], plot_legend=legend),
+                    rrb.Spatial2DView(origin="map", name="road map (north up)"),
+                    rrb.Spatial2DView(origin=KEY_ORIGIN, name="colour key",
+                                      visual_bounds=rrb.VisualBounds2D(**key_bounds(len(names)))),
+                    row_shares=[3, 1],
                 ),
                 rrb.Vertical(
-                    rrb.Spatial2DView(origin="map", name="road map (to scale, north up)"),
-                    top,
+                    _plot("plots/offset", "offsets (cm, + = car left)",
+                          contents=["+ $origin/**", *hidden]),
+                    _plot("plots/error", "errors (cm, estimate - truth)",
+                          contents=["+ $origin/**", *hidden]),
                 ),
                 rrb.Vertical(
-                    rrb.TimeSeriesView(origin="plots/probability", name="MMAE probabilities",
-                                       axis_y=rrb.ScalarAxis(range=(0.0, 1.0)),
-                                       plot_legend=legend),
-                    rrb.TimeSeriesView(origin="plots/residual",
-                                       name="MMAE residuals (m, reference - model)",
-                                       plot_legend=legend),
-                    rrb.TimeSeriesView(origin="plots/car", name="car: offset (m), steer",
-                                       plot_legend=legend),
-                    rrb.TimeSeriesView(origin="plots/speed", name="car: speed (m/s)",
-                                       plot_legend=legend),
+                    _plot("plots/probability", "MMAE probabilities",
+                          axis_y=rrb.ScalarAxis(range=(0.0, 1.0))),
+                    _plot("plots/residual", "MMAE residuals (cm, reference - model)"),
                 ),
-                column_shares=[2, 2, 2],
+                rrb.Vertical(
+                    _plot("plots/car", "car: offset from the lane centre (cm)"),
+                    _plot("plots/steer", "steer (% of full lock, + = left)"),
+                    _plot("plots/throttle", "throttle (%, - = brake)"),
+                    # from 0: on its own scale a speed held within 0.1 m/s looked like a
+                    # wild ride, and its axis had one label
+                    _plot("plots/speed", "speed (m/s)", axis_y=rrb.ScalarAxis(
+                        range=(0.0, 1.5 * max(1.0, scenario.target_speed_mps)))),
+                ),
+                column_shares=[1.6, 2.6, 2.4, 2.4],
             ),
             rrb.TextLogView(origin="events", name="events"),
-            row_shares=[4, 7, 1.8],
+            row_shares=[3, 6.5, 1],
         ),
         rrb.BlueprintPanel(state="collapsed"),
         rrb.SelectionPanel(state="collapsed"),
-        rrb.TimePanel(state="collapsed"),
+        rrb.TimePanel(state="collapsed", timeline=TIMELINE),
     )
+
+
+# The colour key's entries: KEY_COLUMNS a row, a point each with its label under it. A 2D
+# view keeps one scale on both axes, so the key is laid out in about pixels of its panel.
+KEY_COLUMNS, KEY_COLUMN_PX, KEY_ROW_PX = 2, 140.0, 36.0
+
+
+def key_names(models) -> list[str]:
+    """The colour key's entries: the truth, the fused output, the reference, each model."""
+    return [TRUTH, FUSED, REFERENCE, *models]
+
+
+def key_positions(n: int) -> list[tuple[float, float]]:
+    """Where the colour key puts its n entries."""
+    return [((i % KEY_COLUMNS) * KEY_COLUMN_PX, (i // KEY_COLUMNS) * KEY_ROW_PX)
+            for i in range(n)]
+
+
+def key_bounds(n: int) -> dict[str, tuple[float, float]]:
+    """The key panel's view: every entry, with room for the labels of the last row."""
+    rows = max(1, math.ceil(n / KEY_COLUMNS))
+    return {"x_range": (-KEY_COLUMN_PX / 2, (KEY_COLUMNS - 0.5) * KEY_COLUMN_PX),
+            "y_range": (-KEY_ROW_PX / 2, (rows - 0.3) * KEY_ROW_PX)}
 
 
 def scenario_document(scenario) -> str:

@@ -25,17 +25,23 @@ y left are drawn in world coordinates):
     world/car, world/car/body             pose (Transform3D) and a box the car's size
     world/path                            the driven path so far
     world/lanes/{model}, world/lanes/output  lane estimates in world coordinates
-    plots/offset/{truth,model...,reference,fused}  lateral offsets at each look-ahead (m)
-    plots/error/{model...,reference,fused}  estimate - truth at the estimate's look-ahead (m)
+    plots/offset/{truth,model...,reference,fused}  lateral offsets at each look-ahead (cm)
+    plots/error/{model...,reference,fused}  estimate - truth at the estimate's look-ahead (cm)
     plots/probability/{model}             MMAE probabilities
     plots/residual/{model}                MMAE residuals (eq. 2): the reference minus the model's
-                                          offset carried to where the reference looked (m)
-    plots/car/{offset_m,steer,throttle}, plots/speed/speed_mps   (split by unit)
+                                          offset carried to where the reference looked (cm)
+    plots/car/offset_cm, plots/steer/steer_pct, plots/throttle/throttle_pct,
+    plots/speed/speed_mps                 one panel each (one unit a plot); steer and
+                                          throttle in % of their range [-1, 1]
+    plots/sensors/...                     what the vehicle sensors told the estimator (SI)
+    key                                   static: the colour key (a labelled point per source)
     events                                text: model switches, reference repairs, gated
                                           measurements, lanes lost/found, detector failures,
                                           lane departures
 
 Scalars and events are logged every step; images, overlays and the 3D view every `every`-th.
+Offsets, errors and residuals are plotted in centimetres (the papers' unit; in metres a plot of
+errors of a few centimetres showed a lone "0" tick), as reports use them.
 """
 
 from __future__ import annotations
@@ -54,7 +60,7 @@ import numpy as np
 
 from lanekeep.core.busy import CORES_FREE
 from lanekeep.core.interrupts import stop_signals_held
-from lanekeep.report.blueprint import blueprint, scenario_document
+from lanekeep.report.blueprint import blueprint, key_names, key_positions, scenario_document
 from lanekeep.report.overlay import (
     MAX_POINTS_PER_SIDE,
     camera_x_range,
@@ -82,6 +88,8 @@ APPLICATION_ID = "lanekeep"
 TRUTH_BEHIND_M, TRUTH_AHEAD_M, TRUTH_STEP_M = 25.0, 45.0, 0.5
 ROAD_STEP_M = 1.0
 BATCH_FLUSH_S, BATCH_BYTES = 2.0, 8 << 20  # rerun's chunk batcher (default 0.2 s, 2 MiB)
+CM_PER_M = 100.0  # plots of offsets, errors and residuals are in cm
+PERCENT = 100.0  # steer and throttle (each in [-1, 1]) are plotted in %
 
 
 @dataclass(frozen=True)
@@ -348,46 +356,53 @@ class RerunRecorder:
             width = 3.0 if name == FUSED else 1.5
             rec.log(path, rr.SeriesLines(colors=[self._colour(name)], names=[label],
                                          widths=[width]), static=True)
-        car_series = {"plots/car/offset_m": ("offset (m)", (0, 140, 230)),
-                      "plots/car/steer": ("steer", (220, 20, 20)),
-                      "plots/car/throttle": ("throttle", (30, 170, 30)),
+        car_series = {"plots/car/offset_cm": ("offset (cm)", (0, 140, 230)),
+                      "plots/steer/steer_pct": ("steer (%)", (220, 20, 20)),
+                      "plots/throttle/throttle_pct": ("throttle (%)", (30, 170, 30)),
                       "plots/speed/speed_mps": ("speed (m/s)", (190, 50, 190))}
         for path, (label, rgb) in car_series.items():
             rec.log(path, rr.SeriesLines(colors=[rgb], names=[label], widths=[1.5]), static=True)
+        names = key_names(view.models)
+        rec.log("key", rr.Points2D(key_positions(len(names)), radii=rr.Radius.ui_points(6.0),
+                                   colors=[self._colour(n) for n in names], labels=names,
+                                   show_labels=True), static=True)
 
     def _log_scalars(self, step, truth: _Truth) -> None:
         rr, rec = self._rr, self._rec
         est = self.scenario.estimation
-        rec.log(f"plots/offset/{TRUTH}", rr.Scalars(truth.offset_m(est.offset_lookahead_m)))
+
+        def cm(path: str, metres: float) -> None:
+            rec.log(path, rr.Scalars(CM_PER_M * float(metres)))
+
+        cm(f"plots/offset/{TRUTH}", truth.offset_m(est.offset_lookahead_m))
         for name, estimate in step.estimates.items():
             value = step.reference_m if name == REFERENCE else estimate.offset_m
             if not estimate.valid or value is None:
                 continue
             x_m = step.reference_x_m if name == REFERENCE else estimate.x_m
-            rec.log(f"plots/offset/{name}", rr.Scalars(value))
-            rec.log(f"plots/error/{name}", rr.Scalars(value - truth.offset_m(x_m)))
+            cm(f"plots/offset/{name}", value)
+            cm(f"plots/error/{name}", value - truth.offset_m(x_m))
         x_out = step.output_x_m
         for name, value in step.track_offsets_m.items():
             if value is not None:
-                rec.log(f"plots/offset/{name}:track", rr.Scalars(value))
-                rec.log(f"plots/error/{name}:track", rr.Scalars(value - truth.offset_m(x_out)))
+                cm(f"plots/offset/{name}:track", value)
+                cm(f"plots/error/{name}:track", value - truth.offset_m(x_out))
         if step.output_offset_m is not None:
-            rec.log(f"plots/offset/{FUSED}", rr.Scalars(step.output_offset_m))
-            rec.log(f"plots/error/{FUSED}", rr.Scalars(
-                step.output_offset_m - truth.offset_m(x_out)))
+            cm(f"plots/offset/{FUSED}", step.output_offset_m)
+            cm(f"plots/error/{FUSED}", step.output_offset_m - truth.offset_m(x_out))
         for name, p in zip(self._view.models, np.asarray(step.probabilities), strict=False):
             rec.log(f"plots/probability/{name}", rr.Scalars(float(p)))
         for name, r in zip(self._view.models, step.mmae_residuals_m, strict=False):
             if np.isfinite(r):  # NaN: that model was not compared
-                rec.log(f"plots/residual/{name}", rr.Scalars(float(r)))
-        rec.log("plots/car/offset_m", rr.Scalars(truth.offset_m(0.0)))
+                cm(f"plots/residual/{name}", r)
+        cm("plots/car/offset_cm", truth.offset_m(0.0))
         rec.log("plots/speed/speed_mps", rr.Scalars(float(step.speed_mps)))
-        rec.log("plots/car/steer", rr.Scalars(float(step.steer)))
+        rec.log("plots/steer/steer_pct", rr.Scalars(PERCENT * float(step.steer)))
         signals = step.signals  # what the car's sensors told the estimator
         rec.log("plots/sensors/speed_mps", rr.Scalars(float(signals.speed_mps)))
         rec.log("plots/sensors/yaw_rate_rps", rr.Scalars(float(signals.yaw_rate_rps)))
         rec.log("plots/sensors/accel_lat_mps2", rr.Scalars(float(signals.accel_lat_mps2)))
-        rec.log("plots/car/throttle", rr.Scalars(float(step.throttle)))
+        rec.log("plots/throttle/throttle_pct", rr.Scalars(PERCENT * float(step.throttle)))
 
     def _log_events(self, step) -> None:
         names = self._view.models

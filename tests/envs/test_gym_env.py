@@ -6,14 +6,21 @@ import subprocess
 import sys
 import warnings
 
+# Imported, not importorskip'd: gymnasium is in the `test` extra, and a missing one must fail
+# README's test command loudly rather than skip these tests.
+import gymnasium
 import numpy as np
 import pytest
+from gymnasium.utils.env_checker import check_env
+from gymnasium.wrappers import (
+    AddRenderObservation,
+    FrameStackObservation,
+    GrayscaleObservation,
+    ResizeObservation,
+)
 
-gymnasium = pytest.importorskip("gymnasium")
-from gymnasium.utils.env_checker import check_env  # noqa: E402
-
-import lanekeep  # noqa: E402,F401  (registers the id)
-from lanekeep.envs.gym_env import LaneKeepGymEnv  # noqa: E402
+import lanekeep  # noqa: F401  (registers the id)
+from lanekeep.envs.gym_env import LaneKeepGymEnv
 
 SIZE = (96, 54)
 
@@ -95,6 +102,7 @@ def test_keeping_the_lane_pays_and_the_duration_truncates():
         env.close()
     assert truncated and not terminated
     assert steps == 10  # 10 periods of 0.1 s; reset() only observes the first
+    assert env.spec.max_episode_steps == steps  # from the scenario, for RL libraries
     assert min(rewards) > 0.9  # centred at about the target speed on a straight road
     assert "truth_offset_m" in info
 
@@ -112,3 +120,50 @@ def test_steering_hard_off_the_lane_terminates_with_a_low_reward():
     assert terminated and not truncated
     assert any(e.startswith("lane departure") for e in info["events"])
     assert reward < 0.9
+
+
+@pytest.mark.parametrize("kwargs", [
+    {"render_size": (-96, 54)}, {"render_size": (96, 0)}, {"render_size": (96.5, 54)},
+    {"render_size": "96x54"}, {"cameras": ("front", "side")}, {"layers": ("rgb", "rgb")},
+])
+def test_bad_options_raise_one_clear_value_error(kwargs):
+    with pytest.raises(ValueError) as err:
+        LaneKeepGymEnv("clear_straight", **kwargs)
+    message = str(err.value)
+    assert next(iter(kwargs)) in message and "\n" not in message
+
+
+def test_state_only_and_depth_and_segmentation_observations():
+    env = _make(scenario="clear_straight", cameras=())
+    try:
+        obs, _ = env.reset(seed=0)
+        assert not {"front", "rear"} & set(obs) and obs in env.observation_space
+    finally:
+        env.close()
+    env = _make(scenario="clear_straight", cameras=("front",),
+                layers=("rgb", "depth", "segmentation"))
+    try:
+        obs, _ = env.reset(seed=0)
+        obs, *_ = env.step(np.array([0.0, 0.3], np.float32))
+    finally:
+        env.close()
+    assert {"front", "front_depth", "front_segmentation"} <= set(obs) and "rear" not in obs
+    assert obs in env.observation_space
+    depth, paint = obs["front_depth"], obs["front_segmentation"].astype(bool)
+    assert depth.shape == paint.shape == (SIZE[1], SIZE[0])
+    # the road just ahead of the bumper is nearer than the road at the horizon
+    assert 0 < np.median(depth[-3:]) < np.median(depth[SIZE[1] // 2 + 2])
+    assert 0 < paint.mean() < 0.2  # some lane paint, not the whole picture
+
+
+def test_gymnasium_wrappers_give_stacked_grey_downscaled_frames():
+    env = _make(scenario="clear_straight", render_mode="rgb_array", cameras=())
+    env = AddRenderObservation(env, render_only=True)
+    env = FrameStackObservation(GrayscaleObservation(ResizeObservation(env, (42, 42))), 4)
+    try:
+        obs, _ = env.reset(seed=0)
+        obs, *_ = env.step(np.array([0.0, 0.3], np.float32))
+    finally:
+        env.close()
+    assert obs.shape == (4, 42, 42) and obs.dtype == np.uint8
+    assert obs[-1].std() > 0  # a picture, not a blank

@@ -141,7 +141,8 @@ def test_recording_verifies_and_holds_one_image_per_camera_per_recorded_step(fak
         assert steps_of(data, f"/plots/probability/{model}", "Scalars:scalars") == list(range(7))
     # the MMAE's residuals: a model it did not compare (NaN) has none
     assert steps_of(data, "/plots/residual/hough", "Scalars:scalars") == list(range(7))
-    assert value_at(data, "/plots/residual/hough", "Scalars:scalars", 3) == [pytest.approx(-0.01)]
+    # plotted in cm: the step's residual was -0.01 m
+    assert value_at(data, "/plots/residual/hough", "Scalars:scalars", 3) == [pytest.approx(-1.0)]
     assert not steps_of(data, "/plots/residual/sliding_window", "Scalars:scalars")
     assert len(data["/cameras/front/lanes/hough/points"]["Points2D:positions"]) == 3
     assert len(data["/cameras/rear/lanes/reference/boundaries"]["LineStrips2D:strips"]) == 3
@@ -157,7 +158,13 @@ def test_recording_verifies_and_holds_one_image_per_camera_per_recorded_step(fak
     (offset,) = value_at(data, "/plots/offset/hough", "Scalars:scalars", 0)
     (error,) = value_at(data, "/plots/error/hough", "Scalars:scalars", 0)
     (truth,) = value_at(data, "/plots/offset/truth", "Scalars:scalars", 0)
-    assert offset == pytest.approx(0.05) and error == pytest.approx(offset - truth)
+    assert offset == pytest.approx(5.0) and error == pytest.approx(offset - truth)  # cm
+    # steer and throttle in % of [-1, 1]; the colour key names every source once
+    assert value_at(data, "/plots/steer/steer_pct", "Scalars:scalars", 0) == [pytest.approx(1.0)]
+    assert value_at(data, "/plots/throttle/throttle_pct", "Scalars:scalars",
+                    0) == [pytest.approx(20.0)]
+    labels = value_at(data, "/key", "Points2D:labels", None)
+    assert sorted(labels) == sorted(["truth", "fused", "reference", *MODELS])
 
 
 def test_ground_truth_overlay_lies_on_the_rendered_markings(fake, tmp_path):
@@ -190,15 +197,18 @@ def test_blueprint_is_stored_with_the_recording(fake, tmp_path):
                                                         row["ViewBlueprint:space_origin"])
     assert views["front camera"] == ("2D", "cameras/front")
     assert views["rear camera"] == ("2D", "cameras/rear")
-    assert views["offsets (m, + = car left)"] == ("TimeSeries", "plots/offset")
-    assert views["errors (m, estimate - truth)"] == ("TimeSeries", "plots/error")
+    assert views["offsets (cm, + = car left)"] == ("TimeSeries", "plots/offset")
+    assert views["errors (cm, estimate - truth)"] == ("TimeSeries", "plots/error")
     assert views["MMAE probabilities"] == ("TimeSeries", "plots/probability")
-    assert views["MMAE residuals (m, reference - model)"] == ("TimeSeries", "plots/residual")
+    assert views["MMAE residuals (cm, reference - model)"] == ("TimeSeries", "plots/residual")
     assert views["follow view (3D)"] == ("3D", "world")
-    assert views["road map (to scale, north up)"] == ("2D", "map")
-    # one unit per plot: speed (m/s) apart from the car's offset (m) and steer
-    assert views["car: offset (m), steer"] == ("TimeSeries", "plots/car")
-    assert views["car: speed (m/s)"] == ("TimeSeries", "plots/speed")
+    assert views["road map (north up)"] == ("2D", "map")
+    assert views["colour key"] == ("2D", "key")
+    # one unit per plot: the car's offset, steer, throttle and speed each in their own
+    assert views["car: offset from the lane centre (cm)"] == ("TimeSeries", "plots/car")
+    assert views["steer (% of full lock, + = left)"] == ("TimeSeries", "plots/steer")
+    assert views["throttle (%, - = brake)"] == ("TimeSeries", "plots/throttle")
+    assert views["speed (m/s)"] == ("TimeSeries", "plots/speed")
     assert views["events"] == ("TextLog", "events")
 
 
@@ -275,8 +285,8 @@ def test_recorded_episode_reads_back_and_lines_up_with_its_segmentation(tmp_path
     for name in (*episode.front, "reference"):
         assert f"/plots/offset/{name}" in data
     # One ground truth: the plotted errors are the ones the report scores.
-    errors = [v[0] for _, v in data["/plots/error/fused"]["Scalars:scalars"]]
-    rms_cm = 100.0 * float(np.sqrt(np.mean(np.square(errors))))
+    errors_cm = [v[0] for _, v in data["/plots/error/fused"]["Scalars:scalars"]]
+    rms_cm = float(np.sqrt(np.mean(np.square(errors_cm))))
     assert rms_cm == pytest.approx(report.sources["fused"].rmse_cm, rel=1e-9)
     for step in recorded[1:]:
         mask = np.asarray(value_at(data, "/cameras/front/segmentation",
@@ -388,8 +398,9 @@ def test_view_rejects_a_missing_or_garbage_file_in_one_line(tmp_path, capsys, co
     assert len(err) == 1 and str(path) in err[0] and "Traceback" not in err[0]
 
 
-def test_view_url_is_bound_to_localhost():
+def test_view_url_is_bound_to_localhost_and_asks_for_webgl():
     from lanekeep.cli.view import web_url
 
+    # WebGL: the default WebGPU renderer crashed in a browser with software GL.
     assert web_url(9090, 9876) == ("http://127.0.0.1:9090/?url=rerun%2Bhttp%3A%2F%2F"
-                                   "127.0.0.1%3A9876%2Fproxy")
+                                   "127.0.0.1%3A9876%2Fproxy&renderer=webgl")

@@ -103,20 +103,24 @@ def _drawn_share(region: np.ndarray) -> float:
     return float(np.mean(np.abs(flat - bg).sum(axis=1) > 30))
 
 
-# The blueprint's panels (lanekeep/report/record.py) as fractions of the window (x0, y0, x1, y1),
-# inset from their borders: cameras on top; offsets / errors, road map / 3D follow view,
-# probabilities / MMAE residuals / car / speed in the middle row; events below.
+# The blueprint's panels (lanekeep/report/blueprint.py) as fractions of the window (x0, y0, x1, y1),
+# inset from their borders: cameras and the 3D follow view on top; the road map over the colour
+# key, offsets / errors, probabilities / residuals, car offset / steer / throttle / speed in the
+# middle row; events below.
 PANELS = {
-    "front camera": (0.05, 0.08, 0.45, 0.30),
-    "rear camera": (0.55, 0.08, 0.95, 0.30),
-    "offsets": (0.03, 0.40, 0.32, 0.56),
-    "errors": (0.03, 0.66, 0.32, 0.80),
-    "road map": (0.36, 0.40, 0.64, 0.56),
-    "follow view": (0.36, 0.66, 0.64, 0.80),
-    "probabilities": (0.70, 0.38, 0.98, 0.44),
-    "residuals": (0.70, 0.49, 0.98, 0.56),
-    "car": (0.70, 0.63, 0.98, 0.69),
-    "speed": (0.70, 0.76, 0.98, 0.81),
+    "front camera": (0.06, 0.09, 0.27, 0.27),
+    "rear camera": (0.39, 0.09, 0.60, 0.27),
+    "follow view": (0.70, 0.10, 0.97, 0.27),
+    "road map": (0.02, 0.36, 0.16, 0.70),
+    "colour key": (0.02, 0.78, 0.16, 0.87),
+    "offsets": (0.20, 0.35, 0.45, 0.56),
+    "errors": (0.20, 0.64, 0.45, 0.85),
+    "probabilities": (0.49, 0.35, 0.72, 0.56),
+    "residuals": (0.49, 0.64, 0.72, 0.85),
+    "car": (0.76, 0.34, 0.98, 0.42),
+    "steer": (0.76, 0.49, 0.98, 0.56),
+    "throttle": (0.76, 0.63, 0.98, 0.71),
+    "speed": (0.76, 0.77, 0.98, 0.85),
 }
 # Camera panels must show their image (most pixels drawn), not only the overlays; the map
 # draws thin lines on a wide area.
