@@ -2,7 +2,11 @@
 
 Each condition's worlds come from the dataset's random worlds (`random_scenario(seed, tag)`)
 with the condition forced on them, so that what is scored is the condition and not a lucky
-draw. Seeds come from their own SeedSequence namespace, SeedSequence([EVAL_NAMESPACE,
+draw. The paint is forced too: every boundary a readable line (solid, dashed or double; worn
+paint, Botts' dots and missing lines as drawn by the dataset become lines, `readable`) except
+where the condition is the paint ("worn"). Without it "clear" held worlds whose ego lane was
+worn on both sides or unpainted, and `--quick`'s one clear world was such a one.
+Seeds come from their own SeedSequence namespace, SeedSequence([EVAL_NAMESPACE,
 condition index, world index]), never one the dataset's splits use ([recipe seed, split, i]).
 
     clear       day, no shadows, no weather
@@ -41,6 +45,7 @@ import numpy as np
 from lanekeep.evaluation.dataset import FORMAT as DATASET_FORMAT
 from lanekeep.evaluation.dataset import DatasetRecipe, camera_from_vector, render_world
 from lanekeep.evaluation.dataset_world import ROAD_LENGTH_M, random_scenario
+from lanekeep.geometry.markings import MarkingStyle
 from lanekeep.geometry.road import SegmentSpec
 from lanekeep.scenario.schema import Scenario, ScenarioError, ShadowZone
 
@@ -89,12 +94,24 @@ def condition_seed(condition: str, index: int, attempt: int = 0) -> int:
     return int(np.random.SeedSequence(parts).generate_state(1)[0])
 
 
+def readable(marking: MarkingStyle) -> MarkingStyle:
+    """`marking` as a painted line: worn paint as the line it wore from, Botts' dots as dashes
+    of their rows' length, no paint as a solid line; solid, dashed and double as they are."""
+    if marking.kind == "worn":
+        return replace(marking, kind=marking.pattern)
+    if marking.kind == "dots":
+        return replace(marking, kind="dashed")
+    if marking.kind == "none":
+        return replace(marking, kind="solid")
+    return marking
+
+
 def _force(condition: str, s: Scenario, rng: np.random.Generator) -> Scenario:
     """`s` with `condition` imposed (see the module docstring)."""
     c = s.conditions
     if condition not in BASE_TAG:
         c = replace(c, shadows=())  # the clear family: no shadows but those asked for
-    road = s.road
+    road = replace(s.road, markings=tuple(readable(m) for m in s.road.markings))
     if condition == "curve":
         k = float(rng.choice([-1.0, 1.0])) / float(rng.uniform(150.0, 300.0))
         road = replace(road, segments=(

@@ -16,7 +16,7 @@ A camera file (written by `lanekeep calibrate`, mounting added by hand):
 Without a file (an unknown dashcam, e.g. TuSimple or Udacity highway frames at 1280x720) the
 camera is a pinhole with a 60 deg horizontal field of view, centred principal point, mounted
 1.5 m high, and its pitch follows from the horizon row found in each image: the vanishing
-point of the image's dominant converging line segments (lane lines, road edges), taken as
+point of its lane lines (lanekeep/realcam/horizon.py), taken as
 pitch = atan((v_horizon - cy) / fy). When no vanishing point is found, the horizon is assumed
 at the image middle (a level camera). Numbers: detectors.toml [dashcam].
 """
@@ -28,11 +28,11 @@ import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 
-import cv2
 import numpy as np
 
 from lanekeep.core.config_io import InvalidValue, from_dict
 from lanekeep.geometry.camera_model import CameraModel
+from lanekeep.realcam.horizon import horizon_row
 
 
 @dataclass(frozen=True)
@@ -106,60 +106,6 @@ def default_camera(width: int, height: int, hfov_deg: float = 60.0, height_m: fl
                       height_m=height_m)
 
 
-def estimate_horizon_row(
-    image: np.ndarray, min_fraction: float = 0.2, max_fraction: float = 0.75
-) -> float | None:
-    """Row of the vanishing point of the image's converging line segments, or None.
-
-    Segments (Canny + probabilistic Hough, at 640 px width) slanted 15-75 deg from horizontal
-    are kept when they lean towards the image middle (left half rising to the right, right
-    half rising to the left), as lane lines and road edges do. The point nearest to all of
-    them (length-weighted least squares, twice re-weighted to drop outliers) is the vanishing
-    point. Both leanings must be present, else None.
-    """
-    h, w = image.shape[:2]
-    s = 640.0 / w
-    small = cv2.resize(image, (640, max(2, int(round(h * s)))), interpolation=cv2.INTER_AREA)
-    grey = cv2.cvtColor(small, cv2.COLOR_RGB2GRAY) if small.ndim == 3 else small
-    top = int(min_fraction * grey.shape[0])
-    edges = cv2.Canny(cv2.GaussianBlur(grey, (5, 5), 0), 40, 120)
-    edges[:top] = 0
-    lines = cv2.HoughLinesP(edges, 1, math.pi / 180, 30, minLineLength=20, maxLineGap=10)
-    if lines is None:
-        return None
-    seg = lines.reshape(-1, 4).astype(float)
-    dx, dy = seg[:, 2] - seg[:, 0], seg[:, 3] - seg[:, 1]
-    angle = np.degrees(np.arctan2(np.abs(dy), np.abs(dx)))
-    mid_u = (seg[:, 0] + seg[:, 2]) / 2.0
-    # In image coordinates (v down), a line rising to the right has dv/du < 0.
-    rising_right = (dx * dy) < 0
-    towards = np.where(mid_u < 320, rising_right, ~rising_right)
-    keep = (angle >= 15) & (angle <= 75) & towards
-    if (keep & (mid_u < 320)).sum() < 1 or (keep & (mid_u >= 320)).sum() < 1:
-        return None
-    seg, length = seg[keep], np.hypot(dx[keep], dy[keep])
-    # Line i: n_i . p = c_i with unit normal n_i.
-    normal = np.stack([seg[:, 3] - seg[:, 1], seg[:, 0] - seg[:, 2]], axis=1)
-    normal /= np.linalg.norm(normal, axis=1, keepdims=True)
-    c = np.sum(normal * seg[:, :2], axis=1)
-    weight = length.copy()
-    point = None
-    for _ in range(3):
-        a = normal * weight[:, None]
-        try:
-            point = np.linalg.solve(a.T @ normal + 1e-6 * np.eye(2), a.T @ c)
-        except np.linalg.LinAlgError:
-            return None
-        dist = np.abs(normal @ point - c)
-        weight = length * (dist < max(10.0, 2.0 * np.median(dist)))
-        if weight.sum() == 0:
-            return None
-    row = float(point[1]) / s
-    if not (min_fraction * h <= row <= max_fraction * h) or not math.isfinite(row):
-        return None
-    return row
-
-
 def camera_for_image(
     image: np.ndarray,
     camera_file: CameraFile | None,
@@ -178,7 +124,7 @@ def camera_for_image(
         pitch = math.radians(cam.pitch_deg)
         horizon = cam.cy + cam.fy * math.tan(pitch)
     else:
-        found = estimate_horizon_row(image, min_fraction, max_fraction)
+        found = horizon_row(image, min_fraction, max_fraction)
         horizon = found if found is not None else horizon_fraction * h
         pitch = math.atan((horizon - cam.cy) / cam.fy)
     return cam.model(pitch), cam, horizon

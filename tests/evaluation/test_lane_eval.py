@@ -19,6 +19,7 @@ from lanekeep.evaluation.eval_sets import (
     condition_seed,
     occlude,
     occlusion_share,
+    readable,
 )
 from lanekeep.evaluation.lane_metrics import (
     FramePrediction,
@@ -197,6 +198,20 @@ def test_conditions_are_forced_on_the_worlds():
     assert len(shade) == 1 and 0.45 <= shade[0].reach <= 0.55 and shade[0].coverage == 1.0
     assert condition_scenario("clear", 0).conditions.shadows == ()
     assert condition_scenario("night", 0).conditions.time_of_day == "night"
+
+
+def test_eval_worlds_have_readable_paint_unless_worn_is_the_condition():
+    """Worn, dotted and missing lines are the `worn` condition's subject, not a draw's: the
+    first clear world (the `--quick` one) was drawn with both ego boundaries worn."""
+    from lanekeep.evaluation.dataset_world import random_scenario
+    from lanekeep.geometry.markings import MARKING_KINDS, MarkingStyle
+
+    lines = {"solid", "dashed", "double"}
+    drawn = random_scenario(condition_seed("clear", 0), "clear").road.markings
+    assert {m.kind for m in drawn} - lines  # the draw had worn paint
+    assert {m.kind for m in condition_scenario("clear", 0).road.markings} <= lines
+    assert readable(MarkingStyle(kind="worn", pattern="dashed")).kind == "dashed"
+    assert all(readable(MarkingStyle(kind=k)).kind in lines for k in MARKING_KINDS)
 
 
 def test_eval_bad_input_is_one_line_and_exit_2(tmp_path, capsys):
