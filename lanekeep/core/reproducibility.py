@@ -69,6 +69,13 @@ def pin_kernels() -> None:
         os.environ.setdefault("OPENCV_CPU_DISABLE", opencv)
 
 
+def kernel_env() -> dict[str, str]:
+    """The pinning variables as set in this process, for processes that do not inherit its
+    environment (Ray workers on other nodes), so that they compute as this one does."""
+    keys = [*PINNED, "OPENCV_CPU_DISABLE", PIN_ENV]
+    return {k: os.environ[k] for k in keys if k in os.environ}
+
+
 def _cpu_flags() -> set[str]:
     try:
         with open("/proc/cpuinfo") as cpuinfo:

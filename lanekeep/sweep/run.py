@@ -16,6 +16,7 @@ from concurrent.futures import FIRST_COMPLETED, wait
 from contextlib import contextmanager
 from dataclasses import dataclass
 
+from lanekeep.core.reproducibility import kernel_env
 from lanekeep.core.workers import THREADS_ENV, worker_pool
 from lanekeep.sweep.spec import Cell
 
@@ -132,8 +133,10 @@ def ray_session(address: str | None = None, num_cpus: int | None = None):
     batches of a search); a Ray already connected is used and left as it is."""
     import ray
 
+    # Workers on other nodes do not inherit this process's environment: the kernel pins go
+    # with them (lanekeep/core/reproducibility.py), so that every node computes alike.
     env = {"env_vars": {"LP_NUM_THREADS": "1", THREADS_ENV: "1",
-                        "MUJOCO_GL": os.environ.get("MUJOCO_GL", "egl")}}
+                        "MUJOCO_GL": os.environ.get("MUJOCO_GL", "egl"), **kernel_env()}}
     started = not ray.is_initialized()
     if started:
         kwargs = {"address": address} if address else {"num_cpus": num_cpus}
