@@ -4,6 +4,9 @@
     python tools/golden.py --write            # on purpose; the commit says why they changed
     python tools/golden.py --check --only night
 
+Exit codes: 0 identical, 1 a difference (named), 2 bad arguments, 3 the golden files were made
+with other library versions (torch, OpenCV, numpy, the renderer): nothing to compare.
+
 Run it as its own process: `import lanekeep` must come before numpy for the kernel pins to
 take effect (lanekeep/core/reproducibility.py).
 """
@@ -20,7 +23,7 @@ FOLDER = Path(__file__).resolve().parent.parent / "tests" / "data" / "golden"
 
 
 def main(argv: list[str] | None = None) -> int:
-    from lanekeep.loop.golden import CASES, check, write
+    from lanekeep.loop.golden import CASES, check, other_versions, write
 
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     mode = parser.add_mutually_exclusive_group(required=True)
@@ -41,6 +44,12 @@ def main(argv: list[str] | None = None) -> int:
         for path in write(args.folder, cases):
             print(path)
         return 0
+    versions = other_versions(args.folder, cases)
+    if versions:
+        print("golden: the golden files were made with other library versions: "
+              + "; ".join(versions) + ". Their bits cannot be compared here; make them anew "
+              "on purpose (--write) where these versions are the project's.", file=sys.stderr)
+        return 3
     failed = 0
     for scenario, problems in check(args.folder, cases).items():
         print(f"{scenario}: {'identical' if not problems else 'DIFFERS'}")

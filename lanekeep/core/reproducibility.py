@@ -102,8 +102,9 @@ KERNEL_ENV = ("LP_NATIVE_VECTOR_WIDTH", "LP_NUM_THREADS", "ATEN_CPU_CAPABILITY",
 
 @functools.cache
 def gl_renderer() -> str:
-    """The OpenGL renderer string, e.g. "llvmpipe (LLVM 15.0.6, 256 bits)": llvmpipe names its
-    vector width there. Made from a tiny offscreen context once per process."""
+    """The OpenGL renderer and version strings, e.g. "llvmpipe (LLVM 15.0.6, 256 bits); 4.5
+    (Compatibility Profile) Mesa 22.3.6": llvmpipe names its LLVM and vector width, the version
+    its Mesa. Made from a tiny offscreen context once per process."""
     import mujoco
     from OpenGL import GL
 
@@ -111,7 +112,8 @@ def gl_renderer() -> str:
     renderer = mujoco.Renderer(model, 8, 8)
     try:
         renderer._gl_context.make_current()
-        return GL.glGetString(GL.GL_RENDERER).decode()
+        return (f"{GL.glGetString(GL.GL_RENDERER).decode()}; "
+                f"{GL.glGetString(GL.GL_VERSION).decode()}")
     finally:
         renderer.close()
 
@@ -169,3 +171,28 @@ def settings_now(renderer: bool = True) -> dict[str, Any]:
         "env": {k: os.environ[k] for k in KERNEL_ENV if k in os.environ},
     }
     return out
+
+
+def kernel_differences(a: dict | None, b: dict | None) -> list[str]:
+    """Which parts of two `settings_now()` records differ (pinned, renderer, torch, opencv,
+    numpy, env), thread counts aside; [] when either is missing (a report from before them)."""
+    if not isinstance(a, dict) or not isinstance(b, dict):
+        return []
+    return [k for k in ("pinned", "renderer", "torch", "opencv", "numpy", "env")
+            if _kernels_only(a.get(k)) != _kernels_only(b.get(k))]
+
+
+def _kernels_only(value: Any) -> Any:
+    """A setting without its thread counts: the loop gives the same numbers on any number of
+    threads (docs/reproducibility.md), so those do not make two runs incomparable."""
+    if isinstance(value, dict):
+        return {k: v for k, v in value.items() if k != "threads" and not k.endswith("_THREADS")}
+    return value
+
+
+def library_versions(settings: dict) -> dict[str, Any]:
+    """The library versions a `settings_now()` record names: another version of any of them is
+    another computation, not a drift (the renderer string holds Mesa's and LLVM's)."""
+    return {"renderer": settings.get("renderer"),
+            **{lib: (settings.get(lib) or {}).get("version") for lib in ("torch", "opencv",
+                                                                           "numpy")}}

@@ -15,7 +15,7 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
-from lanekeep.core.reproducibility import settings_now
+from lanekeep.core.reproducibility import kernel_differences, library_versions, settings_now
 from lanekeep.loop.episode import Episode
 from lanekeep.loop.stage_hashes import first_difference, hash_episode
 from lanekeep.report.json_io import dumps, report_document
@@ -33,7 +33,7 @@ class GoldenCase:
     scenario: str
     seed: int | None = None  # None: the file's own
     seconds: float = 2.0
-    size: tuple[int, int] = (640, 360)
+    size: tuple[int, int] = (320, 180)
 
     @property
     def file_name(self) -> str:
@@ -102,15 +102,26 @@ def check(folder: Path, cases: tuple[GoldenCase, ...] = CASES) -> dict[str, list
         expected = json.loads(path.read_text())
         made = expected.get("made_with", {})
         problems = differences(expected, golden_document(case, expected))
-        if problems:
-            now = settings_now()
-            settings = [k for k in ("renderer", "torch", "opencv", "numpy", "env")
-                        if made.get(k) != now.get(k)]
-            if settings:
-                problems.append("settings differ from the golden file's in: "
-                                + ", ".join(settings))
+        settings = kernel_differences(made, settings_now()) if problems else []
+        if settings:
+            problems.append("settings differ from the golden file's in: " + ", ".join(settings))
         result[case.scenario] = problems
     return result
+
+
+def other_versions(folder: Path, cases: tuple[GoldenCase, ...] = CASES) -> list[str]:
+    """The library versions here that differ from those the golden files were made with, in
+    words: with another torch, OpenCV, numpy or renderer the bits are another computation, and
+    the files must be made anew on purpose before they can check anything."""
+    now = library_versions(settings_now())
+    out = []
+    for case in cases:
+        path = folder / case.file_name
+        if path.is_file():
+            made = library_versions(json.loads(path.read_text()).get("made_with", {}))
+            out = [f"{k} {made[k]!r} (here {now[k]!r})" for k in made if made[k] != now[k]]
+            break
+    return out
 
 
 def write(folder: Path, cases: tuple[GoldenCase, ...] = CASES) -> list[Path]:

@@ -22,6 +22,7 @@ from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
+from lanekeep.core.reproducibility import kernel_differences
 from lanekeep.report.json_io import SCHEMA_VERSION, lanekeep_version
 from lanekeep.report.seed_summary import EPISODE_KEYS, HIGHER_IS_BETTER, SOURCE_KEYS
 from lanekeep.scoring import statistics as stats
@@ -220,23 +221,6 @@ def _notes(a: Run, b: Run, labels: Sequence[str]) -> list[str]:
         notes.append("one seed per label: no interval, every per-label verdict "
                      "indistinguishable (run bench with --seeds N)")
     return notes
-
-
-def kernel_differences(a: dict | None, b: dict | None) -> list[str]:
-    """Which parts of two reports' `reproducibility` settings differ (renderer, torch,
-    opencv, numpy, env, pinned); [] when either report predates the key."""
-    if not isinstance(a, dict) or not isinstance(b, dict):
-        return []
-    return [k for k in ("pinned", "renderer", "torch", "opencv", "numpy", "env")
-            if _kernels_only(a.get(k)) != _kernels_only(b.get(k))]
-
-
-def _kernels_only(value: Any) -> Any:
-    """A setting without its thread counts: the loop gives the same numbers on any number of
-    threads (docs/reproducibility.md), so those do not make two runs incomparable."""
-    if isinstance(value, dict):
-        return {k: v for k, v in value.items() if k != "threads" and not k.endswith("_THREADS")}
-    return value
 
 
 def run_settings(doc: dict) -> dict[str, Any]:

@@ -9,7 +9,7 @@ import subprocess
 import sys
 
 from lanekeep.core import reproducibility as repro
-from lanekeep.report.compare import kernel_differences
+from lanekeep.core.reproducibility import kernel_differences, library_versions
 from lanekeep.report.json_io import with_metadata
 from lanekeep.scenario.schema import load_scenario
 
@@ -86,3 +86,12 @@ def test_reports_differ_in_kernels_but_not_in_thread_counts():
     unpinned = {**a, "pinned": False, "torch": {"cpu_capability": "AVX512", "threads": 1}}
     assert kernel_differences(a, unpinned) == ["pinned", "torch"]
     assert kernel_differences(a, None) == []  # a report from before the key
+
+
+def test_library_versions_name_what_makes_another_computation():
+    settings = {"renderer": "llvmpipe (LLVM 15.0.6, 256 bits); 4.5 Mesa 22.3.6",
+                "torch": {"version": "2.13.0+cpu", "threads": 1}, "opencv": {"version": "5.0.0"},
+                "numpy": {"version": "2.4.6", "simd": ["X86_V3"]}}
+    assert library_versions(settings) == {
+        "renderer": "llvmpipe (LLVM 15.0.6, 256 bits); 4.5 Mesa 22.3.6",
+        "torch": "2.13.0+cpu", "opencv": "5.0.0", "numpy": "2.4.6"}
