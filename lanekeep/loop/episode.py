@@ -9,10 +9,12 @@ look-ahead, and the speed PI) steers and drives.
 What the car knows is what a car has: the camera frames and its sensor signals
 (lanekeep/sensing/vehicle_sensors.py: wheel odometry, IMU yaw rate, accelerations, steering
 angle), dead-reckoned into the estimator's ego-motion (estimators/odometry.py). The
-simulator's state (the car's true pose and speed, the road) is read only to score the step
-(`_true_pose`, `_score`, which calls lanekeep/scoring/), to image the scene (`_sense`: motion
-blur follows the true motion) and by the recorder; tests/loop/test_honest_loop.py makes any
-other read fail.
+detectors, the estimator and the controller are built from the car's camera models, its
+estimation and control settings and its spec sheet, never from the world. The simulator's
+state (the car's true pose and speed, the MuJoCo state, the road, the scenario's conditions)
+sits behind one gate, `self.truth` (lanekeep/scoring/gate.py), which only scoring (`_score`),
+the recorder, the sensors and the renderer and image effects (`_sense`) are handed;
+tests/loop/test_honest_loop.py proves that perception, estimation and control run without it.
 """
 
 from __future__ import annotations
@@ -39,6 +41,7 @@ from lanekeep.report.record import EpisodeInfo, NullRecorder, Recorder
 from lanekeep.scenario.nuisance import with_nuisance
 from lanekeep.scenario.schema import Scenario
 from lanekeep.scoring.departures import off_road_reason, wheels_outside_lane
+from lanekeep.scoring.gate import Truth
 from lanekeep.scoring.metrics import EpisodeReport, Metrics
 from lanekeep.scoring.step_score import REFERENCE, score_estimates, source_names
 from lanekeep.scoring.step_truth import StepTruth, step_truth
@@ -127,15 +130,17 @@ class Episode:
     def __init__(self, scenario: Scenario, recorder: Recorder | None = None,
                  render_size: tuple[int, int] | None = None) -> None:
         # the seed's start and traffic timing (the file's own seed: its nominal drive)
-        self.scenario = scenario = with_nuisance(scenario)
-        est = scenario.estimation
-        self.world: World = build(scenario)
+        scenario = with_nuisance(scenario)
+        world = build(scenario)
+        # The gate to the truth: scoring, the recorder, the sensors and the renderer get it.
+        self.truth = Truth(world, scenario)
+        # What the car's perception, estimation and control are built from (settings only).
+        self.estimation = est = scenario.estimation
         width, height = render_size or (scenario.camera.width, scenario.camera.height)
-        self.rig = CameraRig(self.world.model,
-                             RenderSettings.of(scenario, width, height))
+        self.rig = CameraRig(world.model, RenderSettings.of(scenario, width, height))
         self.rng = np.random.default_rng(scenario.seed)
         # One effects pipeline per camera: lens drops and the auto-exposure keep state.
-        self.effects = make_effects(scenario, self.world, self.rig, self.rng)
+        self.effects = make_effects(scenario, world, self.rig, self.rng)
         self.dt_s = scenario.control_period_s
         # keyed by label: a plug-in given by import path by its own `name` (core/plugins.py)
         labels = front_labels(est.front_detectors)
@@ -155,7 +160,7 @@ class Episode:
             estimator_settings(est),
             reference_x_m=float(self.reference.x_ref),
         )
-        geometry = self.world.car.geometry
+        geometry = world.car.geometry  # the car's spec sheet, not its state
         # The sensors draw from their own stream of the episode's generator, so that they do
         # not shift the image effects' draws (and a perfect-sensor run sees the same frames).
         self.sensors = VehicleSensors(scenario.sensors, self.dt_s, self.rng.spawn(1)[0])
@@ -167,8 +172,7 @@ class Episode:
         self.controller.reset()
         self.metrics = Metrics(source_names(list(self.front)))
         self.recorder: Recorder = recorder or NullRecorder()
-        geometry = self.world.car.geometry
-        self.recorder.start(EpisodeInfo(self.world.road, dict(self.rig.cameras), list(self.front),
+        self.recorder.start(EpisodeInfo(world.road, dict(self.rig.cameras), list(self.front),
                                         float(self.dt_s),
                                         (geometry.length_m, geometry.width_m)))
         for detector in [*self.front.values(), self.reference]:
@@ -178,8 +182,19 @@ class Episode:
         self.detector_errors = 0
         self.clock = StageClock()  # wall time per stage (`lanekeep perf`)
         self.detection = DetectionRunner(threads_now)
-        self._tyre_geoms = [self.world.model.geom(n).id for n in TYRES]
+        self._tyre_geoms = [world.model.geom(n).id for n in TYRES]
         self._wall_start = time.perf_counter()
+
+    @property
+    def world(self) -> World:
+        """The simulator (truth): for tools outside the loop and the faces' privileged views.
+        The loop itself reads it through `self.truth`."""
+        return self.truth.world
+
+    @property
+    def scenario(self) -> Scenario:
+        """The scenario as run (truth: its road and conditions), read through the gate."""
+        return self.truth.scenario
 
     # -- the loop ------------------------------------------------------------------------------
     def observe(self) -> Percept:
@@ -194,11 +209,11 @@ class Episode:
             events: list[str] = []
             sensed_pose = self._true_pose()  # scoring: where the frames are taken from
             frames = self._sense()
-            signals = self.sensors.sample(self.world.car)
+            signals = self.sensors.sample(self.truth.car)
             estimates = self._roll_corrected(self._detect(frames, events), signals)
             estimate = self._estimate(estimates, signals)  # laps "track" and "mmae"
             events.extend(estimate.events)
-            self._percept = Percept(index=self.index, time_s=float(self.world.data.time),
+            self._percept = Percept(index=self.index, time_s=self.truth.time_s(),
                                     frames=frames, signals=signals, estimates=estimates,
                                     estimate=estimate, events=events, sensed_pose=sensed_pose)
         return self._percept
@@ -212,7 +227,7 @@ class Episode:
         estimate, signals = percept.estimate, percept.signals
         steer, throttle = self._control(estimate, signals) if action is None else action
         clock.lap("control")
-        self.world.step(steer, throttle, self.dt_s)
+        self.truth.world.step(steer, throttle, self.dt_s)  # actuate: the simulator
         clock.lap("physics")
         result = self._score(percept.sensed_pose, percept.frames, percept.estimates, estimate,
                              signals, steer, throttle, percept.events)
@@ -230,7 +245,9 @@ class Episode:
         return self.act(action)
 
     def _sense(self) -> dict[str, np.ndarray]:
-        data = self.world.data
+        """The cameras' frames: the renderer and the image effects image the true scene
+        (motion blur follows the true motion)."""
+        data, car = self.truth.data, self.truth.car
         frames = {}
         for name in self.rig.CAMERA_NAMES:
             depth = None
@@ -239,7 +256,7 @@ class Episode:
             else:
                 rgb = self.rig.render_rgb(data, name)
             self.clock.lap(f"render_{name}")
-            frames[name] = self.effects[name](rgb, self.rng, speed_mps=self.world.car.speed_mps(),
+            frames[name] = self.effects[name](rgb, self.rng, speed_mps=car.speed_mps(),
                                               depth_m=depth)
             self.clock.lap(f"effects_{name}")
         return frames
@@ -248,7 +265,7 @@ class Episode:
         """Every detector's estimate of this step's frames (lanekeep/loop/detection.py: on two
         threads when this process may use two cores); a detector that fails counts as a miss,
         with an event, in the detectors' order whatever thread ran it."""
-        est = self.scenario.estimation
+        est = self.estimation
         named = [(name, detector, frames["front"]) for name, detector in self.front.items()]
         named.append((REFERENCE, self.reference, frames[est.reference_camera]))
         parallel = self.detection.parallel_now()
@@ -272,7 +289,7 @@ class Episode:
         """Each camera's lanes with the body roll's offset error taken out (estimators/roll.py),
         from the lateral accelerometer."""
         self.roll.update(signals.accel_lat_mps2)
-        camera = {REFERENCE: self.scenario.estimation.reference_camera}
+        camera = {REFERENCE: self.estimation.reference_camera}
         return {name: corrected(e, self.roll.offset_error_m(camera.get(name, "front")))
                 for name, e in estimates.items()}
 
@@ -290,7 +307,7 @@ class Episode:
 
     def _true_pose(self) -> tuple[float, float, float]:
         """The car's true pose, for scoring only."""
-        return self.world.car.pose()
+        return self.truth.pose()
 
     def _score(self, sensed_pose, frames, estimates, estimate: EstimatorOutput,
                signals: VehicleSignals, steer, throttle, events) -> StepResult:
@@ -300,19 +317,20 @@ class Episode:
         Per front model two columns: its raw detection (at the detector's own look-ahead) and
         its own Kalman track (at the output's look-ahead, like the fused output).
         """
-        world, lane = self.world, self.scenario.road.ego_lane
+        gate = self.truth
+        world, lane = gate.world, gate.lane
         pose_after = self._true_pose()
         truth = step_truth(
             world.road, lane, sensed_pose, pose_after,
             [e.x_m for e in estimates.values()] + [estimate.offset_x_m, estimate.reference_x_m],
             self.metrics.ade_points_m,
-            drawn_lookaheads_m=(0.0, self.scenario.estimation.offset_lookahead_m))
+            drawn_lookaheads_m=(0.0, self.estimation.offset_lookahead_m))
         track_offsets = score_estimates(self.metrics, list(self.front), estimates, estimate,
                                         truth, self.estimator.centre_of)
         tyres_xy = world.data.geom_xpos[self._tyre_geoms, :2]
         outside = wheels_outside_lane(world.road, lane, tyres_xy)
         off_road = off_road_reason(world.road, world.layout, tyres_xy, truth.car_offset_m,
-                                   self.scenario.criteria.off_road_distance_m,
+                                   gate.scenario.criteria.off_road_distance_m,
                                    float(world.data.time))
         if off_road:
             events.append(off_road)
@@ -338,9 +356,10 @@ class Episode:
     def _marking_masks(self) -> dict[str, np.ndarray]:
         """Per camera, the paint the camera can see now (for the recording): the segmentation
         render's paint, less what fog or darkness hides (lanekeep/sensing/paint_visibility.py)."""
-        data, masks = self.world.data, {}
+        world, masks = self.truth.world, {}
+        data = world.data
         for name in self.rig.CAMERA_NAMES:
-            paint = self.world.marking_mask(self.rig.render_segmentation(data, name))
+            paint = world.marking_mask(self.rig.render_segmentation(data, name))
             bare, depth = self.rig.render_rgb_depth(data, name)
             fx = self.effects[name]
             weather = fx.weather
@@ -352,7 +371,7 @@ class Episode:
     # -- whole episodes --------------------------------------------------------------------
     @property
     def total_steps(self) -> int:
-        return int(round(self.scenario.duration_s / self.dt_s))
+        return int(round(self.truth.scenario.duration_s / self.dt_s))
 
     def run(self, seconds: float | None = None,
             on_step: Callable[[StepResult, int], None] | None = None) -> EpisodeReport:
@@ -387,7 +406,8 @@ class Episode:
 
     def report(self, completed: bool = True, stop_reason: str = "",
                status: str | None = None) -> EpisodeReport:
-        return self.metrics.report(self.scenario.name, self.scenario.seed, self.dt_s,
+        scenario = self.truth.scenario
+        return self.metrics.report(scenario.name, scenario.seed, self.dt_s,
                                    completed=completed,
                                    wall_s=time.perf_counter() - self._wall_start,
                                    stop_reason=stop_reason, status=status)
