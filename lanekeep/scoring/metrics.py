@@ -78,6 +78,11 @@ class SourceReport:
     fde_cm: float
     valid_share: float
     drift_cm: float = math.nan
+    # Pearson correlation over the steps where both had an offset of this source's error with
+    # the rear reference's error (both against the truth at their own look-ahead): a reference
+    # whose errors follow a model's cannot tell when that model is wrong. NaN for the reference
+    # itself and with fewer than three such steps (or no spread).
+    reference_error_corr: float = math.nan
 
 
 @dataclass(frozen=True)
@@ -179,6 +184,36 @@ class _ErrorSums:
 
 
 @dataclass
+class _PairSums:
+    """Running sums for a Pearson correlation of two errors, in constant memory."""
+
+    n: int = 0
+    sx: float = 0.0
+    sy: float = 0.0
+    sxx: float = 0.0
+    syy: float = 0.0
+    sxy: float = 0.0
+
+    def add(self, x: float, y: float) -> None:
+        self.n += 1
+        self.sx += x
+        self.sy += y
+        self.sxx += x * x
+        self.syy += y * y
+        self.sxy += x * y
+
+    def corr(self) -> float:
+        if self.n < 3:
+            return math.nan
+        vx = self.sxx - self.sx * self.sx / self.n
+        vy = self.syy - self.sy * self.sy / self.n
+        floor = self.n * 1e-12  # errors in metres: a spread under a micrometre is none
+        if vx <= floor or vy <= floor:
+            return math.nan
+        return (self.sxy - self.sx * self.sy / self.n) / math.sqrt(vx * vy)
+
+
+@dataclass
 class _SourceAccumulator:
     offsets: _ErrorSums = field(default_factory=_ErrorSums)
     drift: _ErrorSums = field(default_factory=_ErrorSums)
@@ -188,6 +223,7 @@ class _SourceAccumulator:
     final_sum_m: float = 0.0     # sum over those steps of the error at the last ADE point
     valid: int = 0
     steps: int = 0
+    with_reference: _PairSums = field(default_factory=_PairSums)
 
 
 class Metrics:
@@ -206,6 +242,7 @@ class Metrics:
         self.reference_repairs = 0
         self._no_estimate_steps = 0
         self._last_selected: int | None = None
+        self._step_errors: dict[str, float] = {}  # this step's error (m) per valid source
 
     def add_offset(self, name: str, estimate_m: float | None, truth_m: float) -> None:
         acc = self._sources[name]
@@ -213,11 +250,22 @@ class Metrics:
         if estimate_m is not None and math.isfinite(estimate_m):
             acc.valid += 1
             acc.offsets.add(estimate_m - truth_m)
+            self._step_errors[name] = estimate_m - truth_m
             if acc.last is not None:
                 acc.drift.add((estimate_m - acc.last[0]) - (truth_m - acc.last[1]))
             acc.last = (estimate_m, truth_m)
         else:
             acc.last = None
+
+    def pair_with_reference(self, reference: str) -> None:
+        """End of a step's offsets: pair each source's error with `reference`'s (when both
+        had one) for `reference_error_corr`, then forget the step's errors."""
+        ref = self._step_errors.get(reference)
+        if ref is not None:
+            for name, error in self._step_errors.items():
+                if name != reference:
+                    self._sources[name].with_reference.add(error, ref)
+        self._step_errors.clear()
 
     def add_lane(self, name: str, centre: np.ndarray | None, truth_y: np.ndarray) -> None:
         """Lateral errors of lane centre `centre` ([c0, c1, c2]; None = no lane this step)
@@ -262,6 +310,7 @@ class Metrics:
                 fde_cm=acc.final_sum_m / acc.lanes * 100 if acc.lanes else math.nan,
                 valid_share=acc.valid / acc.steps if acc.steps else 0.0,
                 drift_cm=acc.drift.rms_cm(),
+                reference_error_corr=acc.with_reference.corr(),
             )
         car = self._car
         return EpisodeReport(

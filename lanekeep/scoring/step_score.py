@@ -51,6 +51,7 @@ def score_estimates(metrics: Metrics, models: list[str], estimates: Mapping[str,
                        truth.offset_at(estimate.reference_x_m))
     metrics.add_offset(FUSED, estimate.offset_m, truth.offset_at(x_out))
     metrics.add_lane(FUSED, estimate.centre, truth.centre_at_ade_m)
+    metrics.pair_with_reference(REFERENCE)
     if estimate.centre is None:
         metrics.add_no_estimate()
     return track_offsets

@@ -85,7 +85,7 @@ def test_a_report_with_nan_fields_writes_null_and_reads_back_nan(tmp_path):
     doc = strict_load(path)
     assert doc["sources"]["reference"] == {"rmse_cm": None, "max_cm": None, "ade_cm": None,
                                            "fde_cm": None, "valid_share": 0.0,
-                                           "drift_cm": None}
+                                           "drift_cm": None, "reference_error_corr": None}
     assert doc["sources"]["hough"]["ade_cm"] is None and doc["sources"]["hough"]["rmse_cm"] == 1.5
     assert doc["car_rms_cm"] is None and doc["car_max_cm"] is None  # NaN and infinity alike
     assert doc["seed"] == 4 and doc["scenario_sha256"] == _sha256("clear_straight")

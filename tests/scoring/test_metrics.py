@@ -126,3 +126,26 @@ def test_the_drift_table_compares_tracks_with_raw_detections():
     assert lines[3].split()[1:] == ["2.00", "1.00", "-50%", "1.00"]
     assert lines[4].split()[1:] == ["4.00", "4.00", "+0%", "4.00"]
     assert lines[5].split()[1:] == ["3.00", "2.50", "-17%"]  # the mean row
+
+
+def test_reference_error_corr_follows_the_errors_the_reference_shares():
+    """Per source, the correlation of its error with the reference's over the steps both had
+    an offset: +1 for a reference that errs as the model does, -1 for one that errs against
+    it, NaN for the reference itself and for a source never seen beside it."""
+    m = Metrics(["same", "against", "alone", "reference"])
+    rng = np.random.default_rng(0)
+    for k in range(50):
+        t = 0.1 * k
+        e = float(rng.normal(0.0, 0.05))
+        m.add_offset("same", t + e, t)
+        m.add_offset("against", t - 0.5 * e + 0.01, t)
+        m.add_offset("alone", t + 0.02, t)
+        if k < 49:  # the last step: the reference has none, so nothing is paired
+            m.add_offset("reference", t + 2.0 * e, t)
+        m.pair_with_reference("reference")
+        m.add_car(0.0, False)
+    sources = m.report("s", 0, 0.1).sources
+    assert sources["same"].reference_error_corr == pytest.approx(1.0)
+    assert sources["against"].reference_error_corr == pytest.approx(-1.0)
+    assert math.isnan(sources["alone"].reference_error_corr)  # a constant error: no spread
+    assert math.isnan(sources["reference"].reference_error_corr)
