@@ -26,6 +26,8 @@ import tempfile
 import time
 from pathlib import Path
 
+from lanekeep.cli.outputs import folder_problem
+
 EXIT_OK, EXIT_FAILURE, EXIT_BAD_INPUT = 0, 1, 2
 MIN_IMAGE_PX = 64
 # What a folder given to `detect` contributes: its files with these suffixes (any case).
@@ -95,24 +97,6 @@ def _plausibility(estimate, detector, image, camera, config):
                  support_share(estimate, covered))
 
 
-def _output_dir_problem(folder: str) -> str | None:
-    """Why `folder` cannot become a writable folder, checked without creating anything."""
-    p = Path(folder)
-    if p.exists():
-        if not p.is_dir():
-            return f"{folder}: exists and is not a folder"
-        existing = p
-    else:
-        existing = p.parent
-        while not existing.exists() and existing != existing.parent:
-            existing = existing.parent
-        if not existing.is_dir():
-            return f"{folder}: cannot be created: {existing} is not a folder"
-    if not os.access(existing, os.W_OK | os.X_OK):
-        return f"{folder}: cannot write there: {existing} is not writable"
-    return None
-
-
 def _make_output_dir(folder: str) -> str | None:
     """Create `folder` and prove it takes a file; the problem, or None."""
     try:
@@ -173,7 +157,7 @@ def _input_problems(args: argparse.Namespace, camera_file) -> list[str]:
 
     problems = []
     if args.overlay:
-        problem = _output_dir_problem(args.overlay)
+        problem = folder_problem(Path(args.overlay))
         if problem:
             problems.append(problem)
     for path in args.images:
@@ -327,7 +311,7 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
     out = Path(args.out)
     if out.is_dir():
         return _error("calibrate", f"{args.out}: is a folder; --out names the camera file")
-    problem = _output_dir_problem(str(out.parent))
+    problem = folder_problem(out.parent)
     if problem:
         return _error("calibrate", f"--out {args.out}: {problem}")
     images, unreadable = [], []

@@ -237,15 +237,19 @@ def interval_table(docs: list[dict], wide: bool = False) -> str:
             f"{counts['better']}b {counts['worse']}w {counts['indistinguishable']}i"
             f"{'':<7}{interval_text(d['car_rms_cm'], d['car_rms_cm_ci95'], 1):<22}"
             f"{rate:<18}{d['passed_episodes']}/{d['n']}")
-    total = stats.count_verdicts([p["verdict"] for d in docs
-                                  for p in d["paired"]["fused_vs"].values()])
-    lines.append(f"fused vs each model's own track, paired over seeds: {total['better']} "
-                 f"better, {total['worse']} worse, {total['indistinguishable']} "
-                 "indistinguishable (b / w / i per scenario)")
+    lines.append(_fused_vs_total(docs) + " (b / w / i per scenario)")
     lines.append("(cm; mean over seeds [95% t interval]; departed = episodes with a lane "
                  "departure [Clopper-Pearson 95%]; a verdict needs the paired 95% interval to "
                  "exclude 0)")
     return "\n".join(lines)
+
+
+def _fused_vs_total(docs: list[dict]) -> str:
+    """The verdicts of the fused output against each model's own track, over all scenarios."""
+    total = stats.count_verdicts([p["verdict"] for d in docs
+                                  for p in d["paired"]["fused_vs"].values()])
+    return (f"fused vs each model's own track, paired over seeds: {total['better']} better, "
+            f"{total['worse']} worse, {total['indistinguishable']} indistinguishable")
 
 
 def _compact_interval_table(docs: list[dict]) -> str:
@@ -263,11 +267,7 @@ def _compact_interval_table(docs: list[dict]) -> str:
             f"{interval_text(d['car_rms_cm'], d['car_rms_cm_ci95'], 1):<18}"
             f"{str(d['departed_episodes']) + '/' + str(d['n']):<10}"
             f"{d['passed_episodes']}/{d['n']}")
-    total = stats.count_verdicts([p["verdict"] for d in docs
-                                  for p in d["paired"]["fused_vs"].values()])
-    lines.append(f"fused vs each model's own track, paired over seeds: {total['better']} "
-                 f"better, {total['worse']} worse, {total['indistinguishable']} "
-                 "indistinguishable")
+    lines.append(_fused_vs_total(docs))
     lines.extend(textwrap.wrap(
         "(b / w / i per scenario; cm; mean over seeds [95% t interval]; departed = episodes "
         "with a lane departure; a verdict needs the paired 95% interval to exclude 0; --wide "
