@@ -7,8 +7,9 @@ light concrete with cracks, patches and tyre marks; solid, dashed, double, worn 
 boundaries; guard rails, barriers, poles, trees, buildings, overpasses; traffic of every size
 and colour in every lane; day, dawn, dusk and night, sun anywhere, shadows, wet, fog, rain,
 snow; cameras 1.2-1.9 m high with 62-120 deg of horizontal field of view, pitched so the
-horizon falls anywhere between rows 200 and 450 of 720, rolled and yawed a little; JPEG,
-noise, vignetting and blur.
+horizon falls anywhere between rows 200 and 450 of 720, or (a quarter of the worlds) the
+`dashcam` preset's front camera (1.4 m, horizon near row 300) with a 56-64 deg lens; rolled
+and yawed a little; JPEG, noise, vignetting and blur.
 
 `random_scenario(seed)` is a pure function of the seed: the same seed builds the same world.
 The shares below were chosen for variety, not tuned on any score.
@@ -16,6 +17,7 @@ The shares below were chosen for variety, not tuned on any score.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -33,9 +35,12 @@ from lanekeep.scenario.schema import (
     StartConfig,
     VehicleSpec,
 )
+from lanekeep.world.camera_mount import DASHCAM_HFOV_DEG
 
 NOMINAL_FRONT_PITCH_DEG = 10.0  # mjcf/car.xml: the front camera looks 10 deg up
 NOMINAL_FRONT_HFOV_DEG = 120.0
+DASHCAM_SHARE = 0.25  # worlds seen through the dashcam preset (lanekeep/world/camera_mount.py)
+DASHCAM_LENS_HFOV_DEG = (56.0, 64.0)  # their lenses, around the preset's 60 deg
 ROAD_LENGTH_M = 420.0
 MAX_VEHICLES = 24
 WHITE = (0.95, 0.95, 0.92)
@@ -101,15 +106,22 @@ def _markings(rng: np.random.Generator, n_lanes: int) -> tuple[MarkingStyle, ...
     return tuple(styles)
 
 
-def _camera(rng: np.random.Generator) -> CameraConfig:
-    """A camera whose horizon falls between rows 200 and 450 (front, at 720 rows)."""
+def _camera(rng: np.random.Generator, dashcam: bool = False) -> CameraConfig:
+    """A camera whose horizon falls between rows 200 and 450 (front, at 720 rows), or with
+    `dashcam` the dashcam preset's front camera (1.4 m, horizon near row 300), its lens
+    56-64 deg from the same draw. Both make the same draws, so the rest of a world does not
+    depend on the choice."""
     hfov = float(rng.uniform(62.0, 120.0))
     nominal = math.tan(math.radians(NOMINAL_FRONT_HFOV_DEG / 2))
+    if dashcam:
+        low, high = DASHCAM_LENS_HFOV_DEG
+        hfov = low + (high - low) * (hfov - 62.0) / (120.0 - 62.0)
+        nominal = math.tan(math.radians(DASHCAM_HFOV_DEG / 2))
     fov_scale = math.tan(math.radians(hfov / 2)) / nominal
     f = 640.0 / math.tan(math.radians(hfov / 2))
     horizon = float(rng.uniform(200.0, 450.0))
     pitch = math.degrees(math.atan((359.5 - horizon) / f))
-    return CameraConfig(
+    camera = CameraConfig(
         width=640, height=360,
         read_noise_dn=float(rng.uniform(0.5, 3.0)),
         vignetting=float(rng.uniform(0.0, 0.4)),
@@ -121,6 +133,10 @@ def _camera(rng: np.random.Generator) -> CameraConfig:
         yaw_offset_deg=float(rng.uniform(-3.0, 3.0)),
         fov_scale=float(fov_scale),
     )
+    if dashcam:  # the preset's height and pitch instead of the drawn ones
+        camera = dataclasses.replace(camera, preset="dashcam", mount_height_m=0.0,
+                                     pitch_offset_deg=0.0)
+    return camera
 
 
 def _traffic(rng: np.random.Generator, n_lanes: int) -> tuple[VehicleSpec, ...]:
@@ -215,6 +231,8 @@ def random_scenario(seed: int, tag: str | None = None, attempts: int = 20) -> Sc
     """The world of `seed` (condition `tag`, or one drawn from the seed). A draw the world
     builder rejects (e.g. shadows the sun cannot cast) is redrawn from the same stream."""
     rng = np.random.default_rng([seed, 0xDA7A])
+    # Its own stream, so that the other worlds keep the draws they had before the preset.
+    dashcam = bool(np.random.default_rng([seed, 0xDA5C]).random() < DASHCAM_SHARE)
     tag = tag or draw_tag(rng)
     if tag not in CONDITION_TAGS:
         raise ValueError(f"condition tag must be one of {CONDITION_TAGS}, got {tag!r}")
@@ -238,7 +256,7 @@ def random_scenario(seed: int, tag: str | None = None, attempts: int = 20) -> Sc
                     tyre_marks=float(rng.uniform(0.0, 0.8))),
                 seed=int(seed),
                 start=StartConfig(s_m=30.0),
-                camera=_camera(rng),
+                camera=_camera(rng, dashcam),
                 conditions=_conditions(rng, tag, n_lanes, ego),
                 roadside=_roadside(rng),
             )

@@ -31,6 +31,7 @@ from lanekeep.geometry.markings import MARKING_KINDS, WORN_PATTERNS
 from lanekeep.geometry.road import MAX_LANES, MAX_ROAD_M, SEGMENT_KINDS
 from lanekeep.scenario.roadside import SKYLINES
 from lanekeep.scenario.schema import (
+    CAMERA_PRESETS,
     CAMERAS,
     ESTIMATION_MODES,
     SHADOW_KINDS,
@@ -39,6 +40,7 @@ from lanekeep.scenario.schema import (
     Scenario,
 )
 from lanekeep.scenario.sensors import MAX_SPEED_SCALE_SIGMA, STEERING_RATIO_RANGE
+from lanekeep.scenario.traffic import DIRECTIONS, MAX_VEHICLES_PER_KM
 
 
 def _one_of(values) -> str:
@@ -121,9 +123,13 @@ DESCRIPTIONS: dict[str, tuple[str, str]] = {
     "camera.exposure_time_constant_s": ("How fast the exposure follows the scene.",
                                         "0.01..10"),
     "camera.vignetting": ("Corner darkening of the lens.", "0..0.6"),
+    "camera.lens_blur_px": ("Lens + demosaic point spread (Gaussian sigma, pixels); "
+                            "0 = off.", "0..3"),
+    "camera.bloom": ("Glare around near-saturated areas (sky, lamps); 0 = off.", "0..1"),
     "camera.jpeg_quality": ("JPEG compression of every frame; 0 = off.", "0 or 10..100"),
     "camera.show_hood": ("The car's hood at the bottom of the front image.", "true, false"),
-    "camera.mount_height_m": ("Both cameras' height above the ground; 0 = the car's 1.5 m.",
+    "camera.mount_height_m": ("Both cameras' height above the ground; 0 = the preset's "
+                              "(1.5 m; the dashcam front's 1.4 m).",
                               "0 or 0.5..4"),
     "camera.pitch_offset_deg": ("Added to each camera's pitch; + = looking up.", "-30..30"),
     "camera.roll_deg": ("About each camera's optical axis; + = image turns anticlockwise.",
@@ -132,6 +138,11 @@ DESCRIPTIONS: dict[str, tuple[str, str]] = {
                               "-30..30"),
     "camera.fov_scale": ("Scales tan(field of view / 2); < 1 = a longer lens (the car's: "
                          "120 deg horizontal).", "0.3..1.5"),
+    "camera.preset": ("The front camera's pose before the mounting keys: \"paper\" = the "
+                      "car's (1.5 m, 10 deg up, 120 deg horizontal, horizon at row 425 of 720); "
+                      "\"dashcam\" = a real dashcam's (1.4 m, 3.1 deg down, 60 deg horizontal, "
+                      "horizon at row 300 of 720). The rear camera keeps the car's pose.",
+                      _one_of(CAMERA_PRESETS)),
     "camera.distortion": ("OpenCV lens distortion k1, k2, p1, p2, k3 of the front camera; "
                           "every image is bent by it and the detectors are given it. All zero "
                           "= a pinhole; k1 < 0 = barrel (wide lenses). The delivered focal "
@@ -277,6 +288,19 @@ DESCRIPTIONS: dict[str, tuple[str, str]] = {
                                     "0..20"),
     "roadside.skyline": ("Far background: hills or buildings.", _one_of(SKYLINES)),
     "roadside.shadow_darkness": ("Opacity of the props' shadows.", _UNIT),
+    "traffic": ("Other vehicles drawn from the seed in the lanes beside the car's, never in "
+                "its own; off by default.", ""),
+    "traffic.vehicles_per_km": ("Vehicles per km of road in each lane but the car's; 0 = no "
+                                "traffic.", f"0..{MAX_VEHICLES_PER_KM:g}"),
+    "traffic.directions": ("Per lane, rightmost first: traffic driving the car's way or "
+                           "towards it; empty = all the car's way.",
+                           f"each of {_one_of(DIRECTIONS)}; empty or one per lane"),
+    "traffic.speed_mps": ("Range each lane's speed is drawn from (one speed per lane, so "
+                          "vehicles keep their gaps).", "[low, high], 0 <= low <= high <= 40"),
+    "traffic.van_share": ("Share of vans among the vehicles.", _UNIT),
+    "traffic.truck_share": ("Share of trucks among the vehicles.", "0..1, with vans at most 1"),
+    "traffic.clear_m": ("No vehicle within this arc length of the car's start, in any lane.",
+                        "0..200"),
     "criteria": ("Pass/fail limits of an episode; an episode that leaves the road or stops "
                  "early fails whatever they say.", ""),
     "criteria.max_lane_departures": ("Pass limit: times a wheel crossed an ego-lane boundary.",

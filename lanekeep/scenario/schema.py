@@ -29,10 +29,12 @@ from lanekeep.geometry.road import MAX_LANES, MAX_ROAD_M, Road, SegmentSpec
 from lanekeep.scenario.pavement import PavementStyle
 from lanekeep.scenario.roadside import Roadside
 from lanekeep.scenario.sensors import SensorsConfig
+from lanekeep.scenario.traffic import Traffic
 
 TIMES_OF_DAY = ("day", "dawn", "dusk", "night")
 SHADOW_KINDS = ("buildings", "trees")
 SIDES = ("left", "right")
+CAMERA_PRESETS = ("paper", "dashcam")  # lanekeep/world/camera_mount.py: the front camera's pose
 
 
 class ScenarioError(ConfigError):
@@ -139,18 +141,27 @@ class CameraConfig:
     auto_exposure: bool = True  # causal gain from the past frames' metering
     exposure_time_constant_s: float = 0.3  # how fast the exposure follows the scene
     vignetting: float = 0.2  # corner darkening of the lens, 0 none .. 0.6
-    jpeg_quality: int = 0  # JPEG compression of every frame, 0 = off, else 10..100
+    # Lens + demosaic point spread: Gaussian sigma in pixels of the frame; 0.8 makes a hard
+    # edge rise over ~2-3 px as on real photos instead of a 1 px stair step. 0 = off, .. 3.
+    lens_blur_px: float = 0.8
+    bloom: float = 0.4  # glare around near-saturated areas (sky, lamps), 0 = off .. 1
+    # JPEG compression of every frame (dashcams store ~90), 0 = off, else 10..100
+    jpeg_quality: int = 90
     show_hood: bool = True  # the ego car's hood at the bottom of the front image
     # The mounting of both onboard cameras, changed from the car's own (mjcf/car.xml: 1.5 m
     # high, front pitched 10 deg up with a 120 deg horizontal field of view): other cameras, as
     # real rigs and the datasets (lanekeep/evaluation/dataset.py) have. Applied by
     # lanekeep/world/camera_mount.py
     # to the compiled model, so the detectors' camera models (read from it) stay exact.
-    mount_height_m: float = 0.0  # 0 = the car's 1.5 m; else the cameras' height above ground
+    mount_height_m: float = 0.0  # 0 = the preset's (1.5 m; dashcam front 1.4 m); else both
     pitch_offset_deg: float = 0.0  # added to each camera's pitch, + = looking up
     roll_deg: float = 0.0  # about each camera's optical axis, + = image turns anticlockwise
     yaw_offset_deg: float = 0.0  # about the car's vertical axis, + = towards the car's left
     fov_scale: float = 1.0  # scales tan(field of view / 2): < 1 a longer lens
+    # The front camera's base pose before the keys above: "paper" = the car's (Table 1),
+    # "dashcam" = a real dashcam's (60 deg wide, 1.4 m, horizon near row 300 of 720); the
+    # rear camera keeps the car's pose under either.
+    preset: str = "paper"
     # OpenCV lens distortion k1, k2, p1, p2, k3 of the front and the rear camera
     # (lanekeep/geometry/lens.py); all zero = a pinhole. The detectors are given the same
     # coefficients, as from a camera file.
@@ -166,6 +177,9 @@ class CameraConfig:
             if not -limit <= getattr(self, key) <= limit:
                 raise InvalidValue(key, f"must be in [-{limit:g}, {limit:g}] deg, "
                                         f"got {getattr(self, key)}")
+        if self.preset not in CAMERA_PRESETS:
+            raise InvalidValue("preset", f"must be one of {', '.join(CAMERA_PRESETS)}, "
+                                         f"got {self.preset!r}")
         if not 0.3 <= self.fov_scale <= 1.5:
             raise InvalidValue("fov_scale", f"must be in [0.3, 1.5], got {self.fov_scale}")
         for key in ("width", "height"):
@@ -178,6 +192,10 @@ class CameraConfig:
                                f"must be in [0.01, 10] s, got {self.exposure_time_constant_s}")
         if not 0.0 <= self.vignetting <= 0.6:
             raise InvalidValue("vignetting", f"must be in [0, 0.6], got {self.vignetting}")
+        if not 0.0 <= self.lens_blur_px <= 3.0:
+            raise InvalidValue("lens_blur_px", f"must be in [0, 3] px, got {self.lens_blur_px}")
+        if not 0.0 <= self.bloom <= 1.0:
+            raise InvalidValue("bloom", f"must be in [0, 1], got {self.bloom}")
         if not (self.jpeg_quality == 0 or 10 <= self.jpeg_quality <= 100):
             raise InvalidValue("jpeg_quality",
                                f"must be 0 (off) or 10..100, got {self.jpeg_quality}")
@@ -420,6 +438,7 @@ class Scenario:
     control: ControlConfig = field(default_factory=ControlConfig)  # the controller, by name
     sensors: SensorsConfig = field(default_factory=SensorsConfig)
     roadside: Roadside = field(default_factory=Roadside)  # props: lanekeep/world/props.py
+    traffic: Traffic = field(default_factory=Traffic)  # lanekeep/world/traffic_flow.py
     criteria: CriteriaConfig = field(default_factory=CriteriaConfig)  # pass/fail limits
     source: str = field(default="", metadata={"toml": False})  # file it was read from
     # The seed its file gives: that seed is the file's nominal drive, any other draws the

@@ -1,11 +1,24 @@
 """The camera's own image chain after the light reaches it: vignetting, auto-exposure, sensor
-noise, tone curve and (optionally) JPEG; what every real camera does, so it is always on.
+noise, tone curve, glare, point spread and JPEG; what every real camera does, so it is on by
+default (each step off at 0 in CameraConfig).
 
 Order, as a camera works: the lens darkens the corners (vignetting, falloff 1 - k r^2 with r
 the radius relative to the corner), the sensor integrates with the exposure the auto-exposure
 set and adds its read noise (before the gain, so the gain amplifies it: night frames are
 noisier), the ISP maps the signal through gain and a tone curve whose toe lifts deep shadows (a
-shaded road is dark grey, not black), and the frame is optionally JPEG-compressed.
+shaded road is dark grey, not black); then the optics' and the demosaic's softness: a mild
+glare (bloom) spreads light from near-saturated areas (a bright sky over the treeline, lamps at
+night) onto their darker surroundings, and a small Gaussian point spread (`lens_blur_px`) makes
+a hard edge rise over 2-3 px as on a real photo instead of the renderer's 1 px stair step
+(applied after the noise, as demosaicing is: it also correlates the noise, as on real frames);
+last the frame is JPEG-compressed as a dashcam stores it (quality 90 by default; its 4:2:0
+chroma subsampling is the camera's chromatic softness).
+
+The glare is computed at 1/16 of the size (it is smooth): the frame's excess over
+BLOOM_THRESHOLD, area-averaged, blurred; only where that glow exceeds the averaged excess
+itself is light added (enlarged to the frame), so a uniformly bright sky keeps its level and
+its glow falls on the darker things next to it. The optics cost ~1.5 ms and the JPEG round
+trip ~3-4 ms on a 1280x720 frame (2 CPU cores; see the issue #44 note).
 
 Auto-exposure is causal: frame k is exposed with the gain set from the metering of frames
 0..k-1, filtered in log-gain with a time constant; the first frame starts settled on its own
@@ -45,6 +58,10 @@ MIN_GAIN, MAX_GAIN = 1.0, 4.0
 HIGHLIGHT_DN = 160.0  # brightening stops where the frame's 99th percentile reaches this
 TOE_LIFT, TOE_POWER, TOE_ONSET = 2.5, 8.0, 1.3  # tone toe: t + lift t^onset (1 - t)^power
 METER_STEP_PX = 8  # metering reads every 8th pixel in both directions
+BLOOM_HALVINGS = 4  # the glare is computed at 1/16 of the frame's size
+BLOOM_THRESHOLD = (200.0, 200.0, 200.0, 0.0)  # display level (DN) above which a pixel glares
+BLOOM_SIGMA = 0.02  # the glare's Gaussian width, a share of the frame's width
+BLOOM_GAIN = 2.0  # the glare's excess gain at bloom = 1
 
 
 def tone_curve(t: np.ndarray) -> np.ndarray:
@@ -63,6 +80,11 @@ def _tone_lut(gain: float) -> np.ndarray:
     lut = np.clip(np.round(255.0 * tone_curve(t)), 0, 255).astype(np.uint8)
     lut.flags.writeable = False
     return lut
+
+
+def psf_taps(sigma_px: float) -> int:
+    """Taps of the point spread's Gaussian: 2 round(1.5 sigma) + 1 (3 for the default)."""
+    return 2 * max(1, round(1.5 * sigma_px)) + 1
 
 
 def vignetting_map(height: int, width: int, strength: float) -> np.ndarray:
@@ -87,6 +109,9 @@ class CameraSensor:
         self.height, self.width = height, width
         self.auto_exposure = camera.auto_exposure
         self.jpeg_quality = camera.jpeg_quality
+        self.psf_sigma = camera.lens_blur_px
+        self.bloom_gain = BLOOM_GAIN * camera.bloom
+        self.bloom_sigma = BLOOM_SIGMA * width / 2**BLOOM_HALVINGS  # at the small size
         # Read noise in the sensor's DN before the gain (an int8 bank): the camera's own and a
         # noisier sensor's extra (Conditions.noise); the gain and the tone curve shape it.
         read_dn = math.hypot(camera.read_noise_dn, READ_NOISE_DN_AT_1 * extra_noise)
@@ -133,6 +158,27 @@ class CameraSensor:
         else:
             self.log_gain += self.alpha * (target - self.log_gain)
 
+    def bloom(self, frame: np.ndarray) -> np.ndarray:
+        """The glare of the near-saturated areas added to `frame` (in place; see the module
+        docstring). A frame with nothing above the threshold is returned as it is."""
+        small = cv2.subtract(frame, BLOOM_THRESHOLD)  # the excess (saturating)
+        for _ in range(BLOOM_HALVINGS):  # a bilinear halving is a 2x2 mean: 4 make 16x16
+            small = cv2.resize(small, (max(1, small.shape[1] // 2), max(1, small.shape[0] // 2)),
+                               interpolation=cv2.INTER_LINEAR)
+        if not small.any():
+            return frame
+        small = cv2.convertScaleAbs(small, alpha=self.bloom_gain)
+        glow = cv2.GaussianBlur(small, (0, 0), self.bloom_sigma)
+        halo = cv2.resize(cv2.subtract(glow, small), (self.width, self.height),
+                          interpolation=cv2.INTER_LINEAR)
+        return cv2.add(frame, halo, dst=frame)
+
+    def jpeg(self, frame: np.ndarray) -> np.ndarray:
+        """`frame` compressed and decompressed as a dashcam stores it."""
+        _, data = cv2.imencode(".jpg", cv2.cvtColor(frame, cv2.COLOR_RGB2BGR),
+                               [cv2.IMWRITE_JPEG_QUALITY, self.jpeg_quality])
+        return cv2.cvtColor(cv2.imdecode(data, cv2.IMREAD_COLOR), cv2.COLOR_BGR2RGB)
+
     def __call__(self, image: np.ndarray, rng: np.random.Generator) -> np.ndarray:
         """One RGB uint8 frame through the chain; returns a new array."""
         h, w = self.height, self.width
@@ -151,10 +197,13 @@ class CameraSensor:
             out = cv2.add(plane if out is None else out, positive[start:start + h], dst=out)
             cv2.subtract(out, negative[start:start + h], dst=out)  # both saturate
         out = cv2.LUT(plane if out is None else out, tone, dst=out).reshape(h, w, 3)
+        if self.bloom_gain > 0.0:
+            out = self.bloom(out)
+        if self.psf_sigma > 0.0:
+            taps = psf_taps(self.psf_sigma)
+            out = cv2.GaussianBlur(out, (taps, taps), self.psf_sigma, dst=out)
         if self.jpeg_quality > 0:
-            _, data = cv2.imencode(".jpg", cv2.cvtColor(out, cv2.COLOR_RGB2BGR),
-                                    [cv2.IMWRITE_JPEG_QUALITY, self.jpeg_quality])
-            out = cv2.cvtColor(cv2.imdecode(data, cv2.IMREAD_COLOR), cv2.COLOR_BGR2RGB)
+            out = self.jpeg(out)
         if self.auto_exposure:
             self._update_exposure(metering)  # sets the next frame's exposure
         return out  # a new array: the first pass made it

@@ -2,10 +2,11 @@
 
 Order, as light reaches the sensor: the scene's weather in depth (motion blur, fog, falling rain
 or snow, drops on the lens; lanekeep/sensing/weather.py), then the camera's own chain
-(vignetting, auto-exposure, read and shot noise, tone curve, optional JPEG;
+(vignetting, auto-exposure, read noise, tone curve, glare, point spread, JPEG;
 lanekeep/sensing/camera_sensor.py). The camera chain is on by default, as on every real camera; a
-`CameraConfig` with `read_noise_dn = 0`, `auto_exposure = false`, `vignetting = 0` and
-`jpeg_quality = 0` passes a weatherless frame through unchanged.
+`CameraConfig` with `read_noise_dn = 0`, `auto_exposure = false`, `vignetting = 0`,
+`lens_blur_px = 0`, `bloom = 0` and `jpeg_quality = 0` passes a weatherless frame through
+the tone curve only.
 
 `ImageEffects` is made once per camera and episode (the lens drops and the auto-exposure keep
 state). Every random choice per frame comes from the `numpy.random.Generator` passed in, so a

@@ -24,8 +24,10 @@ pass as the colour) so that they sit in the scene, not on top of it.
     and in elevation, narrow above the axis (HEADLIGHT_CUT_DEG) and wide below it.
   - Motion blur: a zoom blur about the focus of expansion (the image flow of forward motion
     grows with the distance from it), scaled by the speed.
-  - Snowflakes and lens drops as before (flakes of three sizes; drops that stay on the lens and
-    slide down).
+  - Lens drops: each a small ball lens that shows a wider, inverted, defocused view of the
+    scene around it under a darker rim and a glint; they stay on the lens and slide down.
+  - Snowflakes in depth layers: far ones small, dim and sharp, near ones large, brighter and
+    out of focus (drawn and blurred at a reduced size), each flake of its own brightness.
 
 Every random choice per frame comes from the generator passed in; `Weather` is made once per
 camera and episode.
@@ -33,6 +35,7 @@ camera and episode.
 
 from __future__ import annotations
 
+import functools
 import math
 
 import cv2
@@ -58,6 +61,16 @@ HEADLIGHT_CUT_DEG = 2.0  # ... and above it: the low beam's cut-off line
 HEADLIGHT_REACH_M = 40.0
 HEADLIGHT_VEIL = 0.25
 HEADLIGHT_RGB = (255.0, 247.0, 230.0)
+# Lens drops: how much wider than itself the (inverted) view through a drop is, its blur (a
+# share of its radius: the lens is focused far beyond it), the light its rim passes, its glint.
+DROP_VIEW = 2.5
+DROP_BLUR = 0.12
+DROP_RIM_SHADE = 0.75
+DROP_GLINT_DN = 25.0
+# Snowflakes per depth layer: radius (px at 720 rows), count at snow = 1 on a 1280x720 frame,
+# opacity range, defocus blur sigma (px at 720 rows) and the size reduction they are drawn at.
+SNOW_LAYERS = ((1, 1800, (0.3, 0.7), 0.0, 1), (2, 500, (0.45, 0.9), 0.8, 1),
+               (4, 90, (0.5, 0.95), 1.6, 2), (10, 14, (0.25, 0.5), 5.0, 4))
 BLUR_SCALE_PER_MPS = 0.0022  # zoom-blur scale per m/s at motion_blur = 1 (9 px at the bottom)
 
 
@@ -66,22 +79,28 @@ def needs_depth(conditions: Conditions) -> bool:
     return conditions.fog > 0.0 or conditions.rain > 0.0 or conditions.wet > 0.0
 
 
+@functools.lru_cache(maxsize=64)
+def _drop_profile(side: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A lens drop `side` px across: its coverage (soft-edged disc), the light its body
+    passes (1 inside, DROP_RIM_SHADE at the rim) and its highlight (DN, upper left), all
+    float32 (side, side); read-only, they are cached."""
+    c = (np.arange(side, dtype=np.float32) - (side - 1) / 2.0) / (side / 2.0)
+    rho = np.hypot(c[None, :], c[:, None])
+    edge_px = side / 2.0
+    alpha = np.clip((1.0 - rho) / 0.25, 0.0, 1.0)  # out of focus: a soft edge
+    alpha = np.minimum(alpha, np.clip((1.0 - rho) * edge_px, 0.0, 1.0))
+    shade = 1.0 - (1.0 - DROP_RIM_SHADE) * np.exp(-(((rho - 0.8) / 0.15) ** 2))
+    glint = DROP_GLINT_DN * np.exp(-(np.hypot(c[None, :] + 0.35, c[:, None] + 0.4) / 0.15) ** 2)
+    arrays = tuple(a.astype(np.float32) for a in (alpha, shade, glint))
+    for a in arrays:
+        a.flags.writeable = False
+    return arrays
+
+
 def focus_of_expansion(camera: CameraModel, forward: bool) -> np.ndarray:
     """Pixel (u, v) where the car's straight-ahead (or straight-behind) direction projects."""
     uv, _ = camera.project(camera.position_m + [1000.0 if forward else -1000.0, 0.0, 0.0])
     return np.asarray(uv, dtype=float).reshape(2)
-
-
-def _enlarged(small: np.ndarray, factor: int, x0: int, x1: int, y0: int, y1: int
-              ) -> np.ndarray:
-    """Rows y0..y1 and columns x0..x1 of `small` enlarged `factor` times, sampled as
-    cv2.resize's bilinear enlargement samples it (pixel centres aligned)."""
-    xs = ((np.arange(x0, x1, dtype=np.float32) + 0.5) / factor - 0.5)[None, :]
-    ys = ((np.arange(y0, y1, dtype=np.float32) + 0.5) / factor - 0.5)[:, None]
-    map_x = np.broadcast_to(xs, (y1 - y0, x1 - x0))
-    map_y = np.broadcast_to(ys, (y1 - y0, x1 - x0))
-    return cv2.remap(small, np.ascontiguousarray(map_x), np.ascontiguousarray(map_y),
-                     cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
 
 
 class Weather:
@@ -232,43 +251,56 @@ class Weather:
         return cv2.GaussianBlur(alpha, (3, 5), 0)
 
     def lens_drops(self, image: np.ndarray, rng: np.random.Generator) -> np.ndarray:
-        """Water drops on the lens: soft discs showing a blurred, brightened view. The blurred
-        view (1/8 size) and the discs' mask (1/4 size) are enlarged only around each drop."""
+        """Water drops on the lens, each a small lens itself: it shows the scene around it,
+        DROP_VIEW times wider than the drop, turned upside down (a ball lens inverts),
+        out of focus, under a darker rim (the drop's edge bends light away) with a small
+        highlight; the scene outside is untouched. Work is done only around each drop."""
         if len(self.drops) == 0:
             return image
         self.drops[:, 1] += rng.uniform(0.0, 1.5, len(self.drops)) * self.scale  # slide down
         gone = self.drops[:, 1] - self.drops[:, 2] > self.height
         self.drops[gone, 1] = -self.drops[gone, 2]
-        small = cv2.blur(cv2.resize(image, (self.width // 8, self.height // 8),
-                                    interpolation=cv2.INTER_AREA), (3, 3))
-        mask = np.zeros((self.height // 4, self.width // 4), np.uint8)
-        for x, y, r in self.drops:
-            cv2.circle(mask, (int(x / 4), int(y / 4)), max(1, int(r / 4)), 255, -1, cv2.LINE_AA)
-        mask = cv2.blur(mask, (3, 3))
         out = image.copy()
-        for x, y, r in self.drops:  # blend only around each drop
-            x0, y0 = max(0, int(x - r - 6)), max(0, int(y - r - 6))
-            x1, y1 = min(self.width, int(x + r + 7)), min(self.height, int(y + r + 7))
-            if x1 > x0 and y1 > y0:
-                blurred = cv2.convertScaleAbs(_enlarged(small, 8, x0, x1, y0, y1), alpha=1.1,
-                                              beta=12)
-                out[y0:y1, x0:x1] = self._blend(image[y0:y1, x0:x1], blurred,
-                                                _enlarged(mask, 4, x0, x1, y0, y1))
+        for x, y, r in self.drops:
+            side = 2 * int(math.ceil(r)) + 1
+            x0, y0 = int(round(x)) - side // 2, int(round(y)) - side // 2
+            cx0, cy0 = max(0, x0), max(0, y0)
+            cx1, cy1 = min(self.width, x0 + side), min(self.height, y0 + side)
+            if cx1 <= cx0 or cy1 <= cy0:
+                continue
+            view_px = int(round(DROP_VIEW * side))
+            view = cv2.getRectSubPix(image, (view_px, view_px), (float(x), float(y)))
+            view = cv2.flip(cv2.resize(view, (side, side), interpolation=cv2.INTER_AREA), -1)
+            view = cv2.GaussianBlur(view, (0, 0), max(0.8, DROP_BLUR * r))
+            alpha, shade, glint = _drop_profile(side)
+            lens = view.astype(np.float32) * shade[..., None] + glint[..., None]
+            region = (slice(cy0 - y0, cy1 - y0), slice(cx0 - x0, cx1 - x0))
+            a = alpha[region][..., None]
+            behind = out[cy0:cy1, cx0:cx1].astype(np.float32)
+            out[cy0:cy1, cx0:cx1] = np.clip(behind + a * (lens[region] - behind), 0, 255)
         return out
 
     def snow(self, image: np.ndarray, rng: np.random.Generator) -> np.ndarray:
-        """Flakes of three sizes, soft-edged (near ones larger and blurrier)."""
+        """Flakes in depth layers (SNOW_LAYERS): each flake of its own brightness, near ones
+        larger and out of focus, drawn and blurred at 1/shrink of the size and enlarged."""
         amount = self.conditions.snow
         h, w = self.height, self.width
         layer = np.zeros((h, w), np.uint8)
-        for radius, count in ((1, 1800), (2, 500), (4, 90)):
+        for radius, count, (lo, hi), sigma, shrink in SNOW_LAYERS:
             n = int(count * amount * (w * h) / (1280 * 720))
-            rad = max(1, int(round(radius * self.scale)))
-            dots = np.zeros((h, w), np.uint8)
-            dots[rng.integers(0, h, n), rng.integers(0, w, n)] = 255
+            hs, ws = h // shrink, w // shrink
+            dots = np.zeros((hs, ws), np.uint8)
+            dots[rng.integers(0, hs, n), rng.integers(0, ws, n)] = np.round(
+                255 * rng.uniform(lo, hi, n)).astype(np.uint8)
+            rad = max(1, int(round(radius * self.scale / shrink)))
             kernel = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * rad + 1, 2 * rad + 1))
-            layer = cv2.max(layer, cv2.dilate(dots, kernel))
-        out = self._blend(image, np.full_like(image, 245), cv2.GaussianBlur(layer, (5, 5), 0))
+            flakes = cv2.dilate(dots, kernel)  # grey dilation: each flake keeps its level
+            if sigma > 0.0:
+                flakes = cv2.GaussianBlur(flakes, (0, 0), sigma * self.scale / shrink)
+            if shrink > 1:
+                flakes = cv2.resize(flakes, (w, h), interpolation=cv2.INTER_LINEAR)
+            layer = cv2.max(layer, flakes)
+        out = self._blend(image, np.full_like(image, 245), cv2.GaussianBlur(layer, (3, 3), 0))
         return cv2.LUT(out, self.snow_veil)  # falling snow whitens the whole view
 
     def __call__(self, image: np.ndarray, depth_m: np.ndarray | None,

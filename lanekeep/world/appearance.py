@@ -16,11 +16,14 @@ import numpy as np
 from lanekeep.geometry.road import Road
 from lanekeep.scenario.schema import Conditions, Scenario
 from lanekeep.world.lighting import (
+    CLEAR_SKY_CLOUDS,
     FOG_END_OF_VISIBILITY,
     GRID_STEP_M,
     LIGHTING,
+    OVERCAST_SKY,
     SKY_DAY,
     SKY_SCATTER,
+    cloud_cover,
     direct_sun_share,
     fog_visibility_m,
     sun_direction,
@@ -47,6 +50,8 @@ class Lighting:
     sky_horizon: RGB  # also the fog and haze colour
     fog_start: float  # in units of MODEL_EXTENT_M; beyond the far clip plane = no fog
     fog_end: float
+    clouds: float  # share of the sky under cloud (lanekeep/world/sky.py)
+    overcast: float  # 0 fair-weather cumulus .. 1 a closed grey deck
 
 
 @dataclass(frozen=True)
@@ -72,6 +77,12 @@ def lighting_of(cond: Conditions, road: Road) -> Lighting:
     """Time of day sets sun, ambient and sky; fog washes the sky grey and limits visibility."""
     sun_diffuse, sun_ambient, (head_amb, head_dif), (zenith, horizon) = LIGHTING[cond.time_of_day]
     glare = 0.1 + 0.6 * cond.wet if cond.time_of_day == "day" else 0.02 + 0.4 * cond.wet
+    cover = cloud_cover(cond)
+    if cover > 0.0:  # rain or snow: an overcast's flat grey sky
+        scale = np.mean(horizon) / np.mean(SKY_DAY[1])
+        zenith = tuple((1 - cover) * np.array(zenith) + cover * scale * np.array(OVERCAST_SKY[0]))
+        horizon = tuple((1 - cover) * np.array(horizon)
+                        + cover * scale * np.array(OVERCAST_SKY[1]))
     if cond.fog > 0.0:  # overcast: a sky washed towards the fog colour
         grey = np.array([0.72, 0.74, 0.76]) * (np.mean(horizon) / np.mean(SKY_DAY[1]))
         mix = 0.5 + 0.5 * cond.fog
@@ -97,6 +108,7 @@ def lighting_of(cond: Conditions, road: Road) -> Lighting:
         headlight_ambient=head_amb, headlight_diffuse=head_dif,
         sky_zenith=tuple(float(v) for v in zenith), sky_horizon=tuple(float(v) for v in horizon),
         fog_start=fog_start, fog_end=fog_end,
+        clouds=CLEAR_SKY_CLOUDS + (1.0 - CLEAR_SKY_CLOUDS) * cover, overcast=cover,
     )
 
 

@@ -51,6 +51,7 @@ from lanekeep.world.parts import (
     add_texture,
 )
 from lanekeep.world.pavement import LANE_U, SLAB_M
+from lanekeep.world.sky import SKY_SEED, sky_texture
 from lanekeep.world.traffic import update_dynamic
 from lanekeep.world.vehicle import Car
 
@@ -127,15 +128,11 @@ def _add_environment(spec: mujoco.MjSpec, road: Road, scenario: Scenario,
     spec.visual.headlight.ambient = [lighting.headlight_ambient] * 3
     spec.visual.headlight.diffuse = [lighting.headlight_diffuse] * 3
     spec.visual.headlight.specular = [0.0, 0.0, 0.0]
-    spec.add_texture(
-        name="sky",
-        type=mujoco.mjtTexture.mjTEXTURE_SKYBOX,
-        builtin=mujoco.mjtBuiltin.mjBUILTIN_GRADIENT,
-        rgb1=list(lighting.sky_zenith),
-        rgb2=list(lighting.sky_horizon),
-        width=512,
-        height=512,
-    )
+    sky = sky_texture(lighting.sky_zenith, lighting.sky_horizon, lighting.clouds,
+                      lighting.overcast, np.random.default_rng([scenario.seed, SKY_SEED]))
+    texture = spec.add_texture(name="sky", type=mujoco.mjtTexture.mjTEXTURE_SKYBOX,
+                               width=sky.shape[1], height=sky.shape[0], nchannel=3)
+    texture.data = sky.tobytes()
     spec.worldbody.add_light(
         name="sun",
         type=mujoco.mjtLightType.mjLIGHT_DIRECTIONAL,

@@ -45,7 +45,9 @@ from lanekeep.world.lighting import (
 from lanekeep.world.parts import ConditionsInfo, WorldLayout
 from lanekeep.world.props import add_props
 from lanekeep.world.roadside import add_bumps, add_shadow_zone, add_snow, add_wet, overlay_alpha
+from lanekeep.world.street_lights import add_street_lights
 from lanekeep.world.traffic import add_vehicle
+from lanekeep.world.traffic_flow import traffic_vehicles
 
 
 def add_conditions(spec: mujoco.MjSpec, scenario: Scenario, road: Road,
@@ -67,6 +69,7 @@ def add_conditions(spec: mujoco.MjSpec, scenario: Scenario, road: Road,
                           specular=0.0, shininess=0.0)
         add_shadow_zone(spec, road, zone, i, to_sun, rng, info, layout)
     add_props(spec, scenario, road, to_sun, info, layout)  # after the zones: their shadows
+    add_street_lights(spec, scenario, road, layout)
     if cond.speed_bumps_m:
         spec.add_material(name="cond_bump", rgba=[0.95, 0.75, 0.1, 1.0], specular=0.2)
         add_bumps(spec, road, cond, info, layout)
@@ -79,6 +82,6 @@ def add_conditions(spec: mujoco.MjSpec, scenario: Scenario, road: Road,
         add_wet(spec, road, cond, rng, info, layout)
     if cond.snow > 0.0:
         add_snow(spec, road, cond, rng, layout)
-    for i, vehicle in enumerate(cond.vehicles):
+    for i, vehicle in enumerate(cond.vehicles + traffic_vehicles(scenario, road)):
         info.vehicles.append(add_vehicle(spec, road, vehicle, i))
     return info

@@ -5,7 +5,8 @@ Dawn, dusk and night dim the sun, the ambient light and the sky and switch on th
 headlights (two white spot lights, lit road ~35 m ahead) and a dim red tail light (the rear
 camera sees ~8 m of road). MuJoCo lights per vertex, so with headlights the asphalt ribbons are
 meshed as a 0.5 m grid. Fog: MuJoCo's linear fog up to the visibility distance, in the sky's
-horizon colour. lanekeep/world/appearance.py turns these into one scenario's values.
+horizon colour. Rain and snow: an overcast (`cloud_cover`), no direct sun, a grey sky.
+lanekeep/world/appearance.py turns these into one scenario's values.
 """
 
 
@@ -19,7 +20,9 @@ import numpy as np
 from lanekeep.geometry.road import Road
 from lanekeep.scenario.schema import Conditions
 
-SKY_DAY = ((0.45, 0.62, 0.88), (0.88, 0.92, 0.97))  # zenith, horizon
+# A clear day's sky, zenith and horizon: a mid blue, not a saturated one, over a pale hazy band
+# (real dashcam skies are washed out; the bright band at the horizon is the air's haze).
+SKY_DAY = ((0.52, 0.65, 0.84), (0.84, 0.87, 0.90))
 # time of day -> (sun diffuse, sun ambient, camera headlight ambient/diffuse, sky zenith/horizon)
 
 LIGHTING = {
@@ -46,6 +49,20 @@ GRID_STEP_M = 0.5  # lateral/along step of the asphalt mesh under headlights
 FOG_LAYER_M = 60.0
 SKY_SCATTER = 0.6
 
+# Rain and snow fall from an overcast: cloud cover grows with them (full from 0.5), the sun's
+# direct light falls to OVERCAST_DIRECT of itself under a full cover (no hard shadows; what is
+# lost comes down as skylight, as under fog), and the sky turns a flat grey (OVERCAST_SKY:
+# zenith, horizon, at day; scaled with the time of day's horizon).
+CLOUD_COVER_PER_PRECIPITATION = 2.0
+OVERCAST_DIRECT = 0.03
+OVERCAST_SKY = ((0.62, 0.64, 0.67), (0.74, 0.75, 0.77))
+CLEAR_SKY_CLOUDS = 0.3  # fair-weather cumulus cover of a sky without rain or snow
+
+
+def cloud_cover(conditions: Conditions) -> float:
+    """Share of the sky under thick cloud (0 clear .. 1 overcast), from the rain and snow."""
+    return min(1.0, CLOUD_COVER_PER_PRECIPITATION * max(conditions.rain, conditions.snow))
+
 
 def fog_visibility_m(fog: float) -> float:
     """Meteorological visibility (5% contrast) of a fog density in (0, 1]."""
@@ -54,12 +71,13 @@ def fog_visibility_m(fog: float) -> float:
 
 
 def direct_sun_share(conditions: Conditions) -> float:
-    """The share of the sun's direct light that the scenario's fog lets through (1 without
-    fog); the sun's diffuse light and the props' cast shadows are scaled by it."""
+    """The share of the sun's direct light that the scenario's fog and cloud let through (1
+    without either); the sun's diffuse light and the props' cast shadows are scaled by it."""
+    clouds = 1.0 - (1.0 - OVERCAST_DIRECT) * cloud_cover(conditions)
     if conditions.fog <= 0.0:
-        return 1.0
+        return clouds
     sin_el = max(math.sin(math.radians(conditions.sun_elevation_deg)), 0.05)
-    return math.exp(-3.0 * FOG_LAYER_M / (fog_visibility_m(conditions.fog) * sin_el))
+    return clouds * math.exp(-3.0 * FOG_LAYER_M / (fog_visibility_m(conditions.fog) * sin_el))
 
 
 def sun_direction(conditions: Conditions, road: Road) -> np.ndarray:

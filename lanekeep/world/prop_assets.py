@@ -20,7 +20,7 @@ from lanekeep.geometry.road import Road
 from lanekeep.geometry.road_mesh import Ribbon
 from lanekeep.world import prop_textures as tex
 from lanekeep.world.parts import WorldLayout, add_material, add_texture
-from lanekeep.world.prop_meshes import box, ellipsoid, extrude, prism
+from lanekeep.world.prop_meshes import box, cone, ellipsoid, extrude, prism
 
 FACADE_WALLS = ((0.72, 0.68, 0.6), (0.55, 0.4, 0.32), (0.8, 0.8, 0.78), (0.45, 0.47, 0.5))
 SIGN_COLOURS = ((0.05, 0.38, 0.18), (0.06, 0.2, 0.55))
@@ -55,8 +55,9 @@ class Props:
             self.casters.append(mesh.vertices)
 
 
-def add_prop_materials(spec: mujoco.MjSpec, seed: int) -> None:
-    """Textures and materials of the props (also used by the shadow zones' casters)."""
+def add_prop_materials(spec: mujoco.MjSpec, seed: int, night: bool = False) -> None:
+    """Textures and materials of the props (also used by the shadow zones' casters); at
+    night the far hills lose the glow that stands for daylight haze."""
     rng = np.random.default_rng([seed, 0x9209])
     for k, wall in enumerate(FACADE_WALLS):
         add_texture(spec, f"prop_facade_{k}", tex.facade(rng, wall))
@@ -69,6 +70,9 @@ def add_prop_materials(spec: mujoco.MjSpec, seed: int) -> None:
     add_texture(spec, "prop_foliage", tex.foliage(rng))
     for k, tint in enumerate(FOLIAGE_TINTS):
         add_material(spec, f"prop_foliage_{k}", "prop_foliage", rgba=list(tint), specular=0.0)
+    # Conifers: darker and bluer than the broadleaf crowns, on the same leaf texture.
+    add_material(spec, "prop_conifer", "prop_foliage", rgba=[0.5, 0.62, 0.55, 1.0],
+                 specular=0.0)
     add_material(spec, "prop_steel", None, rgba=[0.68, 0.7, 0.72, 1.0], specular=0.5,
                  shininess=0.4)
     add_material(spec, "prop_pole", None, rgba=[0.5, 0.52, 0.55, 1.0], specular=0.3)
@@ -76,7 +80,7 @@ def add_prop_materials(spec: mujoco.MjSpec, seed: int) -> None:
     # Far hills: hazy (lighter, bluer, of little contrast) and untextured, since texture
     # detail is lost at 400 m while sampling it over a sixth of the frame costs render time.
     add_material(spec, "prop_hills", None, rgba=[0.36, 0.47, 0.36, 1.0], specular=0.0,
-                 emission=0.25)
+                 emission=0.02 if night else 0.25)
 
 
 def tree(props: Props, rng: np.random.Generator, base_xy: np.ndarray, crown_z_m: float,
@@ -99,6 +103,20 @@ def tree(props: Props, rng: np.random.Generator, base_xy: np.ndarray, crown_z_m:
     props.add(material, Ribbon.concatenate(crowns))
     trunk_r = 0.1 + 0.05 * radius_m
     props.add("prop_trunk", prism(np.r_[base_xy, 0.0], crown_z_m, trunk_r, sides=5))
+
+
+def conifer(props: Props, rng: np.random.Generator, base_xy: np.ndarray, height_m: float,
+            radius_m: float) -> None:
+    """A spruce or pine: three stacked cones, each narrower, on a short bare trunk; one
+    shadow for the crown, one for the trunk."""
+    tiers = []
+    for k in range(3):
+        z0 = (0.15 + 0.22 * k) * height_m
+        tiers.append(cone(np.r_[base_xy, z0], height_m - z0 if k == 2 else 0.45 * height_m,
+                          radius_m * (1.0 - 0.27 * k) * rng.uniform(0.9, 1.1)))
+    props.add("prop_conifer", Ribbon.concatenate(tiers))
+    props.add("prop_trunk", prism(np.r_[base_xy, 0.0], 0.3 * height_m, 0.08 + 0.04 * radius_m,
+                                  sides=5))
 
 
 def building(props: Props, rng: np.random.Generator, centre_xy: np.ndarray, heading: float,
@@ -157,12 +175,26 @@ def jersey_barrier(props: Props, road: Road, side: str, layout: WorldLayout) -> 
              layout)
 
 
+def pole_s(road: Road, spacing_m: float) -> np.ndarray:
+    """Arc lengths of the light poles, `spacing_m` apart from half a spacing on."""
+    return np.arange(0.5 * spacing_m, road.length_m, spacing_m)
+
+
+def pole_heads(road: Road, side: str, spacing_m: float,
+               layout: WorldLayout) -> tuple[np.ndarray, np.ndarray]:
+    """World xy (n, 2) of the light poles' lamp heads on one side and the road heading there
+    (lanekeep/world/street_lights.py lights them at night)."""
+    s = pole_s(road, spacing_m)
+    r = verge_r(road, side, layout) + _sign_of(side) * (1.0 - 2.3)
+    return road.position(s, np.full(len(s), r)), np.asarray(road.heading_at(s), float)
+
+
 def light_poles(props: Props, road: Road, side: str, spacing_m: float,
                 layout: WorldLayout) -> None:
     """10 m poles 1 m beyond the gravel, arms reaching 2.4 m towards the road."""
     sign = _sign_of(side)
     r_pole = verge_r(road, side, layout) + sign * 1.0
-    for s in np.arange(0.5 * spacing_m, road.length_m, spacing_m):
+    for s in pole_s(road, spacing_m):
         th = float(road.heading_at(s))
         props.add("prop_pole", prism(np.r_[road.position(s, r_pole), 0.0], 10.0, 0.1))
         props.add("prop_pole", box(np.r_[road.position(s, r_pole - sign * 1.2), 9.9], th,

@@ -173,3 +173,21 @@ def tree_belt(centre_xy: np.ndarray, radii_m: np.ndarray, heights_m: np.ndarray,
     uv[:, :, 1] = quads[..., 2]
     # The first triangle's normal points outwards here (foot a, foot b, top b): reverse all.
     return _quads(quads[:, ::-1], uv[:, ::-1] / uv_m)
+
+
+def cone(base: np.ndarray, height_m: float, radius_m: float, sides: int = 7) -> Ribbon:
+    """An upright cone (a conifer's tier) on base (3,), with its underside: flat shaded,
+    texcoords in metres around the side and up."""
+    base = np.asarray(base, float)
+    ang = np.linspace(0.0, 2 * np.pi, sides + 1)
+    ring = np.c_[radius_m * np.cos(ang), radius_m * np.sin(ang), np.zeros(sides + 1)] + base
+    apex = base + [0.0, 0.0, height_m]
+    side = np.stack([ring[:-1], ring[1:], np.broadcast_to(apex, (sides, 3))], 1)
+    under = np.stack([ring[1:], ring[:-1], np.broadcast_to(base, (sides, 3))], 1)
+    tris = np.concatenate([side, under])  # CCW from outside: side up and out, underside down
+    run = radius_m * ang
+    uv_side = np.stack([np.c_[run[:-1], np.zeros(sides)], np.c_[run[1:], np.zeros(sides)],
+                        np.c_[0.5 * (run[:-1] + run[1:]), np.full(sides, height_m)]], 1)
+    uv = np.concatenate([uv_side, tris[sides:, :, :2] - base[:2]])
+    faces = np.arange(3 * len(tris), dtype=np.int32).reshape(-1, 3)
+    return Ribbon(tris.reshape(-1, 3), faces, uv.reshape(-1, 2) / 2.0)

@@ -33,6 +33,7 @@ from lanekeep.world.roadside import cast_shadow, disjoint_pieces, overlay_alpha,
 TREE_OFFSET_M = (4.0, 40.0)  # scenery trees: from the gravel's outer edge (m)
 BUILDING_OFFSET_M = (15.0, 60.0)
 HILL_WIDTH_M = 200.0
+TREE_KINDS = {"broadleaf": 0.55, "poplar": 0.15, "conifer": 0.3}  # shares of scenery trees
 
 
 def add_props(spec: mujoco.MjSpec, scenario: Scenario, road: Road, to_sun: np.ndarray,
@@ -40,7 +41,7 @@ def add_props(spec: mujoco.MjSpec, scenario: Scenario, road: Road, to_sun: np.nd
     """Add the scenario's roadside props and their shadows (after the shadow zones, whose
     casters use the props' materials and whose shadows the props' shadows leave out)."""
     cfg = scenario.roadside
-    assets.add_prop_materials(spec, scenario.seed)
+    assets.add_prop_materials(spec, scenario.seed, scenario.conditions.time_of_day == "night")
     for key in ("signs_m", "gantries_m", "overpasses_m"):
         assets.check_s(road, key, getattr(cfg, key))
     rng = np.random.default_rng([scenario.seed, 0x9205])
@@ -124,14 +125,17 @@ def _scenery(props: assets.Props, rng: np.random.Generator, road: Road, scenario
         for _ in range(n_trees):
             s = rng.uniform(0.0, road.length_m)
             off = min(TREE_OFFSET_M[0] + rng.exponential(10.0), TREE_OFFSET_M[1])
-            radius = rng.uniform(2.0, 4.0)  # crowns 4-8 m across on 2-3 m of bare trunk
-            crown_z = 0.75 * radius + rng.uniform(2.0, 3.0)
+            kind, radius, crown_z, column, top = _tree_shape(rng)
             xy = road.position(s, verge + sign * (off + radius))
-            reach = _towards_road(road, s, sign, to_sun) * (crown_z + radius)
+            reach = _towards_road(road, s, sign, to_sun) * top
             if any(a <= s <= b and off < o for a, b, o in blocked) or reach > off - 1.0:
                 continue
-            if _clear_of_road(road, xy, abs(verge) + radius + 1.0):
-                assets.tree(props, rng, xy, crown_z, radius)
+            if not _clear_of_road(road, xy, abs(verge) + radius + 1.0):
+                continue
+            if kind == "conifer":
+                assets.conifer(props, rng, xy, top, radius)
+            else:
+                assets.tree(props, rng, xy, crown_z, radius, column)
         placed: list[tuple[np.ndarray, float]] = []
         n_buildings = rng.poisson(cfg.buildings_per_100m * road.length_m / 100.0)
         for _ in range(n_buildings):
@@ -153,6 +157,24 @@ def _scenery(props: assets.Props, rng: np.random.Generator, road: Road, scenario
             if height >= 4.0 and _clear_of_road(road, corners, abs(verge) + 5.0):
                 placed.append((xy, reach))
                 assets.building(props, rng, xy, th, length, depth, height)
+
+
+def _tree_shape(rng: np.random.Generator) -> tuple[str, float, float, float, float]:
+    """(kind, crown radius, crown centre height, column, top height) of a scenery tree: a
+    broadleaf (crowns 4-8 m across on 2-3 m of bare trunk), a poplar (a narrow crown carried
+    down a 4-8 m column) or a conifer 7-16 m high, in the proportions TREE_KINDS gives."""
+    kind = str(rng.choice(list(TREE_KINDS), p=list(TREE_KINDS.values())))
+    if kind == "conifer":
+        radius = float(rng.uniform(1.5, 3.0))
+        top = float(rng.uniform(7.0, 16.0))
+        return kind, radius, 0.5 * top, 0.0, top
+    if kind == "poplar":
+        radius, column = float(rng.uniform(1.2, 1.8)), float(rng.uniform(4.0, 8.0))
+        crown_z = column + float(rng.uniform(2.0, 3.0))
+        return kind, radius, crown_z, column, crown_z + 0.8 * radius
+    radius = float(rng.uniform(2.0, 4.0))
+    crown_z = 0.75 * radius + float(rng.uniform(2.0, 3.0))
+    return kind, radius, crown_z, 0.0, crown_z + radius
 
 
 def _skyline(props: assets.Props, rng: np.random.Generator, road: Road, skyline: str,

@@ -27,29 +27,38 @@ import mujoco
 import numpy as np
 
 from lanekeep.geometry.road import Road
+from lanekeep.geometry.road_mesh import Ribbon
 from lanekeep.scenario.schema import VehicleSpec
 from lanekeep.world.groups import GROUP_SHADOW, GROUP_WORLD
 from lanekeep.world.parts import (
     OVERLAY_Z_M,
     ConditionsInfo,
     VehicleTrack,
+    add_material,
+    add_texture,
     yaw_quat,
 )
+from lanekeep.world.prop_meshes import ellipsoid
 from lanekeep.world.roadside import cast_shadow, overlay_alpha
 from lanekeep.world.vehicle_assets import Part, vehicle_parts
+from lanekeep.world.vehicle_textures import textured_box, trailer_texture
 
 SUN_SHADOW_DARKNESS = 0.55  # as a ShadowZone's default, under the full day sun
 DAY_SUN_DIFFUSE = 0.75  # world_lighting.LIGHTING["day"]: the sun of SUN_SHADOW_DARKNESS
-CONTACT_DARKNESS = 0.45
+CONTACT_DARKNESS = 0.7  # the road under a car gets neither sun nor most of the sky
+DAY_GLASS_GLOW = 0.35  # emission of the glass by day: the sky it mirrors
+GLOW_ALPHA = 0.3  # a lit lamp's glow
 LIGHTS_ON_BELOW = 0.5  # sun diffuse under which vehicles drive with lights on (dawn, dusk, night)
 
-# role -> material attributes shared by all vehicles (paint is per vehicle)
+# role -> material attributes shared by all vehicles (paint is per vehicle). No `reflectance`:
+# MuJoCo renders a reflective geom by drawing the scene again, once per geom. Glass is nearly
+# black with a sharp highlight and, by day, a faint glow of the sky it mirrors (DAY_GLASS_GLOW).
 SHARED_LOOK = {
-    "glass": dict(rgba=[0.06, 0.08, 0.1, 1.0], specular=0.9, shininess=0.9),
+    "glass": dict(rgba=[0.05, 0.065, 0.08, 1.0], specular=1.0, shininess=0.95),
     "tyre": dict(rgba=[0.035, 0.035, 0.035, 1.0], specular=0.05, shininess=0.1),
     "hub": dict(rgba=[0.55, 0.56, 0.58, 1.0], specular=0.6, shininess=0.6),
     "trim": dict(rgba=[0.1, 0.1, 0.11, 1.0], specular=0.2, shininess=0.3),
-    "underbody": dict(rgba=[0.04, 0.04, 0.045, 1.0], specular=0.0, shininess=0.0),
+    "underbody": dict(rgba=[0.02, 0.02, 0.022, 1.0], specular=0.0, shininess=0.0),
     "plate": dict(rgba=[0.9, 0.9, 0.85, 1.0], specular=0.3, shininess=0.3),
 }
 
@@ -73,6 +82,8 @@ def add_vehicle(spec: mujoco.MjSpec, road: Road, v: VehicleSpec, index: int,
     for part in parts:
         _add_part(spec, body, name, part, materials[part.role])
     _add_shadows(spec, body, name, parts, yaw, to_sun, sun)
+    if sun < LIGHTS_ON_BELOW:
+        _add_glows(spec, body, name, parts)
     return VehicleTrack(name, v.s_m, r, v.speed_mps)
 
 
@@ -100,12 +111,19 @@ def _materials(spec: mujoco.MjSpec, name: str, colour, sun: float) -> dict[str, 
     lit = sun < LIGHTS_ON_BELOW
     out = {role: _material(spec, f"cond_vehicle_{role}", **look)
            for role, look in SHARED_LOOK.items()}
+    spec.material("cond_vehicle_glass").emission = DAY_GLASS_GLOW * min(1.0, sun / DAY_SUN_DIFFUSE)
     out["taillight"] = _material(spec, "cond_vehicle_taillight", rgba=[0.75, 0.04, 0.03, 1.0],
                                  emission=1.0 if lit else 0.25, specular=0.5)
     out["headlight"] = _material(spec, "cond_vehicle_headlight", rgba=[0.95, 0.93, 0.85, 1.0],
                                  emission=1.0 if lit else 0.2, specular=0.8)
-    out["paint"] = _material(spec, f"{name}_paint", rgba=[*colour, 1.0], specular=0.6,
-                             shininess=0.7)
+    out["paint"] = _material(spec, f"{name}_paint", rgba=[*colour, 1.0], specular=0.75,
+                             shininess=0.85)
+    if spec.texture("cond_vehicle_trailer") is None:
+        add_texture(spec, "cond_vehicle_trailer", trailer_texture())
+    out["trailer"] = f"{name}_trailer"
+    if spec.material(out["trailer"]) is None:
+        add_material(spec, out["trailer"], "cond_vehicle_trailer", rgba=[*colour, 1.0],
+                     specular=0.3, shininess=0.4)
     return out
 
 
@@ -113,6 +131,14 @@ def _add_part(spec: mujoco.MjSpec, body, name: str, part: Part, material: str) -
     geom = f"{name}_{part.name}"
     common = dict(name=geom, group=GROUP_WORLD, material=material, contype=0, conaffinity=0,
                   mass=1.0)
+    if part.role == "trailer":  # a textured box (lanekeep/world/vehicle_textures.py)
+        mesh = textured_box(part.pos, part.size)
+        spec.add_mesh(name=geom, uservert=mesh.vertices.astype(np.float32).ravel().tolist(),
+                      userface=mesh.faces.ravel().tolist(),
+                      usertexcoord=mesh.texcoords.astype(np.float32).ravel().tolist(),
+                      inertia=mujoco.mjtMeshInertia.mjMESH_INERTIA_SHELL)
+        body.add_geom(type=mujoco.mjtGeom.mjGEOM_MESH, meshname=geom, **common)
+        return
     if part.shape == "hull":
         spec.add_mesh(name=geom, uservert=np.ravel(part.points).tolist())
         body.add_geom(type=mujoco.mjtGeom.mjGEOM_MESH, meshname=geom, **common)
@@ -120,6 +146,26 @@ def _add_part(spec: mujoco.MjSpec, body, name: str, part: Part, material: str) -
     kind = mujoco.mjtGeom.mjGEOM_BOX if part.shape == "box" else mujoco.mjtGeom.mjGEOM_CYLINDER
     body.add_geom(type=kind, pos=list(part.pos), size=list(part.size), quat=list(part.quat),
                   **common)
+
+
+def _add_glows(spec: mujoco.MjSpec, body, name: str, parts: list[Part]) -> None:
+    """A lit lamp's glow as a camera sees it in the dark: a translucent emissive ellipsoid
+    around each head and tail light (GROUP_SHADOW: the colour render only), one mesh geom
+    per colour and vehicle."""
+    for role, rgba in (("headlight", [1.0, 0.95, 0.85, GLOW_ALPHA]),
+                       ("taillight", [1.0, 0.08, 0.04, GLOW_ALPHA])):
+        lamps = [p for p in parts if p.role == role]
+        if not lamps:
+            continue
+        material = _material(spec, f"cond_vehicle_{role}_glow", rgba=rgba, emission=1.0,
+                             specular=0.0, shininess=0.0)
+        glow = Ribbon.concatenate([ellipsoid(p.pos, (0.25, 0.35, 0.22), 6, 3) for p in lamps])
+        geom = f"{name}_{role}_glow"
+        spec.add_mesh(name=geom, uservert=glow.vertices.astype(np.float32).ravel().tolist(),
+                      userface=glow.faces.ravel().tolist(),
+                      inertia=mujoco.mjtMeshInertia.mjMESH_INERTIA_SHELL)
+        body.add_geom(name=geom, type=mujoco.mjtGeom.mjGEOM_MESH, meshname=geom,
+                      material=material, group=GROUP_SHADOW, contype=0, conaffinity=0, mass=1.0)
 
 
 def contact_polygon(parts: list[Part], margin_m: float = 0.05) -> np.ndarray:

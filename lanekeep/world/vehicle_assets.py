@@ -40,7 +40,7 @@ class Part:
 
     name: str  # suffix of the geom name: cond_vehicle_{i}_{name}
     shape: str  # "box", "cylinder" or "hull" (convex hull of `points`)
-    role: str  # paint, glass, tyre, hub, trim, underbody, taillight, headlight, plate
+    role: str  # paint, trailer, glass, tyre, hub, trim, underbody, taillight, headlight, plate
     pos: Vec3 = (0.0, 0.0, 0.0)
     size: Vec3 = (0.0, 0.0, 0.0)  # box: half sizes; cylinder: (radius, half length, 0)
     quat: Quat = IDENTITY
@@ -149,19 +149,21 @@ def wheels(axles_x: list[float], track_half: float, radius: float, width: float,
     for x in axles_x:
         for side in (1.0, -1.0):
             pos = (x, side * track_half, radius)
-            parts.append(Part(f"wheel_{k}", "cylinder", "tyre", pos, (radius, 0.5 * width, 0.0),
-                              ACROSS))
+            # a 16-sided prism, not a MuJoCo cylinder (~1000 triangles: 4-6 tyres made each
+            # vehicle cost 1.6 ms of a CPU render of both cameras)
+            parts.append(hub(f"wheel_{k}", pos, radius, 0.5 * width, sides=16, role="tyre"))
             parts.append(hub(f"hub_{k}", pos, 0.55 * radius, 0.5 * width + 0.006))
             k += 1
     return parts
 
 
-def hub(name: str, centre: Vec3, radius: float, half_width: float, sides: int = 12) -> Part:
+def hub(name: str, centre: Vec3, radius: float, half_width: float, sides: int = 12,
+        role: str = "hub") -> Part:
     """Hub caps on both faces of a tyre: a 12-sided prism across the vehicle (a hull mesh of
     ~40 triangles: a MuJoCo cylinder has ~1000 and the hubs cost 1 ms a 720p CPU render)."""
     ang = np.linspace(0.0, 2.0 * np.pi, sides, endpoint=False)
     x, z = centre[0] + radius * np.cos(ang), centre[2] + radius * np.sin(ang)
-    return Part(name, "hull", "hub", points=tuple(
+    return Part(name, "hull", role, points=tuple(
         (float(a), centre[1] + s * half_width, float(b)) for a, b in zip(x, z, strict=True)
         for s in (-1.0, 1.0)))
 
@@ -368,7 +370,7 @@ def _truck(L: float, hw: float, H: float, st: TruckStyle) -> list[Part]:  # noqa
         rear_top=cab_rear, z0=st.cab_belt_m, z1=cab_top, hw_base=hw - 0.03, hw_top=hw - 0.08,
         side_glass_m=1.0, glass_height_m=st.glass_height_m, rear_glass=0.0))
     box_rear = -0.5 * L + BODY_INSET_M
-    parts.append(box("cargo", "paint", (box_rear, -hw, box_floor),
+    parts.append(box("cargo", "trailer", (box_rear, -hw, box_floor),
                      (cab_rear - st.gap_m, hw, H)))
     parts.append(box("cargo_rail", "trim", (box_rear, -hw - 0.01, box_floor),
                      (cab_rear - st.gap_m, hw + 0.01, box_floor + 0.14)))

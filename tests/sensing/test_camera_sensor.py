@@ -15,6 +15,7 @@ from lanekeep.sensing.cameras import CameraRig, RenderSettings
 from lanekeep.sensing.snapshot import place_on_road
 
 H, W = 180, 320
+OPTICS_OFF = {"lens_blur_px": 0.0, "bloom": 0.0, "jpeg_quality": 0}  # the sensor alone
 
 
 def _sensor(seed=0, **changes):
@@ -27,7 +28,8 @@ def _flat(level):
 
 
 def test_default_camera_adds_realistic_noise_to_a_flat_frame():
-    out = _sensor(vignetting=0.0, auto_exposure=False)(_flat(105), np.random.default_rng(1))
+    out = _sensor(vignetting=0.0, auto_exposure=False, **OPTICS_OFF)(_flat(105),
+                                                                     np.random.default_rng(1))
     centre = out[40:140, 80:240].astype(float)
     assert 0.7 < centre.std() < 3.0  # a few DN, as a good automotive camera at day
     assert abs(centre.mean() - 255 * tone_curve(105 / 255)) < 0.5  # zero-mean noise
@@ -36,7 +38,8 @@ def test_default_camera_adds_realistic_noise_to_a_flat_frame():
 def test_the_chain_equals_a_straightforward_reference():
     """Vignetting, then the signed noise added in int16 and clipped, then gain and tone: the
     sensor's one-plane passes and its split noise bank give the same frame, bit for bit."""
-    sensor = _sensor(seed=2, auto_exposure=False, read_noise_dn=6.0, vignetting=0.3)
+    sensor = _sensor(seed=2, auto_exposure=False, read_noise_dn=6.0, vignetting=0.3,
+                     **OPTICS_OFF)
     frame = np.random.default_rng(3).integers(0, 256, (H, W, 3), dtype=np.uint8)
     got = sensor(frame, np.random.default_rng(4))
     positive, negative = sensor.read_bank
@@ -109,9 +112,10 @@ def test_vignetting_darkens_the_corners():
 
 def test_jpeg_compression_is_optional():
     frame = np.random.default_rng(5).integers(60, 200, (H, W, 3)).astype(np.uint8)
-    plain = _sensor(read_noise_dn=0.0, auto_exposure=False, vignetting=0.0)(
+    plain = _sensor(read_noise_dn=0.0, auto_exposure=False, vignetting=0.0, **OPTICS_OFF)(
         frame, np.random.default_rng(0))
-    jpeg = _sensor(read_noise_dn=0.0, auto_exposure=False, vignetting=0.0, jpeg_quality=30)(
+    jpeg = _sensor(read_noise_dn=0.0, auto_exposure=False, vignetting=0.0,
+                   **dict(OPTICS_OFF, jpeg_quality=30))(
         frame, np.random.default_rng(0))
     assert plain.shape == jpeg.shape and jpeg.dtype == np.uint8
     assert np.abs(plain.astype(int) - jpeg.astype(int)).mean() > 5  # noise is what JPEG drops

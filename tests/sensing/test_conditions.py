@@ -264,7 +264,8 @@ def test_rain_and_snow_raise_high_frequency_energy(condition):
 
 # The weather alone, through a camera that adds nothing (the auto-exposure would undo a
 # whitening, as a real one does).
-BARE_CAMERA = CameraConfig(read_noise_dn=0.0, auto_exposure=False, vignetting=0.0)
+BARE_CAMERA = CameraConfig(read_noise_dn=0.0, auto_exposure=False, vignetting=0.0,
+                           lens_blur_px=0.0, bloom=0.0, jpeg_quality=0)
 
 
 def test_snow_whitens_the_image(clear_frame):

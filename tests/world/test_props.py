@@ -13,6 +13,7 @@ import pytest
 from lanekeep.core.config_io import InvalidValue
 from lanekeep.scenario.roadside import Roadside
 from lanekeep.scenario.schema import ScenarioError, load_scenario, parse_scenario
+from lanekeep.scenario.traffic import Traffic
 from lanekeep.sensing.cameras import CameraRig, RenderSettings
 from lanekeep.world import prop_assets as assets
 from lanekeep.world.build import build, build_spec, check_scenario
@@ -57,7 +58,7 @@ def test_props_stand_beyond_the_gravel_and_on_the_ground(highway):
         s, r = road.local_coordinates(low[:, :2])
         beside = (s < 0.0) | (s > road.length_m) | (r <= right + 1e-6) | (r >= left - 1e-6)
         assert beside.all(), f"{name}: {np.sum(~beside)} low vertices over the road or gravel"
-        if not name.startswith(("props_foliage", "props_sign")):  # crowns, panels: held up
+        if not name.startswith(("props_foliage", "props_conifer", "props_sign")):  # held up
             assert verts[:, 2].min() == pytest.approx(0.0, abs=1e-6), f"{name} floats"
 
 
@@ -156,6 +157,6 @@ def _edges_above_horizon(scenario) -> float:
 
 
 def test_props_put_edges_above_the_horizon():
-    scenario = load_scenario("clear_straight")
+    scenario = dataclasses.replace(load_scenario("clear_straight"), traffic=Traffic())  # props only
     bare = dataclasses.replace(scenario, roadside=Roadside())
     assert _edges_above_horizon(scenario) > 2.0 * _edges_above_horizon(bare) + 0.002

@@ -15,9 +15,10 @@ from lanekeep.world.groups import GROUP_SHADOW
 from lanekeep.world.paint import FAR_DEPTH_M
 from lanekeep.world.parts import OVERLAY_Z_M
 from lanekeep.world.traffic import update_dynamic
+from lanekeep.world.traffic_flow import traffic_vehicles
 from lanekeep.world.vehicle_assets import kind_of, vehicle_parts
 
-CYLINDER = int(mujoco.mjtGeom.mjGEOM_CYLINDER)
+MESH = int(mujoco.mjtGeom.mjGEOM_MESH)
 
 
 @pytest.fixture(scope="module")
@@ -55,17 +56,18 @@ def _mesh_points(model: mujoco.MjModel, data: mujoco.MjData, g: int) -> np.ndarr
 
 
 def _wheels(model, data, body):
-    """(geom id, centre height, radius) of a vehicle's tyres, checking each is a cylinder
-    whose axis lies level and across the vehicle's heading."""
-    heading = data.body(body).xmat.reshape(3, 3)[:, 0]
+    """(geom id, centre height, radius) of a vehicle's tyres, checking each is a round prism
+    (a mesh) standing upright along the vehicle's heading, its axis level and across it."""
+    frame = data.body(body).xmat.reshape(3, 3)
     out = []
     for g, name in _geoms(model, body).items():
         if not name.startswith("wheel_"):
             continue
-        assert model.geom_type[g] == CYLINDER, name
-        axis = data.geom_xmat[g].reshape(3, 3)[:, 2]
-        assert abs(axis[2]) < 1e-9 and abs(axis @ heading) < 1e-9, (body, name, axis)
-        out.append((g, float(data.geom_xpos[g, 2]), float(model.geom_size[g, 0])))
+        assert model.geom_type[g] == MESH, name
+        local = (_mesh_points(model, data, g) - data.body(body).xpos) @ frame  # body frame
+        along, across, up = np.ptp(local, axis=0)
+        assert abs(along - up) < 0.02 * up and across < 0.8 * up, (body, name)
+        out.append((g, float(local[:, 2].min() + 0.5 * up), float(0.5 * up)))
     return out
 
 
@@ -74,7 +76,8 @@ def test_every_vehicle_stands_on_four_or_more_wheels_touching_the_road(occlusion
     scenario, world = occlusion
     update_dynamic(world, t_s)
     mujoco.mj_forward(world.model, world.data)
-    for track, spec in zip(world.conditions.vehicles, scenario.conditions.vehicles, strict=True):
+    specs = scenario.conditions.vehicles + traffic_vehicles(scenario, world.road)
+    for track, spec in zip(world.conditions.vehicles, specs, strict=True):
         wheels = _wheels(world.model, world.data, track.name)
         assert len(wheels) >= (6 if kind_of(spec) == "truck" else 4), track.name
         for _, centre, radius in wheels:
@@ -120,7 +123,7 @@ def test_any_allowed_size_builds_sound_parts(dims):
         assert p.shape == "hull" or min(p.size[:2]) > 0.0, p
         assert p.corners()[:, 2].min() > -1e-9, p  # nothing below the road
     for w in (p for p in parts if p.name.startswith("wheel_")):
-        assert abs(w.pos[2] - w.size[0]) < 1e-9
+        assert abs(w.corners()[:, 2].min()) < 1e-9  # on the road
 
 
 def test_shadows_fall_away_from_the_sun_and_move_with_the_vehicle(occlusion):

@@ -1,0 +1,183 @@
+"""A contact sheet: every scenario's front and rear camera at the start and at mid-drive, on
+one image, to SEE how the world looks (and how it changed) at a glance.
+
+Each tile is the frame the car's camera delivers, with the scenario's image effects, exactly as
+`lanekeep render SCENARIO --at S` writes front.png / rear.png (lanekeep/sensing/snapshot.py's
+machinery: the same world, render settings and effects drawn from the scenario seed), rendered
+at the scenario's size and shrunk to the tile by area averaging. One row per scenario: front
+start, front mid, rear start, rear mid. The car sits on its ego lane's centre, heading along
+the road; "mid-drive" is start.s_m + duration_s * target_speed_mps / 2 (where the car would be
+half way through its episode at its target speed), clipped to the road. Traffic stands where
+it starts (a snapshot does not run time), so mid-drive tiles show the t = 0 traffic.
+
+An optional row of real frames (`real_row`) is for an image that stays outside the repository:
+real frames are never committed. tools/contact_sheet.py is the command line.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+from lanekeep.tuning.scenarios import TuningInputError
+
+VIEWS = (("front", "start"), ("front", "mid"), ("rear", "start"), ("rear", "mid"))
+IMAGE_SUFFIXES = (".jpg", ".jpeg", ".png")
+BACKGROUND = (24, 24, 24)  # RGB of the gaps between tiles and of letterbox bars
+GAP_PX = 2
+
+
+@dataclass(frozen=True)
+class Tile:
+    """One labelled picture of the sheet (RGB uint8, any size: `fit` makes it a tile)."""
+
+    image: np.ndarray
+    label: str
+
+
+def mid_drive_s(scenario) -> float:
+    """Arc length (m) half way through the episode at the target speed, clipped to the road."""
+    s = scenario.start.s_m + 0.5 * scenario.duration_s * scenario.target_speed_mps
+    return float(min(max(s, 0.0), scenario.road.length_m))
+
+
+def scenario_tiles(scenario) -> list[Tile]:
+    """The four VIEWS of a scenario, each as `render_snapshot(scenario, at_s=s)` renders it
+    (a fresh effects stream from the scenario seed per pose, cameras in the rig's order)."""
+    from lanekeep.sensing.cameras import CameraRig, RenderSettings
+    from lanekeep.sensing.snapshot import camera_frame, make_effects, place_on_road
+    from lanekeep.world.build import build
+
+    world = build(scenario)
+    poses = {"start": scenario.start.s_m, "mid": mid_drive_s(scenario)}
+    frames: dict[tuple[str, str], np.ndarray] = {}
+    with CameraRig(world.model, RenderSettings.of(scenario)) as rig:
+        for pose, s in poses.items():
+            place_on_road(world, s)
+            rng = np.random.default_rng(scenario.seed)
+            effects = make_effects(scenario, world, rig, rng)
+            for cam in rig.CAMERA_NAMES:
+                frames[cam, pose] = camera_frame(rig, world, cam, effects[cam], rng,
+                                                 scenario.start.speed_mps)
+    return [Tile(frames[cam, pose], f"{scenario.name} | {cam} {pose} s={poses[pose]:.0f} m")
+            for cam, pose in VIEWS]
+
+
+def fit(image: np.ndarray, tile: tuple[int, int]) -> np.ndarray:
+    """`image` shrunk (area averaging) to fit a (width, height) tile, letterboxed, RGB uint8."""
+    width, height = tile
+    h, w = image.shape[:2]
+    scale = min(width / w, height / h)
+    size = (max(1, round(w * scale)), max(1, round(h * scale)))
+    small = cv2.resize(image, size, interpolation=cv2.INTER_AREA if scale < 1 else
+                       cv2.INTER_LINEAR)
+    out = np.empty((height, width, 3), np.uint8)
+    out[:] = BACKGROUND
+    top, left = (height - size[1]) // 2, (width - size[0]) // 2
+    out[top:top + size[1], left:left + size[0]] = small
+    return out
+
+
+def label(tile: np.ndarray, text: str) -> np.ndarray:
+    """`tile` with `text` in white on a darkened band along its top (scaled to the tile)."""
+    out = tile.copy()
+    height = out.shape[0]
+    scale = max(0.25, height / 450.0)
+    thickness = 1
+    (_, text_h), base = cv2.getTextSize(text, cv2.FONT_HERSHEY_SIMPLEX, scale, thickness)
+    band = min(height, text_h + base + 4)
+    out[:band] = (out[:band] * 0.35).astype(np.uint8)
+    cv2.putText(out, text, (3, band - base - 1), cv2.FONT_HERSHEY_SIMPLEX, scale,
+                (255, 255, 255), thickness, cv2.LINE_AA)
+    return out
+
+
+def layout(rows: Sequence[Sequence[Tile]], tile: tuple[int, int]) -> np.ndarray:
+    """One RGB image: a row of labelled tiles per entry of `rows`, GAP_PX apart; a short row
+    leaves its last places empty."""
+    if not rows:
+        raise ValueError("a contact sheet needs at least one row")
+    width, height = tile
+    columns = max(len(r) for r in rows)
+    sheet = np.empty((len(rows) * (height + GAP_PX) + GAP_PX,
+                      columns * (width + GAP_PX) + GAP_PX, 3), np.uint8)
+    sheet[:] = BACKGROUND
+    for i, row in enumerate(rows):
+        for j, item in enumerate(row):
+            top, left = GAP_PX + i * (height + GAP_PX), GAP_PX + j * (width + GAP_PX)
+            sheet[top:top + height, left:left + width] = label(fit(item.image, tile), item.label)
+    return sheet
+
+
+def real_frames(folder: Path, count: int) -> list[Path]:
+    """Up to `count` image files from `folder` and its subfolders, spread evenly over their
+    sorted list (so each of several sets gets a share)."""
+    if not folder.is_dir():
+        raise TuningInputError(f"--real {folder}: not a folder")
+    found = sorted(p for p in folder.rglob("*") if p.suffix.lower() in IMAGE_SUFFIXES
+                   and p.is_file())
+    if not found:
+        raise TuningInputError(f"--real {folder}: no .jpg/.jpeg/.png files in it")
+    picks = np.unique(np.linspace(0, len(found) - 1, min(count, len(found))).round().astype(int))
+    return [found[i] for i in picks]
+
+
+def real_row(folder: Path, count: int = len(VIEWS)) -> list[Tile]:
+    """Tiles of real frames (read only, labelled `real | <set>/<file>`)."""
+    tiles = []
+    for path in real_frames(folder, count):
+        bgr = cv2.imread(str(path), cv2.IMREAD_COLOR)
+        if bgr is None:
+            raise TuningInputError(f"--real: cannot read {path}")
+        tiles.append(Tile(cv2.cvtColor(bgr, cv2.COLOR_BGR2RGB),
+                          f"real | {path.parent.name}/{path.name}"))
+    return tiles
+
+
+def inside_a_repository(path: Path) -> Path | None:
+    """The git work tree holding `path` (a folder with .git), or None."""
+    for parent in Path(path).resolve().parents:
+        if (parent / ".git").exists():
+            return parent
+    return None
+
+
+def write_sheet(sheet: np.ndarray, out: Path, jpeg_quality: int = 80) -> None:
+    """Write the RGB sheet as JPEG (at `jpeg_quality`) or PNG, by `out`'s suffix."""
+    params = ([cv2.IMWRITE_JPEG_QUALITY, int(jpeg_quality), cv2.IMWRITE_JPEG_OPTIMIZE, 1]
+              if out.suffix.lower() in (".jpg", ".jpeg") else [])  # optimize: ~6% smaller
+    if not cv2.imwrite(str(out), cv2.cvtColor(sheet, cv2.COLOR_RGB2BGR), params):
+        raise TuningInputError(f"--out {out}: could not write it")
+
+
+def load_scenarios(names: Sequence[str]) -> list:
+    """The scenarios named (shipped names or .toml paths), or every shipped one, in order.
+
+    Raises TuningInputError (one line) for a name or file that does not load."""
+    from lanekeep.scenario.schema import ScenarioError, load_scenario, shipped_scenarios
+
+    scenarios = []
+    for name in list(names) or shipped_scenarios():
+        try:
+            scenarios.append(load_scenario(name))
+        except ScenarioError as err:
+            raise TuningInputError(str(err)) from None
+    return scenarios
+
+
+def make_sheet(scenarios: Sequence, tile: tuple[int, int] = (320, 180),
+               real: Path | None = None, progress=None) -> np.ndarray:
+    """The sheet of `scenarios` (a row each) and, with `real`, a last row of real frames;
+    `progress(name)` is called before each scenario renders."""
+    rows = []
+    for scenario in scenarios:
+        if progress is not None:
+            progress(scenario.name)
+        rows.append(scenario_tiles(scenario))
+    if real is not None:
+        rows.append(real_row(real))
+    return layout(rows, tile)
