@@ -17,6 +17,7 @@ from lanekeep.scenario.schema import (
     load_scenario,
     parse_scenario,
 )
+from lanekeep.scenario.traffic import Traffic
 from lanekeep.sensing import image_effects as effects
 from lanekeep.sensing.camera_sensor import tone_curve
 from lanekeep.sensing.cameras import CameraRig, RenderSettings
@@ -234,10 +235,14 @@ def test_vehicles_move_along_their_lanes_as_mocap_bodies():
     )
 
 
-def test_scenarios_without_traffic_report_no_occlusion(straight_world):
-    with CameraRig(straight_world.model, RenderSettings(W, H)) as rig:
-        place_on_road(straight_world, 20.0)
-        assert occluded_marking_share(straight_world, rig) == 0.0
+def test_scenarios_without_traffic_report_no_occlusion():
+    # clear_straight with its [traffic] table turned off: no vehicle, so nothing hides paint
+    scenario = load_scenario("clear_straight")
+    world = build(dataclasses.replace(scenario, traffic=Traffic()))
+    assert not world.scenario.conditions.vehicles
+    with CameraRig(world.model, RenderSettings(W, H)) as rig:
+        place_on_road(world, 20.0)
+        assert occluded_marking_share(world, rig) == 0.0
 
 
 # -- image effects --------------------------------------------------------------------------------

@@ -15,6 +15,7 @@ from lanekeep.scenario.roadside import Roadside
 from lanekeep.scenario.schema import ScenarioError, load_scenario, parse_scenario
 from lanekeep.scenario.traffic import Traffic
 from lanekeep.sensing.cameras import CameraRig, RenderSettings
+from lanekeep.world import appearance
 from lanekeep.world import prop_assets as assets
 from lanekeep.world.build import build, build_spec, check_scenario
 from lanekeep.world.lighting import sun_direction
@@ -156,7 +157,9 @@ def _edges_above_horizon(scenario) -> float:
     return float((edges[:90] > 0).mean())  # the horizon lies near the middle row
 
 
-def test_props_put_edges_above_the_horizon():
+def test_props_put_edges_above_the_horizon(monkeypatch):
+    # props only: no traffic and a cloudless sky (clouds are edges above the horizon too)
+    monkeypatch.setattr(appearance, "CLEAR_SKY_CLOUDS", 0.0)
     scenario = dataclasses.replace(load_scenario("clear_straight"), traffic=Traffic())  # props only
     bare = dataclasses.replace(scenario, roadside=Roadside())
     assert _edges_above_horizon(scenario) > 2.0 * _edges_above_horizon(bare) + 0.002
