@@ -43,6 +43,7 @@ from lanekeep.sensing.cameras import CameraRig, RenderSettings
 from lanekeep.sensing.snapshot import camera_frame, make_effects
 from lanekeep.world.build import World, build
 from lanekeep.world.camera_mount import camera_from_model
+from lanekeep.world.street_lights import update_pools
 from lanekeep.world.traffic import update_dynamic
 
 SPLIT_IDS = {"train": 0, "val": 1, "test": 2}
@@ -216,6 +217,7 @@ def render_world(scenario: Scenario, recipe: DatasetRecipe, rng: np.random.Gener
                 yaw = float(road.heading_at(s_car)) + math.radians(heading)
                 world.car.place(float(x), float(y), yaw, speed)
                 update_dynamic(world, t0 + k * recipe.frame_period_s)
+                update_pools(world)
                 for ci, cam in enumerate(CAMERAS):
                     i = q * len(CAMERAS) + ci
                     rgb = camera_frame(rig, world, cam, effects[cam], rng, speed)

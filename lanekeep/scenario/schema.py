@@ -145,8 +145,11 @@ class CameraConfig:
     # edge rise over ~2-3 px as on real photos instead of a 1 px stair step. 0 = off, .. 3.
     lens_blur_px: float = 0.8
     bloom: float = 0.4  # glare around near-saturated areas (sky, lamps), 0 = off .. 1
-    # JPEG compression of every frame (dashcams store ~90), 0 = off, else 10..100
-    jpeg_quality: int = 90
+    # JPEG compression of every frame, 0 = off, else 10..100. Off by default: an ADAS camera
+    # hands perception uncompressed frames (JPEG is how dashcams and datasets store them; the
+    # LaneNet dataset draws 30..95), and at 1280x720 it would cost ~4-5 ms a frame per camera
+    # here (`lanekeep perf`, 2026-11-27), most of the richer world's step budget.
+    jpeg_quality: int = 0
     show_hood: bool = True  # the ego car's hood at the bottom of the front image
     # The mounting of both onboard cameras, changed from the car's own (mjcf/car.xml: 1.5 m
     # high, front pitched 10 deg up with a 120 deg horizontal field of view): other cameras, as

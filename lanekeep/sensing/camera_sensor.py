@@ -1,6 +1,6 @@
 """The camera's own image chain after the light reaches it: vignetting, auto-exposure, sensor
-noise, tone curve, glare, point spread and JPEG; what every real camera does, so it is on by
-default (each step off at 0 in CameraConfig).
+noise, tone curve, glare, point spread and optional JPEG; what every real camera does, so all but
+the JPEG is on by default (each step off at 0 in CameraConfig).
 
 Order, as a camera works: the lens darkens the corners (vignetting, falloff 1 - k r^2 with r
 the radius relative to the corner), the sensor integrates with the exposure the auto-exposure
@@ -11,8 +11,9 @@ glare (bloom) spreads light from near-saturated areas (a bright sky over the tre
 night) onto their darker surroundings, and a small Gaussian point spread (`lens_blur_px`) makes
 a hard edge rise over 2-3 px as on a real photo instead of the renderer's 1 px stair step
 (applied after the noise, as demosaicing is: it also correlates the noise, as on real frames);
-last the frame is JPEG-compressed as a dashcam stores it (quality 90 by default; its 4:2:0
-chroma subsampling is the camera's chromatic softness).
+last, when `jpeg_quality` is set, the frame is JPEG-compressed as a dashcam stores it (its 4:2:0
+chroma subsampling is then the camera's chromatic softness). Off by default: an ADAS camera
+hands perception uncompressed frames, and the round trip costs more than the rest together.
 
 The glare is computed at 1/16 of the size (it is smooth): the frame's excess over
 BLOOM_THRESHOLD, area-averaged, blurred; only where that glow exceeds the averaged excess

@@ -21,6 +21,7 @@ from lanekeep.sensing.cameras import CameraRig, RenderSettings
 from lanekeep.sensing.image_effects import ImageEffects
 from lanekeep.world.build import World, build
 from lanekeep.world.parts import WorldLayout
+from lanekeep.world.street_lights import update_pools
 
 
 def place_on_road(world: World, s_m: float, offset_m: float = 0.0, heading_deg: float = 0.0,
@@ -30,6 +31,7 @@ def place_on_road(world: World, s_m: float, offset_m: float = 0.0, heading_deg: 
     x, y = road.position(s_m, road.lane_center_r(lane) + offset_m)
     yaw = float(road.heading_at(s_m)) + math.radians(heading_deg)
     world.car.place(float(x), float(y), yaw, speed_mps)
+    update_pools(world)  # the street lamps' pools of light near the car
     return float(x), float(y), yaw
 
 

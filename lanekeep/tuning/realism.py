@@ -39,6 +39,20 @@ ROAD_INNER_PX, ROAD_OUTER_PX, PAINT_MIN_ROWS_BELOW_HORIZON = 15, 30, 20
 LABEL_PAINT_RADIUS_PX = 2  # TuSimple label polylines widened to 2*2+1 = 5 px
 MIN_PIXELS = 50  # fewer paint or road pixels than this: no contrast ("-")
 
+# Shade/sun: the road area is a trapezoid below the horizon (ROAD_TOP_SHARE of the way down
+# from the horizon to ROAD_BOTTOM_SHARE of the frame's height, ROAD_HALF_WIDTH_TOP..BOTTOM of
+# the width either side of the centre); its luma is split in two by Otsu's threshold.
+ROAD_TOP_SHARE, ROAD_BOTTOM_SHARE = 0.15, 0.92
+ROAD_HALF_WIDTH_TOP, ROAD_HALF_WIDTH_BOTTOM = 0.08, 0.40
+MIN_SHADE_SHARE = 0.10  # the darker class must cover this much of the road area
+# Paint edges: profiles along image rows through each paint run's centre, every EDGE_ROW_STEP
+# rows from PAINT_MIN_ROWS_BELOW_HORIZON below the horizon; the paint's peak within
+# EDGE_PEAK_PX of the centre, the road level the median of the outer EDGE_ROAD_PX of a
+# +-EDGE_WINDOW_PX window; an edge counts when the paint stands EDGE_MIN_STEP_DN above it.
+EDGE_ROW_STEP, EDGE_PEAK_PX, EDGE_WINDOW_PX, EDGE_ROAD_PX = 2, 6, 30, 8
+EDGE_MIN_STEP_DN = 20.0
+MIN_EDGES = 20
+
 
 # -- basic images --------------------------------------------------------------------------------
 def luma(rgb: np.ndarray) -> np.ndarray:
@@ -214,6 +228,92 @@ def paint_contrast(rgb: np.ndarray, paint: np.ndarray, horizon_row: float
     return p50 - r, (p50 / r if r > 0 else math.nan), p90 - r
 
 
+def shade_sun_ratio(rgb: np.ndarray, horizon_row: float) -> float:
+    """Luma of the shade over that of the sunlit road: the means of the darker and the brighter
+    class of an Otsu split of the road area's luma, when the darker covers >= 10% of it.
+
+    Road area: a trapezoid from 15% of the way down from the horizon to 92% of the frame's
+    height (clear of a hood), 8% of the width either side of the centre at its top and 40% at
+    its bottom. The same definition for renders and photos (like for like). Without shade
+    Otsu still splits the asphalt's texture and wheel paths (0.7-0.9); dark cars and their
+    shadows count as shade. NaN when the darker class is smaller or the area empty.
+    """
+    y = luma(rgb)
+    h, w = y.shape
+    top = split_row(horizon_row, h)
+    top = int(top + ROAD_TOP_SHARE * (h - top))
+    bottom = int(ROAD_BOTTOM_SHARE * h)
+    if bottom - top < 2:
+        return math.nan
+    rows = np.arange(top, bottom)
+    t = (rows - top) / max(bottom - top - 1, 1)
+    half = w * (ROAD_HALF_WIDTH_TOP + (ROAD_HALF_WIDTH_BOTTOM - ROAD_HALF_WIDTH_TOP) * t)
+    cols = np.abs(np.arange(w)[None, :] - 0.5 * (w - 1)) <= half[:, None]
+    area = y[top:bottom][cols]
+    if area.size < MIN_PIXELS:
+        return math.nan
+    area8 = np.clip(area, 0, 255).astype(np.uint8)
+    thresh, _ = cv2.threshold(area8.reshape(-1, 1), 0, 255, cv2.THRESH_BINARY | cv2.THRESH_OTSU)
+    dark = area8 <= thresh
+    if dark.mean() < MIN_SHADE_SHARE or dark.all():
+        return math.nan
+    sun = float(area[~dark].mean())
+    return float(area[dark].mean()) / sun if sun > 0 else math.nan
+
+
+def _rise_px(side: np.ndarray, road: float, peak: float) -> float:
+    """Distance (px) over which a profile running from the paint's peak (index 0) out to the
+    road falls from 90% to 10% of the step; NaN if it does not reach 10% in the window."""
+    lo, hi = road + 0.1 * (peak - road), road + 0.9 * (peak - road)
+
+    def crossing(level: float) -> float:
+        below = np.flatnonzero(side < level)
+        if below.size == 0 or below[0] == 0:
+            return math.nan
+        k = int(below[0])  # side[k - 1] >= level > side[k]
+        return k - 1 + (side[k - 1] - level) / max(side[k - 1] - side[k], 1e-6)
+
+    return crossing(lo) - crossing(hi)
+
+
+def paint_edge_width(rgb: np.ndarray, paint: np.ndarray, horizon_row: float) -> float:
+    """Mean 10-90% rise width (px) of the luma across paint edges, both sides of each line.
+
+    Along every 2nd image row from 20 rows below the horizon, through the centre of each run
+    of paint pixels (sim: the segmentation mask; TuSimple: the label polylines widened to
+    5 px, so the centre is the polyline): the paint's peak is the luma's maximum within 6 px of
+    the centre, the road level on each side the median of the outer 8 px of a +-30 px window;
+    walking out from the peak, the width is where the profile falls below 10% of the step less
+    where it falls below 90% (interpolated). Edges whose paint stands less than 20 DN above
+    the road, or that do not fall to 10% in the window, are left out: faded paint and gaps
+    between dashes (which TuSimple's polylines run through) add nothing. NaN with fewer than
+    20 edges. A rendered edge drawn in one pixel gives about 1; real frames 2-12 (lens, motion,
+    JPEG and the paint's own ragged edge).
+    """
+    y = luma(rgb)
+    h, w = y.shape
+    start = split_row(horizon_row, h) + PAINT_MIN_ROWS_BELOW_HORIZON
+    widths = []
+    win = EDGE_WINDOW_PX
+    for row in range(start, h, EDGE_ROW_STEP):
+        m = np.r_[False, paint[row].astype(bool), False].astype(np.int8)
+        edges = np.flatnonzero(np.diff(m))
+        for a, b in zip(edges[0::2], edges[1::2], strict=True):
+            c = (a + b - 1) // 2
+            if c - win < 0 or c + win >= w:
+                continue
+            prof = y[row, c - win:c + win + 1]
+            p = win - EDGE_PEAK_PX + int(np.argmax(prof[win - EDGE_PEAK_PX:win + EDGE_PEAK_PX + 1]))
+            peak = float(prof[p])
+            for side, road in ((prof[p::-1], float(np.median(prof[:EDGE_ROAD_PX]))),
+                               (prof[p:], float(np.median(prof[-EDGE_ROAD_PX:])))):
+                if peak - road >= EDGE_MIN_STEP_DN:
+                    width = _rise_px(side, road, peak)
+                    if math.isfinite(width):
+                        widths.append(width)
+    return float(np.mean(widths)) if len(widths) >= MIN_EDGES else math.nan
+
+
 def label_paint_mask(lanes: list[np.ndarray], shape: tuple[int, int],
                      radius_px: int = LABEL_PAINT_RADIUS_PX) -> np.ndarray:
     """Paint mask from labelled lane polylines ((N, 2) x, y pixel arrays): every pixel within
@@ -266,7 +366,10 @@ def frame_stats(rgb: np.ndarray, horizon_row: float, paint: np.ndarray | None
     return {"horizon_row": horizon_row, "edges_above": above, "edges_below": below,
             "sky_share": sky_share(rgb, horizon_row), **luma_stats(rgb, horizon_row),
             **colour_stats(rgb), "noise_sigma": noise_sigma(rgb, horizon_row),
-            "paint_minus_road": diff, "paint_over_road": ratio, "paint_p90_minus_road": diff90}
+            "paint_minus_road": diff, "paint_over_road": ratio, "paint_p90_minus_road": diff90,
+            "shade_over_sun": shade_sun_ratio(rgb, horizon_row),
+            "paint_edge_px": (paint_edge_width(rgb, paint, horizon_row) if paint is not None
+                              else math.nan)}
 
 
 def mean_stats(rows: list[dict[str, float]]) -> dict[str, float]:

@@ -141,6 +141,8 @@ COLUMNS = (  # (header, formatter of a stats dict)
     ("paint-road", lambda s: cell(s["paint_minus_road"], 0)),
     ("paint/road", lambda s: cell(s["paint_over_road"], 2)),
     ("paint p90-road", lambda s: cell(s["paint_p90_minus_road"], 0)),
+    ("paint edge px", lambda s: cell(s["paint_edge_px"], 1)),
+    ("shade/sun", lambda s: cell(s["shade_over_sun"], 2)),
 )
 
 LEGEND = """\
@@ -154,7 +156,11 @@ real frames: a lower bound there); paint-road / paint/road: difference / ratio o
 luma of marking pixels and of road 15..30 px beside them; paint p90-road: the same with the
 paint's 90th percentile (sim: segmentation mask; TuSimple: +-2 px around the label polylines,
 which run through dash gaps and over raised dots, so a lower bound, the medians mostly see
-road; "-": no labels). Real rows are means over their frames; all values at 1280 px wide."""
+road; "-": no labels); paint edge px: mean 10-90% rise width of the luma across paint edges
+along image rows through the mask's (labels') centre, edges >= 20 DN only; shade/sun: mean
+luma of the darker over the brighter class of an Otsu split of a road trapezoid below the
+horizon, "-" when the darker covers < 10% (unshaded asphalt still reads 0.7-0.9: texture,
+wheel paths). Real rows are means over their frames; all values at 1280 px wide."""
 
 FOOTER = ("This table is for seeing the gap between the renders and real photos, not a target "
           "to fit: matching these numbers on a handful of photos would overfit the renderer "

@@ -35,6 +35,11 @@ SNOW_TEXTURE = "cond_snow"  # made by world_roadside.add_snow, used by the verge
 RGB = tuple[float, float, float]
 RGBA = tuple[float, float, float, float]
 
+# A night sky (zenith, horizon): near-black overhead, and low over the horizon the warm glow
+# of the towns' sodium and LED light scattered in the air (lanekeep/world/sky.py lights the
+# clouds with it). Also the colour of night fog, which that light lights.
+NIGHT_SKY = ((0.004, 0.0045, 0.007), (0.075, 0.052, 0.034))
+
 
 @dataclass(frozen=True)
 class Lighting:
@@ -76,6 +81,8 @@ class Appearance:
 def lighting_of(cond: Conditions, road: Road) -> Lighting:
     """Time of day sets sun, ambient and sky; fog washes the sky grey and limits visibility."""
     sun_diffuse, sun_ambient, (head_amb, head_dif), (zenith, horizon) = LIGHTING[cond.time_of_day]
+    if cond.time_of_day == "night":
+        zenith, horizon = NIGHT_SKY
     glare = 0.1 + 0.6 * cond.wet if cond.time_of_day == "day" else 0.02 + 0.4 * cond.wet
     cover = cloud_cover(cond)
     if cover > 0.0:  # rain or snow: an overcast's flat grey sky

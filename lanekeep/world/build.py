@@ -52,6 +52,7 @@ from lanekeep.world.parts import (
 )
 from lanekeep.world.pavement import LANE_U, SLAB_M
 from lanekeep.world.sky import SKY_SEED, sky_texture
+from lanekeep.world.street_lights import update_pools
 from lanekeep.world.traffic import update_dynamic
 from lanekeep.world.vehicle import Car
 
@@ -67,6 +68,8 @@ PAVEMENT_SEED = 0x9A5E  # the pavement texture's own generator: [scenario seed, 
 PAINT_SEED = 0x9A17  # the worn paint texture's
 PAINT_SHADE_STEP_M = 0.5  # how finely a paint strip is checked against the cast shadows
 DOT_HEIGHT_M = 0.015  # a Botts' dot's dome above the paint layer
+DOT_ALBEDO = 0.75  # a ceramic Botts' dot, cleaner and brighter than road paint
+PAINT_WEAR_SHIFT = 0.37  # each boundary reads the paint's wear texture this far along (v)
 
 
 @dataclass
@@ -88,6 +91,7 @@ class World:
         x, y, yaw = self.scenario.start_pose(self.road)
         self.car.place(x, y, yaw, self.scenario.start.speed_mps)
         self.car.apply(0.0, 0.0)
+        update_pools(self)
 
     def step(self, steer: float, throttle: float, seconds: float) -> None:
         """Apply the command and advance the world by `seconds`: the car's physics, then the
@@ -105,6 +109,7 @@ class World:
                 f"MuJoCo found the simulation unstable by t = {self.data.time:.2f} s "
                 f"(bad position, velocity or acceleration) and reset it")
         update_dynamic(self, self.data.time)
+        update_pools(self)
 
     def marking_mask(self, segmentation: np.ndarray, boundary: int | None = None) -> np.ndarray:
         """Boolean mask of marking pixels (of one boundary, or of any) in a geom-id image."""
@@ -259,26 +264,31 @@ def _in_cast_shadow(road: Road, pieces: list[MarkingPiece], conditions: Conditio
 
 
 def _add_markings(
-    spec: mujoco.MjSpec, road: Road, layout: WorldLayout, conditions: ConditionsInfo
+    spec: mujoco.MjSpec, road: Road, layout: WorldLayout, conditions: ConditionsInfo,
+    seed: int = 0,
 ) -> tuple[dict[str, int], set[str]]:
     """Marking meshes grouped by (boundary, segment, brightness level); returns name ->
-    boundary, and the names of the colour render's own paint geoms. Faded levels use the worn
-    paint texture (asphalt showing through pits and scuffs) and, like raised dots, are geometry
-    in both renders (GROUP_MARKING). Fresh strips are geometry for the segmentation only
-    (GROUP_MARKING_LABEL) and, for the colour render (GROUP_RGB_OVERLAY), a filtered ribbon
-    (lanekeep/world/paint.py) or, inside a static cast shadow, a copy of their geometry.
+    boundary, and the names of the colour render's own paint geoms. Paint strips are geometry
+    for the segmentation only (GROUP_MARKING_LABEL) and, for the colour render
+    (GROUP_RGB_OVERLAY), a translucent copy: a filtered ribbon for fresh paint (lanekeep/world/
+    paint.py: soft edges, seeded fading along the road), the strip itself with the worn paint
+    texture (flaked off in ragged pits, the asphalt showing) for faded levels, or, inside a
+    static cast shadow, an opaque copy of the geometry. Raised dots are geometry in both
+    renders (GROUP_MARKING). The masks mark the whole strip; which of its pixels a camera
+    shows as paint is for lanekeep/sensing/paint_visibility.py to say.
 
-    Why shaded paint stays geometry: MuJoCo draws the filtered ribbons in its translucent pass,
-    after which a shadow overlay darkens them once where it darkens the asphalt twice
-    (paint_filter): a ribbon in shade would keep sqrt(0.45) = 0.67 of its light where the
-    asphalt keeps 0.45, and shaded lines would stand out as they do not on a real road.
+    Why shaded paint stays opaque geometry: MuJoCo draws translucent geoms twice, and a
+    shadow overlay drawn after them darkens them once where it darkens the asphalt twice
+    (paint_filter): a ribbon in shade would keep sqrt(0.3) = 0.55 of its light where the
+    asphalt keeps 0.3, and shaded lines would stand out as they do not on a real road.
     Moving vehicles' shadows are not known here; under them the ribbons keep that error. The
     segmentation meshes do not depend on the shadows, so the masks are the same with or
     without them."""
     styles = road.markings
     groups: dict[tuple[int, int, int], list[Ribbon]] = {}
-    filtered: dict[tuple[int, int, int], list[Ribbon]] = {}
+    translucent: dict[tuple[int, int, int], list[Ribbon]] = {}
     shaded: dict[tuple[int, int, int], list[Ribbon]] = {}
+    dots: set[tuple[int, int, int]] = set()
     bounds = road.segment_bounds()
     starts = np.array([b[0] for b in bounds])
     levels = layout.paint_brightness_levels
@@ -293,49 +303,58 @@ def _add_markings(
             MARKING_Z_M, tile_m=1.0, max_step_m=1.0)
         key = (piece.boundary, segment, level)
         groups.setdefault(key, []).append(strip)
-        if piece.dot or level != levels - 1:
-            continue
-        if shade:
+        if piece.dot:
+            dots.add(key)
+        elif shade:
             shaded.setdefault(key, []).append(strip)
+        elif level == levels - 1:
+            translucent.setdefault(key, []).append(paint_filter.filtered_strip(
+                road, piece.s_start_m, piece.s_end_m, piece.r_m, piece.width_m, MARKING_Z_M,
+                v_shift=PAINT_WEAR_SHIFT * piece.boundary))
         else:
-            filtered.setdefault(key, []).append(
-                paint_filter.filtered_strip(road, piece.s_start_m, piece.s_end_m, piece.r_m,
-                                            piece.width_m, MARKING_Z_M))
-    if filtered:
-        paint_filter.add_paint_texture(spec, "paint_filtered")
+            translucent.setdefault(key, []).append(strip)
+    paint_filter.add_paint_texture(spec, "paint_filtered",
+                                   np.random.default_rng([seed, PAINT_SEED, 1]))
+    paint_filter.add_worn_texture(spec, "paint_worn_rgba",
+                                  np.random.default_rng([seed, PAINT_SEED, 2]))
     names: dict[str, int] = {}
     colour_only: set[str] = set()
     materials = {m.name for m in spec.materials}
+
+    def material(name: str, texture: str, rgb: list[float], alpha: float = 1.0) -> str:
+        if name not in materials:
+            add_material(spec, name, texture, rgba=[*rgb, alpha], specular=0.2, shininess=0.3)
+            materials.add(name)
+        return name
+
     for key, strips in sorted(groups.items()):
         boundary, segment, level = key
         colour = np.asarray(styles[boundary].colour)
         brightness = 0.35 + 0.65 * level / max(levels - 1, 1)
-        material = f"paint_b{boundary}_l{level}"
-        if material not in materials:
-            add_material(
-                spec, material, "paint" if level == levels - 1 else "paint_worn",
-                rgba=[*(colour * brightness), 1.0], specular=0.2, shininess=0.3,
-            )
-            materials.add(material)
+        rgb = paint_filter.paint_rgb(colour, brightness)
+        fresh = level == levels - 1
+        opaque = material(f"paint_b{boundary}_l{level}", "paint" if fresh else "paint_worn", rgb)
         name = f"marking_b{boundary}_s{segment}_l{level}"
-        split = len(filtered.get(key, ())) + len(shaded.get(key, ())) == len(strips)
-        add_mesh_geom(spec, name, Ribbon.concatenate(strips), material,
-                      GROUP_MARKING_LABEL if split else GROUP_MARKING)
         names[name] = boundary
-        if not split:
+        if key in dots:  # ceramic: brighter than paint, in both renders
+            add_mesh_geom(spec, name, Ribbon.concatenate(strips),
+                          material(f"paint_b{boundary}_dot", "paint",
+                                   list(DOT_ALBEDO * colour)), GROUP_MARKING)
             continue
-        if key in filtered:
-            if f"{material}_filtered" not in materials:
-                add_material(spec, f"{material}_filtered", "paint_filtered",
-                             rgba=[*(colour * brightness), paint_filter.PAINT_ALPHA],
-                             specular=0.2, shininess=0.3)
-                materials.add(f"{material}_filtered")
-            add_mesh_geom(spec, f"{name}_rgb", Ribbon.concatenate(filtered[key]),
-                          f"{material}_filtered", GROUP_RGB_OVERLAY)
+        add_mesh_geom(spec, name, Ribbon.concatenate(strips), opaque, GROUP_MARKING_LABEL)
+        if key in translucent:
+            see_through = material(f"paint_b{boundary}_l{level}_rgb",
+                                   "paint_filtered" if fresh else "paint_worn_rgba", rgb,
+                                   paint_filter.PAINT_ALPHA)
+            add_mesh_geom(spec, f"{name}_rgb", Ribbon.concatenate(translucent[key]),
+                          see_through, GROUP_RGB_OVERLAY)
             colour_only.add(f"{name}_rgb")
         if key in shaded:
+            in_shade = opaque if not fresh else material(
+                f"paint_b{boundary}_l{level}_shaded", "paint",
+                list(paint_filter.SHADED_MATCH * np.asarray(rgb)))
             add_mesh_geom(spec, f"{name}_shaded_rgb", Ribbon.concatenate(shaded[key]),
-                          material, GROUP_RGB_OVERLAY)
+                          in_shade, GROUP_RGB_OVERLAY)
             colour_only.add(f"{name}_shaded_rgb")
     return names, colour_only
 
@@ -379,7 +398,7 @@ def build_spec(
     _add_environment(spec, road, scenario, look.lighting)
     _add_road_surface(spec, road, layout, look.asphalt_grid_step_m)
     conditions = add_conditions(spec, scenario, road, layout)  # first: its cast shadows
-    marking_names, ribbons = _add_markings(spec, road, layout, conditions)
+    marking_names, ribbons = _add_markings(spec, road, layout, conditions, scenario.seed)
     paint_filter.draw_overlays_last(spec, GROUP_RGB_OVERLAY, ribbons)
     _draw_ground_last(spec)
     return spec, marking_names, conditions

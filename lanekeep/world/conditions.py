@@ -11,10 +11,12 @@ work is split by concern: lanekeep/world/lighting.py (car lights), world_roadsid
     and switch on the car's headlights (two white spot lights, lit road ~35 m ahead) and a dim
     red tail light (the rear camera sees ~8 m of road). MuJoCo lights per vertex, so with
     headlights world.py meshes the asphalt as a 0.5 m grid.
-  - Hard shadows: shadow maps double the render cost on a CPU, so a building's or tree's shadow is
-    its silhouette cast along the sun onto the ground: a convex polygon drawn as a black
-    translucent overlay (group GROUP_SHADOW, hidden from the segmentation render so the marking
-    masks stay exact). The casters (boxes, trees) stand beside the road and are rendered too.
+  - Cast shadows: shadow maps double the render cost on a CPU, so a building's or tree's shadow
+    is its silhouette cast along the sun onto the ground: convex polygons drawn as black
+    translucent overlays (group GROUP_SHADOW, hidden from the segmentation render so the marking
+    masks stay exact), as dark as skylight alone leaves shade, with soft edges and, under trees,
+    sunflecks (lanekeep/world/shade.py, which also says what `darkness` means). The casters
+    (boxes, trees) stand beside the road and are rendered too.
   - Speed bumps: cylinders across the road sunk into the ground (a circular cap ~0.6 m long and
     `speed_bump_height_m` high) that the tyres collide with; yellow with black stripes.
   - Wet road: darker, glossier asphalt (a material tint, world_appearance.py) and puddles as
@@ -45,9 +47,12 @@ from lanekeep.world.lighting import (
 from lanekeep.world.parts import ConditionsInfo, WorldLayout
 from lanekeep.world.props import add_props
 from lanekeep.world.roadside import add_bumps, add_shadow_zone, add_snow, add_wet, overlay_alpha
+from lanekeep.world.shade import add_shadow_overlay, shade_transmission
 from lanekeep.world.street_lights import add_street_lights
 from lanekeep.world.traffic import add_vehicle
 from lanekeep.world.traffic_flow import traffic_vehicles
+
+DAPPLE_SEED = 0xDA9  # a tree zone's sunflecks: their own generator [seed, this, zone]
 
 
 def add_conditions(spec: mujoco.MjSpec, scenario: Scenario, road: Road,
@@ -64,12 +69,14 @@ def add_conditions(spec: mujoco.MjSpec, scenario: Scenario, road: Road,
         add_car_lights(spec)
     to_sun = sun_direction(cond, road)
     for i, zone in enumerate(cond.shadows):
-        spec.add_material(name=f"cond_shadow_{i}",
-                          rgba=[0.0, 0.0, 0.0, overlay_alpha(zone.darkness)],
-                          specular=0.0, shininess=0.0)
-        add_shadow_zone(spec, road, zone, i, to_sun, rng, info, layout)
+        polygons = add_shadow_zone(spec, road, zone, i, to_sun, rng, info, layout)
+        dapple = np.random.default_rng([scenario.seed, DAPPLE_SEED, i])
+        if polygons:
+            add_shadow_overlay(spec, f"cond_shadow_{i}", polygons,
+                               shade_transmission(zone.darkness, cond),
+                               dapple if zone.kind == "trees" else None)
     add_props(spec, scenario, road, to_sun, info, layout)  # after the zones: their shadows
-    add_street_lights(spec, scenario, road, layout)
+    add_street_lights(spec, scenario, road, layout, info)
     if cond.speed_bumps_m:
         spec.add_material(name="cond_bump", rgba=[0.95, 0.75, 0.1, 1.0], specular=0.2)
         add_bumps(spec, road, cond, info, layout)

@@ -42,35 +42,113 @@ FAR_M = 5000.0  # the ordering triangle's distance: beyond any bounding radius o
 FAR_DEPTH_M = 50.0  # ... and this far under the ground, where no camera sees it
 FAR_SIZE_M = 1e-4  # its size: no area to speak of (a moving overlay's inertia stays as it was)
 
+# How paint looks on a road in use (the marking's `colour` is its pigment's hue). Road paint
+# in dashcam frames stands 40-70 DN above the asphalt (TuSimple: a median of about 55 where
+# paint is), not 100-150: beads wear off, tyres and dust grey it. Fresh paint reflects
+# FRESH_ALBEDO (asphalt about 0.28 here, lanekeep/world/pavement.py); along the road that
+# varies by a seeded wear that drifts over WEAR_PERIOD_M / WEAR_ROWS metres: some dashes and
+# stretches are fainter (down to FADED_SHARE of the fresh reflectance). Worn levels (faded
+# chips of a worn line) fade towards the asphalt's grey, ROAD_ALBEDO, not towards black.
+FRESH_ALBEDO = 0.56
+FADED_SHARE = 0.62
+ROAD_ALBEDO = 0.28
+WEAR_PERIOD_M = 256.0  # the wear texture repeats along the road after this
+WEAR_ROWS = 64  # texels along it: 4 m each, linearly filtered
+EDGE_TEXELS = 2.0  # an edge's alpha ramps over this many texels (soft, as sprayed paint is)
+WORN_TEXELS = 128  # worn paint texture: per metre (mesh uv in metres), 8 mm texels
+WORN_HOLE_SHARE = 0.3  # of a worn chip where the paint has flaked off (asphalt shows)
+# Paint in a cast shadow is opaque geometry with the grain texture (mean GRAIN_MEAN,
+# lanekeep/world/textures.py); scaled by this it matches the ribbons' mean wear (0.82).
+SHADED_MATCH = 0.82 / 0.93
 
-def profile_rgba(texels: int = TEXELS, spread: float = SPREAD) -> np.ndarray:
-    """(4, texels, 4) uint8: white paint, alpha 255 across the middle 1/spread, 0 beside it;
-    the texel that the paint's edge cuts gets the share it covers (a box-filtered edge)."""
-    edges = np.linspace(0.0, 1.0, texels + 1)
+
+def paint_rgb(colour, brightness: float) -> list[float]:
+    """Material RGB of paint of pigment `colour` at `brightness` (1 fresh, lower faded): the
+    fresh reflectance, faded towards the asphalt's grey."""
+    fresh = FRESH_ALBEDO * np.asarray(colour, dtype=float)
+    return list(ROAD_ALBEDO + brightness * (fresh - ROAD_ALBEDO))
+
+
+def wear_along(rng: np.random.Generator, rows: int = WEAR_ROWS) -> np.ndarray:
+    """(rows,) reflectance factor in [FADED_SHARE, 1] along the road: smooth seeded drift
+    (a few rows) plus faded stretches (about one row in six), periodic."""
+    from lanekeep.world.textures import periodic_blur  # noqa: PLC0415 (a leaf; no cycle)
+
+    drift = periodic_blur(rng.standard_normal((rows, 1)).astype(np.float32), 1.5)[:, 0]
+    drift = (drift - drift.mean()) / max(float(drift.std()), 1e-6)
+    faded = (rng.random(rows) < 0.17).astype(np.float32)
+    level = 0.82 + 0.09 * drift - 0.2 * faded
+    return np.clip(level, FADED_SHARE, 1.0)
+
+
+def profile_rgba(texels: int = TEXELS, spread: float = SPREAD,
+                 along: np.ndarray | None = None) -> np.ndarray:
+    """(rows, texels, 4) uint8: paint of reflectance factor `along` (per row, default 1) with
+    alpha 255 across the middle 1/spread and 0 beside it; the edge ramps over EDGE_TEXELS
+    (the paint's exact coverage box-filtered by that width: the line's coverage is kept)."""
+    fine = 16  # samples per texel
+    x = (np.arange(texels * fine) + 0.5) / (texels * fine)
     lo, hi = 0.5 - 0.5 / spread, 0.5 + 0.5 / spread
-    cover = np.clip(np.minimum(edges[1:], hi) - np.maximum(edges[:-1], lo), 0.0, None)
-    alpha = np.round(255.0 * cover * texels).astype(np.uint8)
-    out = np.full((4, texels, 4), 255, np.uint8)
-    out[:, :, 3] = alpha
+    inside = ((x >= lo) & (x < hi)).astype(float)
+    k = max(1, int(round(EDGE_TEXELS * fine)))
+    soft = np.convolve(inside, np.ones(k) / k, mode="same")
+    alpha = soft.reshape(texels, fine).mean(axis=1)
+    along = np.ones(4) if along is None else np.asarray(along, dtype=float)
+    out = np.empty((len(along), texels, 4), np.uint8)
+    out[..., :3] = np.round(255.0 * along)[:, None, None]
+    out[..., 3] = np.round(255.0 * alpha)[None, :]
     return out
 
 
-def add_paint_texture(spec: mujoco.MjSpec, name: str) -> None:
-    rgba = profile_rgba()
+def add_paint_texture(spec: mujoco.MjSpec, name: str, rng: np.random.Generator | None = None
+                      ) -> None:
+    """The filtered ribbons' texture: the edge profile across, seeded wear along (v = s /
+    WEAR_PERIOD_M), or no wear without a generator."""
+    rgba = profile_rgba(along=None if rng is None else wear_along(rng))
+    tex = spec.add_texture(name=name, type=mujoco.mjtTexture.mjTEXTURE_2D,
+                           width=rgba.shape[1], height=rgba.shape[0], nchannel=4)
+    tex.data = np.ascontiguousarray(rgba).tobytes()
+
+
+def worn_rgba(rng: np.random.Generator, size: int = WORN_TEXELS) -> np.ndarray:
+    """(size, size, 4) uint8 worn paint, tiling per metre: grain and scuffs in the colour, and
+    WORN_HOLE_SHARE of it flaked off (alpha 0) in ragged pits and streaks along the road
+    (rows are along it) a few millimetres to centimetres across, with 1-texel soft rims."""
+    from lanekeep.world.textures import tiled_noise  # noqa: PLC0415
+
+    grain = 0.92 + 0.05 * tiled_noise(rng, size, 0.7) - 0.1 * np.clip(
+        tiled_noise(rng, size, 3.0) - 0.5, 0.0, None)
+    pits = 0.6 * tiled_noise(rng, size, 0.8) + 0.5 * tiled_noise(rng, size, 2.5)
+    streak = rng.standard_normal((size, size)).astype(np.float32)
+    streak = np.fft.irfft(np.fft.rfft(streak, axis=0) * np.exp(  # blurred along the road only
+        -2.0 * (np.pi * 4.0 * np.fft.rfftfreq(size)[:, None]) ** 2), n=size, axis=0)
+    loss = pits / pits.std() + 0.6 * streak / streak.std()
+    cut = float(np.quantile(loss, 1.0 - WORN_HOLE_SHARE))
+    alpha = np.clip(0.5 - (loss - cut) / 0.4, 0.0, 1.0)
+    out = np.empty((size, size, 4), np.uint8)
+    out[..., :3] = np.round(255.0 * np.clip(grain, 0.0, 1.0))[..., None]
+    out[..., 3] = np.round(255.0 * alpha)
+    return out
+
+
+def add_worn_texture(spec: mujoco.MjSpec, name: str, rng: np.random.Generator) -> None:
+    rgba = worn_rgba(rng)
     tex = spec.add_texture(name=name, type=mujoco.mjtTexture.mjTEXTURE_2D,
                            width=rgba.shape[1], height=rgba.shape[0], nchannel=4)
     tex.data = np.ascontiguousarray(rgba).tobytes()
 
 
 def filtered_strip(road: Road, s_start_m: float, s_end_m: float, r_m: float, width_m: float,
-                   z_m: float) -> Ribbon:
+                   z_m: float, v_shift: float = 0.0) -> Ribbon:
     """The RGB ribbon of one paint strip: SPREAD x width_m wide, u across it from 0 to 1,
-    v constant (no footprint along the road, so the mip level follows the footprint across)."""
+    v = s / WEAR_PERIOD_M + v_shift: so slow along the road that the mip level still follows
+    the footprint across the line (4 m a texel along, 1 cm across)."""
     half = 0.5 * width_m * SPREAD
     strip = ribbon(road, s_start_m, s_end_m, r_m - half, r_m + half, z_m + LIFT_M,
                    tile_m=1.0, max_step_m=1.0)
     uv = np.empty_like(strip.texcoords)
-    uv[0::2, 0], uv[1::2, 0], uv[:, 1] = 0.0, 1.0, 0.5
+    uv[0::2, 0], uv[1::2, 0] = 0.0, 1.0
+    uv[:, 1] = strip.texcoords[:, 1] / WEAR_PERIOD_M + v_shift
     return Ribbon(strip.vertices, strip.faces, uv)
 
 

@@ -99,6 +99,7 @@ class ConditionsInfo:
     vehicles: list[VehicleTrack] = field(default_factory=list)
     fog_visibility_m: float = math.inf
     headlights: bool = False
+    street_lamps_xy: np.ndarray | None = None  # lit lamp heads, world XY (n, 2), at night
 
     def shaded(self, xy: np.ndarray) -> np.ndarray:
         """Whether world points (..., 2) lie in any cast shadow."""

@@ -21,14 +21,14 @@ import numpy as np
 
 from lanekeep.geometry.road import Road
 from lanekeep.geometry.road_mesh import Ribbon
-from lanekeep.scenario.roadside import SIDES, Roadside
+from lanekeep.scenario.roadside import SIDES
 from lanekeep.scenario.schema import Scenario
 from lanekeep.world import prop_assets as assets
-from lanekeep.world.groups import GROUP_SHADOW, GROUP_WORLD
-from lanekeep.world.lighting import direct_sun_share
-from lanekeep.world.parts import OVERLAY_Z_M, ConditionsInfo, WorldLayout, add_mesh_geom
+from lanekeep.world.groups import GROUP_WORLD
+from lanekeep.world.parts import ConditionsInfo, WorldLayout, add_mesh_geom
 from lanekeep.world.prop_meshes import hill_ring, tree_belt
-from lanekeep.world.roadside import cast_shadow, disjoint_pieces, overlay_alpha, polygon_mesh
+from lanekeep.world.roadside import cast_shadow, disjoint_pieces
+from lanekeep.world.shade import add_shadow_overlay, shade_transmission
 
 TREE_OFFSET_M = (4.0, 40.0)  # scenery trees: from the gravel's outer edge (m)
 BUILDING_OFFSET_M = (15.0, 60.0)
@@ -64,24 +64,21 @@ def add_props(spec: mujoco.MjSpec, scenario: Scenario, road: Road, to_sun: np.nd
         add_mesh_geom(spec, material.replace("prop_", "props_", 1), Ribbon.concatenate(meshes),
                       material, GROUP_WORLD)
     if props.casters and scenario.conditions.time_of_day != "night":
-        _add_shadows(spec, props, to_sun, info, cfg, direct_sun_share(scenario.conditions))
+        _add_shadows(spec, props, to_sun, info,
+                     shade_transmission(cfg.shadow_darkness, scenario.conditions))
 
 
 def _add_shadows(spec: mujoco.MjSpec, props: assets.Props, to_sun: np.ndarray,
-                 info: ConditionsInfo, cfg: Roadside, direct_share: float) -> None:
-    """The props' cast shadows, as dark as the sun's direct light makes them (fog scatters it:
-    world_lighting.direct_sun_share)."""
+                 info: ConditionsInfo, transmission: float) -> None:
+    """The props' cast shadows, as dark as skylight alone leaves shade (fog scatters the sun:
+    lanekeep/world/shade.py), soft-edged, left out where a shadow zone's shadow already lies."""
     polygons = [cast_shadow(points, to_sun) for points in props.casters]
     polygons = [p for p in polygons if len(p) >= 3]
     earlier = list(info.shadow_polygons)
     pieces = disjoint_pieces(earlier + polygons)[len(disjoint_pieces(earlier)):]
     if not pieces:
         return
-    alpha = overlay_alpha(cfg.shadow_darkness * direct_share)
-    spec.add_material(name="props_shadow", rgba=[0.0, 0.0, 0.0, alpha], specular=0.0,
-                      shininess=0.0)
-    add_mesh_geom(spec, "props_shadow", polygon_mesh(pieces, OVERLAY_Z_M), "props_shadow",
-                  GROUP_SHADOW)
+    add_shadow_overlay(spec, "props_shadow", pieces, transmission)
     info.shadow_polygons.extend(polygons)
 
 

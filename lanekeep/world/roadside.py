@@ -147,10 +147,11 @@ def _shadow_per_height(road: Road, s: float, to_sun: np.ndarray) -> tuple[np.nda
 
 def add_shadow_zone(spec: mujoco.MjSpec, road: Road, zone: ShadowZone, index: int,
                     to_sun: np.ndarray, rng: np.random.Generator, info: ConditionsInfo,
-                    layout: WorldLayout) -> None:
+                    layout: WorldLayout) -> list[np.ndarray]:
     """Buildings with facades or trees with crowns (lanekeep/world/prop_assets.py) beside the road,
-    tall enough that the sun throws their shadows `zone.reach` across it: one mesh per material
-    and one shadow overlay per zone."""
+    tall enough that the sun throws their shadows `zone.reach` across it: one mesh per material.
+    Returns their shadows (convex CCW ground polygons, also added to `info`), which
+    lanekeep/world/shade.py draws."""
     sign = 1.0 if zone.side == "left" else -1.0
     face_r = _verge_r(road, zone.side, layout) + sign * 1.0  # casters stand 1 m beyond the gravel
     width = road.boundary_r(road.n_lanes) - road.boundary_r(0)
@@ -193,11 +194,8 @@ def add_shadow_zone(spec: mujoco.MjSpec, road: Road, zone: ShadowZone, index: in
         add_mesh_geom(spec, name, Ribbon.concatenate(meshes), material, GROUP_WORLD)
         info.caster_names.append(name)
     polygons = [cast_shadow(points, to_sun) for points in casters.casters]
-    if polygons:
-        add_mesh_geom(spec, f"cond_shadow_{index}",
-                      polygon_mesh(disjoint_pieces(polygons), OVERLAY_Z_M),
-                      f"cond_shadow_{index}", GROUP_SHADOW)
-        info.shadow_polygons.extend(polygons)
+    info.shadow_polygons.extend(polygons)
+    return polygons
 
 
 def add_bumps(spec: mujoco.MjSpec, road: Road, cond: Conditions, info: ConditionsInfo,

@@ -6,7 +6,10 @@ hazy band at the horizon (the air's haze is brightest where the line of sight th
 longest), and clouds from a tileable noise field projected onto a cloud deck at a fixed
 height, so they shrink towards the horizon as real ones do, and fade into the haze there.
 Fair weather gets scattered white cumulus with grey bases; an overcast (rain, snow) a closed
-grey deck whose texture is only a mottling of its brightness. Below the horizon (seen only past
+grey deck whose texture is only a mottling of its brightness. At night no sun lights the
+clouds: they are lit from below by the towns' glow (the warm band at the horizon), so they show
+only as faintly lighter patches against the near-black zenith and darker ones against the glow
+(blended in as the time of day's light fades, NIGHT_LIGHT). Below the horizon (seen only past
 the end of the ground) the texture is the horizon colour.
 
 The texture is SKY_FACE_PX square per face; with the noise made at CLOUD_NOISE_PX and sampled
@@ -29,6 +32,8 @@ HAZE_ELEVATION = 0.12  # the hazy band's height (sine of the elevation)
 CLOUD_HAZE_ELEVATION = 0.08  # clouds fade into the haze below about this elevation
 FAIR_CLOUD_RGB = (0.96, 0.96, 0.97)  # sunlit cumulus top, at day; its base is greyer
 CLOUD_BASE_SHADE = 0.78  # the base's brightness relative to the top
+NIGHT_LIGHT = 0.3  # below this much of a day's light the clouds are lit by the glow only
+NIGHT_CLOUD_GLOW = 0.22  # a night cloud's brightness relative to the glow at the horizon
 
 
 @functools.lru_cache(maxsize=2)
@@ -103,6 +108,10 @@ def sky_texture(zenith, horizon, clouds: float, overcast: float,
     fair = top * (CLOUD_BASE_SHADE + (1.0 - CLOUD_BASE_SHADE) * shade)
     deck = sky * (0.88 + 0.24 * density)  # an overcast's mottled grey
     cloud_rgb = (1.0 - overcast) * fair + overcast * deck
+    day = np.float32(min(1.0, brightness / NIGHT_LIGHT))
+    if day < 1.0:  # lit from below by the glow: faint, warm, mottled
+        glow = horizon * np.float32(NIGHT_CLOUD_GLOW) * (0.75 + 0.5 * shade)
+        cloud_rgb = day * cloud_rgb + (1.0 - day) * glow
     out = np.empty(above.shape + (3,), np.uint8)
     out[:] = np.clip(np.round(255.0 * horizon), 0, 255).astype(np.uint8)
     out[above] = np.clip(255.0 * (sky + amount * (cloud_rgb - sky)) + 0.5, 0, 255)

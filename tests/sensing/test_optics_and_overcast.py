@@ -1,4 +1,4 @@
-"""Issue #44's optics, sky and weather look: a soft point spread, glare, JPEG by default
+"""Issue #44's optics, sky and weather look: a soft point spread and glare by default, JPEG when asked for
 (lanekeep/sensing/camera_sensor.py); translucent lens drops and snow in depth
 (lanekeep/sensing/weather.py); an overcast for rain and snow (lanekeep/world/lighting.py) and
 the seeded cloudy sky (lanekeep/world/sky.py)."""
@@ -42,10 +42,10 @@ def test_a_hard_edge_rises_over_two_pixels_or_more_by_default():
     assert _rise_px(soft[rows, :, 1].mean(0)) >= 2
 
 
-def test_jpeg_is_on_by_default_at_a_dashcams_quality():
-    assert 85 <= CameraConfig().jpeg_quality <= 95
+def test_jpeg_is_off_by_default_and_changes_the_frame_when_asked_for():
+    assert CameraConfig().jpeg_quality == 0  # an ADAS camera's frames are not compressed
     frame = np.random.default_rng(5).integers(60, 200, (H, W, 3)).astype(np.uint8)
-    on = _sensor(lens_blur_px=0.0, bloom=0.0)(frame, np.random.default_rng(0))
+    on = _sensor(lens_blur_px=0.0, bloom=0.0, jpeg_quality=90)(frame, np.random.default_rng(0))
     off = _sensor(lens_blur_px=0.0, bloom=0.0, jpeg_quality=0)(frame, np.random.default_rng(0))
     assert np.abs(on.astype(int) - off.astype(int)).mean() > 1.0
 

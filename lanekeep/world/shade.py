@@ -1,0 +1,173 @@
+"""Cast shadows on the road as real ones look: as dark as skylight alone makes them, with soft
+edges, and dappled under trees.
+
+How dark. Shade is lit by the sky only; the sunlit road by the sun's direct light and the sky.
+On a clear day the diffuse sky gives about SKY_SHARE of what the direct sun gives a surface
+facing it, so a solid caster's umbra keeps
+
+    T_umbra = sky / (sky + sin(elevation) x direct)
+
+of the sunlit road's light (0.2-0.35 for a sun 25-60 deg high; real dashcam frames show a
+shade/sun luma of about 0.26). `direct` is the sun's diffuse strength for the time of day
+(lanekeep/world/lighting.py LIGHTING, relative to the day's) times the share that fog lets
+through (`direct_sun_share`); `sky` is SKY_SHARE times the ambient light for the time of day,
+plus what fog scatters down. Dawn, dusk, fog: paler shade; a high sun: darker.
+
+A scenario's `darkness` (`conditions.shadows[].darkness`, `roadside.shadow_darkness`) is the
+casters' optical depth in units of a solid caster's: the shade keeps T_umbra ** (darkness /
+DARKNESS_UMBRA) of the light, so 0 is no shadow, DARKNESS_UMBRA (0.55, the default) a solid
+building's umbra lit by the open sky, and more is darker still (a street canyon that also
+hides part of the sky); 1 keeps T_umbra ** 1.8.
+
+Soft edges. The sun is 0.53 deg across, so a shadow's edge is a penumbra about 1/100 of the
+distance from the caster's edge to the ground: 0.3-0.8 m for a building's roof line 30-80 m up
+the sun's ray. Each shadow is drawn as PENUMBRA_LAYERS nested overlays, the polygon grown and
+shrunk by up to PENUMBRA_M / 2, each taking an equal share of the shade's log-transmission: the
+light falls in steps across the edge instead of at one line. `ConditionsInfo.shaded` keeps the
+exact polygons (the middle of the penumbra).
+
+Dapple. Under a tree's crown the sun comes through gaps as sunflecks (images of the sun, a few
+centimetres to decimetres across); a tree zone's overlays carry a seeded RGBA texture whose
+alpha has such holes (DAPPLE_LIGHT_SHARE of the area lit, soft-edged), tiled every
+OVERLAY_TILE_M on the ground.
+
+MuJoCo blends each translucent geom twice (lanekeep/world/roadside.py `overlay_alpha`): an
+overlay that should keep T of the light is given the per-pass alpha 1 - sqrt(T).
+"""
+
+from __future__ import annotations
+
+import math
+
+import cv2
+import mujoco
+import numpy as np
+
+from lanekeep.scenario.schema import Conditions
+from lanekeep.world.groups import GROUP_SHADOW
+from lanekeep.world.lighting import LIGHTING, SKY_SCATTER, direct_sun_share
+from lanekeep.world.parts import OVERLAY_Z_M, add_mesh_geom
+from lanekeep.world.roadside import disjoint_pieces, polygon_mesh
+from lanekeep.world.textures import tiled_noise
+
+SKY_SHARE = 0.2  # clear-sky diffuse light / direct sun on a surface facing it
+DARKNESS_UMBRA = 0.55  # the `darkness` of a solid caster's umbra (the keys' default)
+PENUMBRA_M = 0.5  # width of a shadow's soft edge on the road
+PENUMBRA_LAYERS = 3  # nested overlays that make it
+OVERLAY_TILE_M = 4.0  # ground period of an overlay's texture (roadside.polygon_mesh's uv)
+DAPPLE_TEXELS = 256  # texels per tile: 1.6 cm each
+DAPPLE_LIGHT_SHARE = 0.22  # share of a crown's shadow that sunflecks light
+TRANSLUCENT_ALPHA = 0.99  # a textured overlay's material alpha (below 1: the translucent pass)
+
+
+def umbra_transmission(conditions: Conditions) -> float:
+    """The share of the sunlit road's light that a solid caster's shade keeps (see module)."""
+    sun, ambient = LIGHTING[conditions.time_of_day][:2]
+    day_sun, day_ambient = LIGHTING["day"][:2]
+    sin_el = max(math.sin(math.radians(conditions.sun_elevation_deg)), 0.0)
+    strength = float(np.mean(sun)) / float(np.mean(day_sun))
+    through = direct_sun_share(conditions)
+    direct = sin_el * strength * through
+    sky = SKY_SHARE * float(np.mean(ambient)) / float(np.mean(day_ambient))
+    sky += SKY_SCATTER * sin_el * strength * (1.0 - through)  # fog's scattered sunlight
+    return sky / (sky + direct) if sky + direct > 0.0 else 1.0
+
+
+def shade_transmission(darkness: float, conditions: Conditions) -> float:
+    """The share of the sunlit road's light that shade of this `darkness` keeps."""
+    return float(umbra_transmission(conditions) ** (max(darkness, 0.0) / DARKNESS_UMBRA))
+
+
+def _half_plane(poly: np.ndarray, normal: np.ndarray, offset: float) -> np.ndarray:
+    """The part of a convex polygon (n, 2) where normal . p <= offset."""
+    d = poly @ normal - offset
+    out = []
+    for k in range(len(poly)):
+        j = (k + 1) % len(poly)
+        if d[k] <= 0.0:
+            out.append(poly[k])
+        if (d[k] < 0.0 < d[j]) or (d[j] < 0.0 < d[k]):
+            out.append(poly[k] + d[k] / (d[k] - d[j]) * (poly[j] - poly[k]))
+    return np.array(out, dtype=float).reshape(-1, 2)
+
+
+def grown(poly: np.ndarray, by_m: float) -> np.ndarray:
+    """A convex CCW polygon (n, 2) grown by `by_m` (shrunk if < 0; corners of a grown one are
+    rounded); an empty (0, 2) array when shrinking leaves nothing."""
+    poly = np.asarray(poly, dtype=float)
+    if by_m > 0.0:  # Minkowski sum with a 16-gon
+        ang = np.linspace(0.0, 2.0 * np.pi, 16, endpoint=False)
+        ring = by_m / math.cos(np.pi / 16) * np.c_[np.cos(ang), np.sin(ang)]
+        pts = (poly[:, None, :] + ring[None]).reshape(-1, 2).astype(np.float32)
+        hull = cv2.convexHull(pts).reshape(-1, 2).astype(float)
+        return hull if _ccw_area(hull) > 0 else hull[::-1]
+    out = poly
+    for a, b in zip(poly, np.roll(poly, -1, axis=0), strict=True):
+        normal = np.array([b[1] - a[1], a[0] - b[0]])  # outward: right of a CCW edge
+        length = float(np.hypot(*normal))
+        if length < 1e-9:
+            continue
+        out = _half_plane(out, normal / length, float(normal @ a) / length + by_m)
+        if len(out) < 3:
+            return np.zeros((0, 2))
+    return out
+
+
+def _ccw_area(poly: np.ndarray) -> float:
+    x, y = poly[:, 0].astype(float), poly[:, 1].astype(float)
+    return 0.5 * float(x @ np.roll(y, -1) - np.roll(x, -1) @ y)
+
+
+def layer_offsets_m(layers: int = PENUMBRA_LAYERS, width_m: float = PENUMBRA_M) -> np.ndarray:
+    """How far each nested overlay grows its polygon (m): evenly across the penumbra."""
+    if layers <= 1:
+        return np.zeros(1)
+    return np.linspace(0.5, -0.5, layers) * width_m * (layers - 1) / layers
+
+
+def dapple_transmission(rng: np.random.Generator, transmission: float,
+                        texels: int = DAPPLE_TEXELS) -> np.ndarray:
+    """(texels, texels) share of the light kept under a crown: `transmission` in leaf shade,
+    1 in sunflecks (DAPPLE_LIGHT_SHARE of the area, blobs of 2-20 cm with soft rims)."""
+    noise = 0.65 * tiled_noise(rng, texels, 2.5) + 0.75 * tiled_noise(rng, texels, 7.0)
+    noise /= float(noise.std())
+    cut = float(np.quantile(noise, 1.0 - DAPPLE_LIGHT_SHARE))
+    light = np.clip((noise - cut) / 0.35 + 0.5, 0.0, 1.0)  # ~1-2 texels of soft rim
+    light = light * light * (3.0 - 2.0 * light)
+    return transmission + (1.0 - transmission) * light
+
+
+def add_shadow_overlay(spec: mujoco.MjSpec, name: str, polygons: list[np.ndarray],
+                       transmission: float, dapple: np.random.Generator | None = None) -> int:
+    """Nested overlays `name`_p0, _p1 ... (GROUP_SHADOW) of the convex CCW ground polygons,
+    keeping `transmission` of the light where all lie (dappled with a texture drawn from
+    `dapple` if given); returns how many geoms were added. Within one layer no ground point
+    is covered twice (roadside.disjoint_pieces)."""
+    offsets = layer_offsets_m()
+    share = 1.0 / len(offsets)  # of the log-transmission, per layer
+    material = f"{name}_shade"
+    if dapple is not None:
+        per_pass = 1.0 - np.sqrt(dapple_transmission(dapple, transmission) ** share)
+        alpha = np.clip(np.round(255.0 * per_pass / TRANSLUCENT_ALPHA), 0, 255).astype(np.uint8)
+        rgba = np.zeros((*alpha.shape, 4), np.uint8)
+        rgba[..., 3] = alpha
+        tex = spec.add_texture(name=material, type=mujoco.mjtTexture.mjTEXTURE_2D,
+                               width=alpha.shape[1], height=alpha.shape[0], nchannel=4)
+        tex.data = np.ascontiguousarray(rgba).tobytes()
+        mat = spec.add_material(name=material, rgba=[1.0, 1.0, 1.0, TRANSLUCENT_ALPHA],
+                                specular=0.0, shininess=0.0)
+        mat.textures[mujoco.mjtTextureRole.mjTEXROLE_RGB] = material
+    else:
+        alpha = 1.0 - math.sqrt(max(transmission, 0.0) ** share)
+        spec.add_material(name=material, rgba=[0.0, 0.0, 0.0, alpha], specular=0.0,
+                          shininess=0.0)
+    added = 0
+    for k, by in enumerate(offsets):
+        layer = [p for p in (grown(poly, float(by)) for poly in polygons) if len(p) >= 3]
+        pieces = disjoint_pieces(layer) if layer else []
+        if not pieces:
+            continue
+        add_mesh_geom(spec, f"{name}_p{k}", polygon_mesh(pieces, OVERLAY_Z_M), material,
+                      GROUP_SHADOW)
+        added += 1
+    return added
