@@ -165,7 +165,11 @@ DESCRIPTIONS: dict[str, tuple[str, str]] = {
     "conditions.shadows[].reach": ("How far across the carriageway the shadows reach; "
                                    "1 = to the far edge line.", "(0, 1.5]"),
     "conditions.shadows[].coverage": ("Share of the zone's length in shadow.", "0.05..1"),
-    "conditions.shadows[].darkness": ("Opacity of the shadows: 0 none, 1 black.", _UNIT),
+    "conditions.shadows[].darkness": (
+        "How dark the shade is, as the casters' optical depth: 0 none, 0.55 a solid "
+        "building's shade lit by the open sky (about 0.2-0.35 of the sunlit road's light, "
+        "from the sun's height, the time of day and fog; lanekeep/world/shade.py), more "
+        "darker still.", _UNIT),
     "conditions.speed_bumps_m": ("Arc length of each speed bump across the road.",
                                  "each >= 0"),
     "conditions.speed_bump_height_m": ("Height of every speed bump.", "0.02..0.15"),
@@ -287,7 +291,8 @@ DESCRIPTIONS: dict[str, tuple[str, str]] = {
     "roadside.buildings_per_100m": ("Buildings per 100 m and side, 15..60 m beyond it.",
                                     "0..20"),
     "roadside.skyline": ("Far background: hills or buildings.", _one_of(SKYLINES)),
-    "roadside.shadow_darkness": ("Opacity of the props' shadows.", _UNIT),
+    "roadside.shadow_darkness": (
+        "How dark the props' shadows are, as `conditions.shadows[].darkness`.", _UNIT),
     "traffic": ("Other vehicles drawn from the seed in the lanes beside the car's, never in "
                 "its own; off by default.", ""),
     "traffic.vehicles_per_km": ("Vehicles per km of road in each lane but the car's; 0 = no "

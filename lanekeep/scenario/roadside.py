@@ -40,7 +40,7 @@ class Roadside:
     trees_per_100m: float = 0.0
     buildings_per_100m: float = 0.0
     skyline: str = "none"
-    shadow_darkness: float = 0.55  # opacity of the props' shadow overlay (as shadow zones')
+    shadow_darkness: float = 0.55  # as conditions.shadows[].darkness (lanekeep/world/shade.py)
 
     def __post_init__(self):
         for key in ("guard_rail_sides", "barrier_sides", "pole_sides"):

@@ -233,7 +233,7 @@ class ShadowZone:
     side: str = "left"  # side of the road the casters stand on
     reach: float = 1.0  # how far across the carriageway the shadows reach, 0..1.5 of its width
     coverage: float = 0.6  # fraction of the zone's length in shadow; 1 = one continuous shadow
-    darkness: float = 0.55  # opacity of the shadow overlay: 0 none, 1 black
+    darkness: float = 0.55  # optical depth: 0 none, 0.55 a solid caster (lanekeep/world/shade.py)
 
     def __post_init__(self):
         if self.kind not in SHADOW_KINDS:

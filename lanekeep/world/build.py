@@ -265,7 +265,7 @@ def _in_cast_shadow(road: Road, pieces: list[MarkingPiece], conditions: Conditio
 
 def _add_markings(
     spec: mujoco.MjSpec, road: Road, layout: WorldLayout, conditions: ConditionsInfo,
-    seed: int = 0,
+    seed: int = 0, surface: float = paint_filter.ROAD_ALBEDO,
 ) -> tuple[dict[str, int], set[str]]:
     """Marking meshes grouped by (boundary, segment, brightness level); returns name ->
     boundary, and the names of the colour render's own paint geoms. Paint strips are geometry
@@ -275,7 +275,8 @@ def _add_markings(
     texture (flaked off in ragged pits, the asphalt showing) for faded levels, or, inside a
     static cast shadow, an opaque copy of the geometry. Raised dots are geometry in both
     renders (GROUP_MARKING). The masks mark the whole strip; which of its pixels a camera
-    shows as paint is for lanekeep/sensing/paint_visibility.py to say.
+    shows as paint is for lanekeep/sensing/paint_visibility.py to say. `surface`: the grey of the
+    carriageway (lanekeep/world/pavement.surface_albedo), which faded paint fades towards.
 
     Why shaded paint stays opaque geometry: MuJoCo draws translucent geoms twice, and a
     shadow overlay drawn after them darkens them once where it darkens the asphalt twice
@@ -331,7 +332,7 @@ def _add_markings(
         boundary, segment, level = key
         colour = np.asarray(styles[boundary].colour)
         brightness = 0.35 + 0.65 * level / max(levels - 1, 1)
-        rgb = paint_filter.paint_rgb(colour, brightness)
+        rgb = paint_filter.paint_rgb(colour, brightness, surface)
         fresh = level == levels - 1
         opaque = material(f"paint_b{boundary}_l{level}", "paint" if fresh else "paint_worn", rgb)
         name = f"marking_b{boundary}_s{segment}_l{level}"
@@ -352,7 +353,7 @@ def _add_markings(
         if key in shaded:
             in_shade = opaque if not fresh else material(
                 f"paint_b{boundary}_l{level}_shaded", "paint",
-                list(paint_filter.SHADED_MATCH * np.asarray(rgb)))
+                paint_filter.shaded_rgb(rgb, surface))
             add_mesh_geom(spec, f"{name}_shaded_rgb", Ribbon.concatenate(shaded[key]),
                           in_shade, GROUP_RGB_OVERLAY)
             colour_only.add(f"{name}_shaded_rgb")
@@ -398,7 +399,9 @@ def build_spec(
     _add_environment(spec, road, scenario, look.lighting)
     _add_road_surface(spec, road, layout, look.asphalt_grid_step_m)
     conditions = add_conditions(spec, scenario, road, layout)  # first: its cast shadows
-    marking_names, ribbons = _add_markings(spec, road, layout, conditions, scenario.seed)
+    marking_names, ribbons = _add_markings(
+        spec, road, layout, conditions, scenario.seed,
+        pavement.surface_albedo(scenario.road.pavement))
     paint_filter.draw_overlays_last(spec, GROUP_RGB_OVERLAY, ribbons)
     _draw_ground_last(spec)
     return spec, marking_names, conditions

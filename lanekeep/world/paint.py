@@ -45,28 +45,40 @@ FAR_SIZE_M = 1e-4  # its size: no area to speak of (a moving overlay's inertia s
 # How paint looks on a road in use (the marking's `colour` is its pigment's hue). Road paint
 # in dashcam frames stands 40-70 DN above the asphalt (TuSimple: a median of about 55 where
 # paint is), not 100-150: beads wear off, tyres and dust grey it. Fresh paint reflects
-# FRESH_ALBEDO (asphalt about 0.28 here, lanekeep/world/pavement.py); along the road that
-# varies by a seeded wear that drifts over WEAR_PERIOD_M / WEAR_ROWS metres: some dashes and
-# stretches are fainter (down to FADED_SHARE of the fresh reflectance). Worn levels (faded
-# chips of a worn line) fade towards the asphalt's grey, ROAD_ALBEDO, not towards black.
-FRESH_ALBEDO = 0.56
+# FRESH_ALBEDO, and at least PAINT_OVER_SURFACE times the surface's own grey (light concrete,
+# lanekeep/world/pavement.surface_albedo: white paint on concrete is a faint line, not a dark
+# one). Along the road a seeded wear drifts over WEAR_PERIOD_M / WEAR_ROWS metres: some dashes
+# and stretches keep only FADED_SHARE of the paint. Wear is lost paint, so it lowers the
+# paint's coverage (the texture's alpha) and the surface shows through; worn levels (faded
+# chips of a worn line) fade towards the surface's grey, never below it.
+FRESH_ALBEDO = 0.60
+PAINT_OVER_SURFACE = 1.25
 FADED_SHARE = 0.62
-ROAD_ALBEDO = 0.28
+ROAD_ALBEDO = 0.32  # mid-tone asphalt (pavement.surface_albedo at asphalt_tone 0.5)
 WEAR_PERIOD_M = 256.0  # the wear texture repeats along the road after this
 WEAR_ROWS = 64  # texels along it: 4 m each, linearly filtered
 EDGE_TEXELS = 2.0  # an edge's alpha ramps over this many texels (soft, as sprayed paint is)
 WORN_TEXELS = 128  # worn paint texture: per metre (mesh uv in metres), 8 mm texels
 WORN_HOLE_SHARE = 0.3  # of a worn chip where the paint has flaked off (asphalt shows)
 # Paint in a cast shadow is opaque geometry with the grain texture (mean GRAIN_MEAN,
-# lanekeep/world/textures.py); scaled by this it matches the ribbons' mean wear (0.82).
-SHADED_MATCH = 0.82 / 0.93
+# lanekeep/world/textures.py); `shaded_rgb` gives it the ribbons' mean look: their mean wear
+# (MEAN_WEAR of the paint shows, the surface the rest).
+GRAIN_MEAN = 0.93
+MEAN_WEAR = 0.82
 
 
-def paint_rgb(colour, brightness: float) -> list[float]:
-    """Material RGB of paint of pigment `colour` at `brightness` (1 fresh, lower faded): the
-    fresh reflectance, faded towards the asphalt's grey."""
-    fresh = FRESH_ALBEDO * np.asarray(colour, dtype=float)
-    return list(ROAD_ALBEDO + brightness * (fresh - ROAD_ALBEDO))
+def shaded_rgb(paint: list[float], surface: float) -> list[float]:
+    """Material RGB of opaque paint in a cast shadow that looks, on average, as the worn
+    ribbons of the same paint `paint` do on a surface of grey `surface`."""
+    mean = MEAN_WEAR * np.asarray(paint) + (1.0 - MEAN_WEAR) * surface
+    return list(mean / GRAIN_MEAN)
+
+
+def paint_rgb(colour, brightness: float, surface: float = ROAD_ALBEDO) -> list[float]:
+    """Material RGB of paint of pigment `colour` at `brightness` (1 fresh, lower faded) on a
+    surface of grey `surface`: the fresh reflectance, faded towards the surface's grey."""
+    fresh = max(FRESH_ALBEDO, PAINT_OVER_SURFACE * surface) * np.asarray(colour, dtype=float)
+    return list(surface + brightness * (fresh - surface))
 
 
 def wear_along(rng: np.random.Generator, rows: int = WEAR_ROWS) -> np.ndarray:
@@ -83,9 +95,12 @@ def wear_along(rng: np.random.Generator, rows: int = WEAR_ROWS) -> np.ndarray:
 
 def profile_rgba(texels: int = TEXELS, spread: float = SPREAD,
                  along: np.ndarray | None = None) -> np.ndarray:
-    """(rows, texels, 4) uint8: paint of reflectance factor `along` (per row, default 1) with
-    alpha 255 across the middle 1/spread and 0 beside it; the edge ramps over EDGE_TEXELS
-    (the paint's exact coverage box-filtered by that width: the line's coverage is kept)."""
+    """(rows, texels, 4) uint8: white paint with alpha 255 across the middle 1/spread and 0
+    beside it; the edge ramps over EDGE_TEXELS (the paint's exact coverage box-filtered by that
+    width: the line's coverage is kept). `along` (per row, default 1) is the share of the paint
+    left by wear: it scales the coverage that shows, through the alpha, which is set so that
+    MuJoCo's double translucent draw (1 - (1 - a)^2, see the module docstring) shows `along`
+    times what unworn paint shows."""
     fine = 16  # samples per texel
     x = (np.arange(texels * fine) + 0.5) / (texels * fine)
     lo, hi = 0.5 - 0.5 / spread, 0.5 + 0.5 / spread
@@ -95,8 +110,9 @@ def profile_rgba(texels: int = TEXELS, spread: float = SPREAD,
     alpha = soft.reshape(texels, fine).mean(axis=1)
     along = np.ones(4) if along is None else np.asarray(along, dtype=float)
     out = np.empty((len(along), texels, 4), np.uint8)
-    out[..., :3] = np.round(255.0 * along)[:, None, None]
-    out[..., 3] = np.round(255.0 * alpha)[None, :]
+    shown = along[:, None] * (1.0 - (1.0 - alpha[None, :]) ** 2)
+    out[..., :3] = 255
+    out[..., 3] = np.round(255.0 * (1.0 - np.sqrt(1.0 - shown)))
     return out
 
 

@@ -77,13 +77,19 @@ def _lane_profile(cols: int, lane_width_m: float, sigma_m: float) -> tuple[np.nd
     return paths.astype(np.float32), oil.astype(np.float32)
 
 
+def surface_albedo(style: PavementStyle) -> float:
+    """The base reflectance (grey) of the carriageway's surface, before grain, marks and cracks:
+    light concrete slabs, or asphalt from fresh black to sun-bleached grey."""
+    return 0.62 if style.surface == "concrete" else 0.24 + 0.16 * style.asphalt_tone
+
+
 def _part(rng: np.random.Generator, style: PavementStyle, rows: int, cols: int,
           width_m: float, period_m: float, lane: bool) -> np.ndarray:
     """Grey (rows, cols) of the lane or the shoulder part of the atlas."""
     concrete = style.surface == "concrete"
     px_per_m = rows / period_m
     shape = (rows, cols)
-    base = 0.62 if concrete else 0.24 + 0.16 * style.asphalt_tone
+    base = surface_albedo(style)
     grey = np.full(shape, base, np.float32)
     grey += (0.02 if concrete else 0.05) * tiled_noise(rng, shape, 0.6)  # aggregate grain
     stones = rng.random(shape)

@@ -1,4 +1,5 @@
-"""Issue #44's optics, sky and weather look: a soft point spread and glare by default, JPEG when asked for
+"""Issue #44's optics, sky and weather look: a soft point spread and glare by default, JPEG
+when asked for
 (lanekeep/sensing/camera_sensor.py); translucent lens drops and snow in depth
 (lanekeep/sensing/weather.py); an overcast for rain and snow (lanekeep/world/lighting.py) and
 the seeded cloudy sky (lanekeep/world/sky.py)."""
