@@ -121,8 +121,11 @@ class HoughConfig:
     """Model #1: adaptive brightness threshold, bird's-eye view, probabilistic Hough."""
 
     adaptive_block_px: int = 25  # odd, in working-resolution pixels
-    adaptive_c: float = 35.0  # a pixel must exceed its local mean by this (grey levels)
-    min_grey: int = 120  # and be at least this bright
+    # A pixel must exceed its local mean by `adaptive_ratio` of it: relative to the local
+    # light, for paint in shade keeps its ratio to the asphalt (1.5-1.8), not its level.
+    adaptive_ratio: float = 0.3  # #44 re-tune (replay of the tuning scenarios)
+    adaptive_c: float = 10.0  # and by at least this many grey levels (sensor noise, dark road)
+    min_grey: int = 20  # and be at least this bright (a dark floor: #44's paint is ~58-110)
     rho_px: float = 1.0
     theta_deg: float = 1.0
     votes: int = 12
@@ -137,6 +140,8 @@ class HoughConfig:
     def __post_init__(self) -> None:
         if self.adaptive_block_px < 3 or self.adaptive_block_px % 2 == 0:
             raise InvalidValue("adaptive_block_px", "must be odd and >= 3")
+        if self.adaptive_ratio < 0 or self.adaptive_c < 0:
+            raise InvalidValue("adaptive_ratio", "adaptive_ratio and adaptive_c must be >= 0")
 
 
 @dataclass(frozen=True)
@@ -145,15 +150,17 @@ class SlidingWindowConfig:
 
     sobel_kernel: int = 3
     # Shade compensation: lightness is scaled so that the local background (a wide box blur)
-    # reads `illumination_target`, by a gain of at most `illumination_max_gain` (1 = off).
-    # Paint in a building's shadow keeps its contrast ratio to the asphalt, not its level.
+    # reads `illumination_target`, by a gain of at most `illumination_max_gain` (1 = off)
+    # and at least `illumination_min_gain`. Paint in a building's shadow keeps its contrast
+    # ratio to the asphalt, not its level.
     illumination_block_px: int = 61
     illumination_target: float = 80.0
     illumination_max_gain: float = 4.0
+    illumination_min_gain: float = 0.5  # #44: thresholds below are shares of the light
     sobel_min: float = 25.0  # |d lightness / dx| in grey levels per pixel (Sobel-scaled / 4)
-    min_lightness_gain: float = 10.0  # gradient pixels must sit in a brighter-than-local ridge
+    min_lightness_gain: float = 15.0  # gradient pixels must sit in a brighter-than-local ridge
     local_block_px: int = 25
-    white_lightness: int = 180  # HLS L at or above: paint-white
+    white_lightness: int = 105  # normalised HLS L at or above: paint-white (#44: was 180)
     white_saturation_max: int = 255
     yellow_hue: tuple[int, int] = (12, 38)  # OpenCV hue (0..180) range of yellow paint
     yellow_saturation: int = 90
@@ -167,6 +174,8 @@ class SlidingWindowConfig:
     min_fit_pixels: int = 40
 
     def __post_init__(self) -> None:
+        if not 0.0 < self.illumination_min_gain <= max(1.0, self.illumination_max_gain):
+            raise InvalidValue("illumination_min_gain", "must be > 0 and <= the max gain")
         if self.sobel_kernel not in (1, 3, 5, 7):
             raise InvalidValue("sobel_kernel", "must be 1, 3, 5 or 7")
         if self.local_block_px < 3 or self.local_block_px % 2 == 0:

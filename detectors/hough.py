@@ -1,13 +1,14 @@
 """Paper 001 model #1: ROI, binarisation, bird's-eye view, Hough transform, nearest-row centre.
 
 Pipeline per frame: crop the image below the ground window's far edge and work at reduced
-resolution; binarise by brightness against the local mean (adaptive threshold) and an absolute
-floor; warp to the bird's-eye view of the camera model; find segments with OpenCV's
-probabilistic Hough transform; keep segments near the driving direction, seed one boundary per
-side from the segments nearest the car (clustered by their lateral position at the near edge)
-and grow each boundary outwards with segments that continue its fit; fit y(x) per side. The
-offset is the lane centre at the view's row nearest the car. Being brightness-based, it takes
-the edges of hard shadows for paint, which is the weakness the paper reports.
+resolution; binarise by brightness against the local mean (an adaptive threshold relative to
+the local light, so that shaded paint passes) and a dark floor; warp to the bird's-eye view of
+the camera model; find segments with OpenCV's probabilistic Hough transform; keep segments near
+the driving direction, seed one boundary per side from the segments nearest the car (clustered
+by their lateral position at the near edge) and grow each boundary outwards with segments that
+continue its fit; fit y(x) per side. The offset is the lane centre at the view's row nearest
+the car. Being brightness-based, it takes the edges of hard shadows for paint, which is the
+weakness the paper reports.
 """
 
 from __future__ import annotations
@@ -30,13 +31,21 @@ class HoughDetector(ClassicalDetector):
 
     # -- stages -------------------------------------------------------------------------------
     def binarise(self, roi: RegionOfInterest) -> np.ndarray:
-        """Paint candidates: brighter than the local mean by adaptive_c and above min_grey."""
+        """Paint candidates: brighter than the local mean by a share of it (adaptive_ratio),
+        by at least adaptive_c grey levels, and above min_grey.
+
+        The threshold scales with the local light: paint in shade keeps its contrast ratio to
+        the asphalt (about 1.5-1.8) but not its level or its difference (a shaded line can be
+        darker than the sunlit road), so a fixed offset or floor loses it. The absolute
+        offset only keeps sensor noise on a dark road out.
+        """
         cfg = self.config.hough
         grey = roi.grey
-        mask = cv2.adaptiveThreshold(grey, 255, cv2.ADAPTIVE_THRESH_MEAN_C, cv2.THRESH_BINARY,
-                                     cfg.adaptive_block_px, -cfg.adaptive_c)
-        mask[grey < cfg.min_grey] = 0
-        return mask
+        block = (cfg.adaptive_block_px, cfg.adaptive_block_px)
+        mean = cv2.blur(grey, block, borderType=cv2.BORDER_REPLICATE).astype(np.float32)
+        level = np.maximum(mean * (1.0 + cfg.adaptive_ratio), mean + cfg.adaptive_c)
+        paint = (grey > level) & (grey >= cfg.min_grey)
+        return paint.view(np.uint8) * np.uint8(255)
 
     def segments(self, bev: np.ndarray) -> np.ndarray:
         """Hough segments (N, 4) as vehicle-frame metres x1, y1, x2, y2, end 1 nearer the car."""

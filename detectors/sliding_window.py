@@ -57,7 +57,7 @@ class SlidingWindowDetector(ClassicalDetector):
         # long straight edge of a vehicle's shadow, parallel to the lane).
         tophat = cv2.morphologyEx(raw, cv2.MORPH_TOPHAT, row)
         light = raw
-        if cfg.illumination_max_gain > 1.0:
+        if cfg.illumination_max_gain > 1.0 or cfg.illumination_min_gain < 1.0:
             light, gain = self._compensate_shade(raw)
             ridge = tophat.astype(np.float32) * gain >= cfg.min_lightness_gain
         else:
@@ -79,13 +79,14 @@ class SlidingWindowDetector(ClassicalDetector):
 
     def _compensate_shade(self, light: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Lightness scaled so the local background reads the configured target level, and
-        the gain per pixel."""
+        the gain per pixel. A gain below 1 dims a bright road too, so that the white and
+        gradient thresholds are shares of the local light in sun and shade alike."""
         cfg = self.config.sliding_window
         block = (cfg.illumination_block_px, cfg.illumination_block_px)
         gain = cv2.blur(light, block).astype(np.float32)  # the background, then its gain
         np.maximum(gain, 1.0, out=gain)
         np.divide(cfg.illumination_target, gain, out=gain)
-        np.clip(gain, 1.0, cfg.illumination_max_gain, out=gain)
+        np.clip(gain, cfg.illumination_min_gain, cfg.illumination_max_gain, out=gain)
         scaled = light.astype(np.float32)
         scaled *= gain
         np.clip(scaled, 0, 255, out=scaled)

@@ -76,8 +76,11 @@ def lookaheads(cameras) -> dict[str, float]:
     return {f"{d}@{c}": float(make_detector(d, cameras[c]).x_ref) for d, c in JOBS}
 
 
-def score(folder: Path) -> dict[str, dict[str, float]]:
-    """Per-detector error statistics over a recording (see the module docstring)."""
+def score(folder: Path, config_path: str | Path | None = None) -> dict[str, dict[str, float]]:
+    """Per-detector error statistics over a recording (see the module docstring), with the
+    detectors' thresholds from `config_path` (None: the shipped detectors.toml), so that a
+    candidate tuning is scored without editing the shipped file."""
+    from lanekeep.detectors.config import load_config
     from lanekeep.detectors.registry import make_detector
     from lanekeep.scenario.schema import load_scenario
     from lanekeep.sensing.cameras import CameraRig, RenderSettings
@@ -91,9 +94,10 @@ def score(folder: Path) -> dict[str, dict[str, float]]:
         cameras = dict(rig.cameras)
     truth = np.load(folder / "truth.npy")
     frames = {name: np.load(folder / f"{name}.npy", mmap_mode="r") for name in ("front", "rear")}
+    config = load_config(config_path)
     out = {}
     for j, (name, cam) in enumerate(JOBS):
-        detector = make_detector(name, cameras[cam])
+        detector = make_detector(name, cameras[cam], config=config)
         errors, valid, wall = [], 0, 0.0
         for i in range(len(truth)):
             frame = np.ascontiguousarray(frames[cam][i])
