@@ -138,12 +138,15 @@ def dapple_transmission(rng: np.random.Generator, transmission: float,
 
 
 def add_shadow_overlay(spec: mujoco.MjSpec, name: str, polygons: list[np.ndarray],
-                       transmission: float, dapple: np.random.Generator | None = None) -> int:
+                       transmission: float, dapple: np.random.Generator | None = None,
+                       soft: bool = True) -> int:
     """Nested overlays `name`_p0, _p1 ... (GROUP_SHADOW) of the convex CCW ground polygons,
     keeping `transmission` of the light where all lie (dappled with a texture drawn from
     `dapple` if given); returns how many geoms were added. Within one layer no ground point
-    is covered twice (roadside.disjoint_pieces)."""
-    offsets = layer_offsets_m()
+    is covered twice (roadside.disjoint_pieces). `soft=False` draws one hard-edged layer of
+    polygons that are already disjoint: for many small casters (poles, crowns, signs), whose
+    pieces the nested layers would grow and split again at a cost of seconds a world."""
+    offsets = layer_offsets_m() if soft else np.zeros(1)
     share = 1.0 / len(offsets)  # of the log-transmission, per layer
     material = f"{name}_shade"
     if dapple is not None:
@@ -163,8 +166,11 @@ def add_shadow_overlay(spec: mujoco.MjSpec, name: str, polygons: list[np.ndarray
                           shininess=0.0)
     added = 0
     for k, by in enumerate(offsets):
-        layer = [p for p in (grown(poly, float(by)) for poly in polygons) if len(p) >= 3]
-        pieces = disjoint_pieces(layer) if layer else []
+        if not soft:
+            pieces = [p for p in polygons if len(p) >= 3]
+        else:
+            layer = [p for p in (grown(poly, float(by)) for poly in polygons) if len(p) >= 3]
+            pieces = disjoint_pieces(layer) if layer else []
         if not pieces:
             continue
         add_mesh_geom(spec, f"{name}_p{k}", polygon_mesh(pieces, OVERLAY_Z_M), material,
