@@ -23,6 +23,7 @@ from lanekeep.sensing.camera_sensor import tone_curve
 from lanekeep.sensing.cameras import CameraRig, RenderSettings
 from lanekeep.sensing.snapshot import place_on_road
 from lanekeep.world.build import build
+from lanekeep.world.shade import PENUMBRA_M
 from lanekeep.world.traffic import occluded_marking_share, update_dynamic
 
 W, H = 320, 180
@@ -80,10 +81,16 @@ def test_building_shadows_darken_the_shaded_road_and_not_the_sunlit_road():
                 [x + c * v[..., 0] - sn * v[..., 1], y + sn * v[..., 0] + c * v[..., 1]], -1
             )
             on_road = _patch(v, 3.0, 60.0, -1.8, 5.5)  # both lanes ahead (straight road)
-            shaded = shaded_world.conditions.shaded(np.nan_to_num(world_xy, nan=1e6))
+            xy = np.nan_to_num(world_xy, nan=1e6)
+            # Shade or sun all around a point half a penumbra away (the soft edge, whose
+            # layers reach PENUMBRA_M / 2 either side of the exact polygon, is neither).
+            around = [shaded_world.conditions.shaded(xy + PENUMBRA_M / 2 * np.array(
+                [math.cos(a), math.sin(a)])) for a in np.linspace(0, 2 * np.pi, 8, False)]
+            shaded = np.logical_and.reduce(around)
+            sunlit = ~np.logical_or.reduce(around)
             kernel = np.ones((5, 5), np.uint8)  # keep 2 px clear of the shadow edges
             in_shadow = cv2.erode((on_road & shaded).astype(np.uint8), kernel).astype(bool)
-            in_sun = cv2.erode((on_road & ~shaded).astype(np.uint8), kernel).astype(bool)
+            in_sun = cv2.erode((on_road & sunlit).astype(np.uint8), kernel).astype(bool)
             if in_shadow.sum() > 500 and in_sun.sum() > 500:
                 break
         else:
@@ -156,8 +163,15 @@ def test_fog_lowers_the_contrast_of_the_far_road():
         g = _grey(img)
         return g[band & paint].mean() - g[band & ~paint].mean()
 
-    assert contrast(rgb, 15.0, 30.0) < 0.6 * contrast(rgb0, 15.0, 30.0)
-    assert contrast(rgb, 2.0, 6.0) > 0.7 * contrast(rgb0, 2.0, 6.0)  # fog thins with distance
+    far = contrast(rgb, 15.0, 30.0) / contrast(rgb0, 15.0, 30.0)
+    near = contrast(rgb, 2.0, 6.0) / contrast(rgb0, 2.0, 6.0)
+    assert far < 0.6
+    # Fog thins with distance: the near road keeps a far larger share of its contrast. (Not a
+    # fixed share: part of the paint's brightness is the sun's, which fog takes away near and
+    # far alike; with paint as bright as real paint, 60 DN above the asphalt, that part is a
+    # larger share of the contrast: near 0.76 and far 0.36 before the [realism] paint, near
+    # 0.61 and far 0.36 after.)
+    assert near > 1.5 * far
 
 
 def test_wet_asphalt_is_darker():

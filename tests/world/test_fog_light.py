@@ -12,6 +12,7 @@ from lanekeep.scenario.schema import Conditions, load_scenario
 from lanekeep.world.appearance import lighting_of
 from lanekeep.world.build import build
 from lanekeep.world.lighting import direct_sun_share
+from lanekeep.world.shade import shade_transmission
 
 
 def test_the_direct_share_falls_with_fog_and_with_a_low_sun():
@@ -40,6 +41,9 @@ def test_props_shadows_fade_with_the_sun(fog):
     scenario = dataclasses.replace(scenario, conditions=dataclasses.replace(
         scenario.conditions, fog=fog))
     model = build(scenario).model
-    alpha = float(model.mat_rgba[model.mat("props_shadow").id][3])
-    darkness = scenario.roadside.shadow_darkness * direct_sun_share(scenario.conditions)
-    assert 1.0 - (1.0 - alpha) ** 2 == pytest.approx(darkness, abs=1e-6)  # drawn twice
+    alpha = float(model.mat_rgba[model.mat("props_shadow_shade").id][3])
+    kept = shade_transmission(scenario.roadside.shadow_darkness, scenario.conditions)
+    assert (1.0 - alpha) ** 2 == pytest.approx(kept, abs=1e-6)  # drawn twice
+    clear = shade_transmission(scenario.roadside.shadow_darkness,
+                               dataclasses.replace(scenario.conditions, fog=0.0))
+    assert kept > clear if fog > 0.0 else kept == clear  # fog pales the shade

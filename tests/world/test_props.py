@@ -27,7 +27,7 @@ CLEARANCE_M = 4.5  # anything lower than this is no overhead part and must stay 
 
 def _prop_vertices(spec: mujoco.MjSpec, prefix: str = "props_") -> dict[str, np.ndarray]:
     return {m.name: np.asarray(m.uservert, float).reshape(-1, 3) for m in spec.meshes
-            if m.name.startswith(prefix) and m.name != "props_shadow"}
+            if m.name.startswith(prefix) and not m.name.startswith("props_shadow")}
 
 
 @pytest.fixture(scope="module")
@@ -42,7 +42,7 @@ def test_highway_props_compile_into_few_geoms(highway):
     scenario, road, spec, _ = highway
     model = spec.compile()
     names = {model.geom(i).name for i in range(model.ngeom)}
-    for kind in ("props_steel", "props_concrete", "props_pole", "props_hills", "props_shadow",
+    for kind in ("props_steel", "props_concrete", "props_pole", "props_hills", "props_shadow_p0",
                  "props_sign_0", "props_sign_1", "props_trunk"):
         assert kind in names
     assert sum(n.startswith("props_") for n in names) <= 14  # merged per material
@@ -88,7 +88,7 @@ def test_a_pole_casts_its_shadow_away_from_the_sun():
         az, el = math.radians(az_deg), math.radians(el_deg)
         to_sun = np.array([math.cos(el) * math.cos(az), math.cos(el) * math.sin(az), math.sin(el)])
         info.shadow_polygons = []
-        _add_shadows(spec, props, to_sun, info, Roadside(), direct_share=1.0)
+        _add_shadows(spec, props, to_sun, info, transmission=0.3)
         (poly,) = info.shadow_polygons
         tip = poly[np.argmax(np.hypot(poly[:, 0], poly[:, 1]))]
         assert np.hypot(*tip) == pytest.approx(height / math.tan(el), rel=0.05)
