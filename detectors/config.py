@@ -118,12 +118,13 @@ class LaneRules:
 
 @dataclass(frozen=True)
 class HoughConfig:
-    """Model #1: adaptive brightness threshold, bird's-eye view, probabilistic Hough."""
+    """Model #1: brightness threshold relative to the road beside a ridge, bird's-eye view,
+    probabilistic Hough."""
 
-    adaptive_block_px: int = 25  # odd, in working-resolution pixels
-    # A pixel must exceed its local mean by `adaptive_ratio` of it: relative to the local
-    # light, for paint in shade keeps its ratio to the asphalt (1.5-1.8), not its level.
-    adaptive_ratio: float = 0.3  # #44 re-tune (replay of the tuning scenarios)
+    # A pixel must exceed the road on both sides of it (a paint width away along the row) by
+    # `adaptive_ratio` of it: relative to the local light, for paint in shade keeps its ratio
+    # to the asphalt (1.5-1.8), not its level; faint sunlit paint is only ~1.2-1.35 of it.
+    adaptive_ratio: float = 0.2  # #44 ridge re-tune (closed loop on the tuning scenarios)
     adaptive_c: float = 10.0  # and by at least this many grey levels (sensor noise, dark road)
     min_grey: int = 20  # and be at least this bright (a dark floor: #44's paint is ~58-110)
     rho_px: float = 1.0
@@ -138,8 +139,6 @@ class HoughConfig:
     sample_m: float = 0.5  # spacing of the points taken along each segment
 
     def __post_init__(self) -> None:
-        if self.adaptive_block_px < 3 or self.adaptive_block_px % 2 == 0:
-            raise InvalidValue("adaptive_block_px", "must be odd and >= 3")
         if self.adaptive_ratio < 0 or self.adaptive_c < 0:
             raise InvalidValue("adaptive_ratio", "adaptive_ratio and adaptive_c must be >= 0")
 

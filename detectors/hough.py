@@ -1,14 +1,14 @@
 """Paper 001 model #1: ROI, binarisation, bird's-eye view, Hough transform, nearest-row centre.
 
 Pipeline per frame: crop the image below the ground window's far edge and work at reduced
-resolution; binarise by brightness against the local mean (an adaptive threshold relative to
-the local light, so that shaded paint passes) and a dark floor; warp to the bird's-eye view of
-the camera model; find segments with OpenCV's probabilistic Hough transform; keep segments near
-the driving direction, seed one boundary per side from the segments nearest the car (clustered
-by their lateral position at the near edge) and grow each boundary outwards with segments that
-continue its fit; fit y(x) per side. The offset is the lane centre at the view's row nearest
-the car. Being brightness-based, it takes the edges of hard shadows for paint, which is the
-weakness the paper reports.
+resolution; binarise by brightness against the road beside each pixel on both sides (a ridge
+test relative to the local light, so that shaded paint passes and a shoulder's edge does not)
+and a dark floor; warp to the bird's-eye view of the camera model; find segments with OpenCV's
+probabilistic Hough transform; keep segments near the driving direction, seed one boundary per
+side from the segments nearest the car (clustered by their lateral position at the near edge)
+and grow each boundary outwards with segments that continue its fit; fit y(x) per side. The
+offset is the lane centre at the view's row nearest the car. Being brightness-based, it takes
+sunlit gaps between hard shadows for paint, which is the weakness the paper reports.
 """
 
 from __future__ import annotations
@@ -31,21 +31,39 @@ class HoughDetector(ClassicalDetector):
 
     # -- stages -------------------------------------------------------------------------------
     def binarise(self, roi: RegionOfInterest) -> np.ndarray:
-        """Paint candidates: brighter than the local mean by a share of it (adaptive_ratio),
-        by at least adaptive_c grey levels, and above min_grey.
+        """Paint candidates: narrow bright ridges, brighter than the road on BOTH sides of them
+        (a paint width away along the row) by a share of it (adaptive_ratio), by at least
+        adaptive_c grey levels, and above min_grey.
 
         The threshold scales with the local light: paint in shade keeps its contrast ratio to
         the asphalt (about 1.5-1.8) but not its level or its difference (a shaded line can be
         darker than the sunlit road), so a fixed offset or floor loses it. The absolute
-        offset only keeps sensor noise on a dark road out.
+        offset only keeps sensor noise on a dark road out. Its reference is the road beside
+        the pixel, not a block mean: a mean over the paint and a bright gravel shoulder next
+        to it rises above faint sunlit paint, and the sunlit edge of a shoulder (brighter than
+        the asphalt on one side only) passes a mean but is no ridge.
         """
         cfg = self.config.hough
-        grey = roi.grey
-        block = (cfg.adaptive_block_px, cfg.adaptive_block_px)
-        mean = cv2.blur(grey, block, borderType=cv2.BORDER_REPLICATE).astype(np.float32)
-        level = np.maximum(mean * (1.0 + cfg.adaptive_ratio), mean + cfg.adaptive_c)
+        grey = cv2.blur(roi.grey, (3, 3))  # a pixel's neighbours, not single grains
+        side = self._ridge_reach(grey.shape[0])
+        w = grey.shape[1]
+        cols = np.arange(w)[None, :]
+        left = np.take_along_axis(grey, np.maximum(cols - side, 0), axis=1)
+        right = np.take_along_axis(grey, np.minimum(cols + side, w - 1), axis=1)
+        road = np.maximum(left, right).astype(np.float32)
+        level = np.maximum(road * (1.0 + cfg.adaptive_ratio), road + cfg.adaptive_c)
         paint = (grey > level) & (grey >= cfg.min_grey)
         return paint.view(np.uint8) * np.uint8(255)
+
+    def _ridge_reach(self, rows: int) -> np.ndarray:
+        """(rows, 1) columns from a pixel to the road beside it: the widest paint plus the
+        blur at each ROI row, so that from anywhere on a stripe both reach off it."""
+        px_per_m = self.vehicles.px_per_m  # per working ROI row, from the camera model
+        if len(px_per_m) != rows:
+            px_per_m = np.full(rows, float(px_per_m.max(initial=0.0)))
+        p = self.config.preprocess
+        reach = np.ceil(p.max_paint_width_m * px_per_m + p.paint_blur_px)
+        return np.maximum(reach, 2).astype(np.intp)[:, None]
 
     def segments(self, bev: np.ndarray) -> np.ndarray:
         """Hough segments (N, 4) as vehicle-frame metres x1, y1, x2, y2, end 1 nearer the car."""

@@ -8,6 +8,7 @@ import json
 import math
 import re
 
+import cv2
 import mujoco
 import numpy as np
 import pytest
@@ -323,3 +324,39 @@ def test_a_pair_two_lanes_apart_keeps_the_line_the_car_is_beside(car_y_m, kept):
     assert est.valid
     assert est.offset_m == pytest.approx(car_y_m, abs=1e-6)
     assert getattr(est, kept) is not None
+
+
+def _shoulder_frame(camera) -> np.ndarray:
+    """A sunlit straight road seen by `camera` (car on the lane centre): the centre line's
+    dashes worn away, a faint solid right line (~1.35x the asphalt, as #44's paint renders in
+    sun), a bright gravel shoulder beside it and grass beyond: the frame that sent both models
+    a lane to the right when the gravel's edge passed for paint."""
+    rng = np.random.default_rng(4)
+    v, u = np.mgrid[0 : camera.height, 0 : camera.width]
+    ground, ok = camera.pixels_to_ground(np.stack([u, v], -1).astype(float))
+    y = np.where(ok, ground[..., 1], np.nan)
+    grey = np.full(y.shape, 175.0)  # sky
+    grey[ok] = 78.0 + rng.normal(0.0, 3.0, ok.sum())  # asphalt
+    gravel = ok & (y < -2.4) & (y > -4.0)
+    grey[gravel] = 108.0 + rng.normal(0.0, 8.0, gravel.sum())
+    grey[ok & (y <= -4.0)] = 62.0  # grass
+    grey[ok & (np.abs(y + 1.85) < 0.075)] = 106.0  # the right line
+    grey = cv2.GaussianBlur(grey.astype(np.float32), (0, 0), 0.8)  # lens blur
+    return np.repeat(np.clip(grey, 0, 255).astype(np.uint8)[..., None], 3, axis=2)
+
+
+@pytest.mark.parametrize("name", ["hough", "sliding_window"])
+def test_a_gravel_shoulder_beside_the_right_line_is_no_boundary(name):
+    """Paint is a narrow ridge with road on both sides; a shoulder's edge is bright on one side
+    only. With the centre line worn away the right line alone gives the lane: the estimate
+    must be the car's lane (or none), never the lane-wide jump that pairing with the gravel or
+    taking the right line for a left one gave. Model #1 must find the lane from the right line;
+    model #2's white threshold misses paint this faint, so it may see no lane (honest)."""
+    from lanekeep.geometry.camera_model import CameraModel
+
+    camera = CameraModel.from_mounting("front", np.array([[620, 0, 639.5], [0, 620, 359.5],
+                                                          [0, 0, 1]]), 1280, 720, 1.5, 0.0)
+    est = make_detector(name, camera).detect(_shoulder_frame(camera))
+    assert est.valid or name == "sliding_window", est.reason
+    if est.valid:
+        assert abs(est.offset_m) < 0.3, est
