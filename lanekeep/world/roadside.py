@@ -74,7 +74,7 @@ def _area(poly: np.ndarray) -> float:
     return 0.5 * float(x[:-1] @ y[1:] - x[1:] @ y[:-1] + x[-1] * y[0] - x[0] * y[-1])
 
 
-def _clip(poly: np.ndarray, normal: np.ndarray, offset: float) -> np.ndarray:
+def clip_half_plane(poly: np.ndarray, normal: np.ndarray, offset: float) -> np.ndarray:
     """The part of a convex polygon (n, 2) where normal . p <= offset (Sutherland-Hodgman)."""
     if len(poly) == 0:
         return poly
@@ -96,10 +96,10 @@ def _minus(poly: np.ndarray, hole: np.ndarray) -> list[np.ndarray]:
         normal = np.array([b[1] - a[1], a[0] - b[0]])  # outward: right of a CCW edge
         if normal @ normal < 1e-12:
             continue
-        outside = _clip(rest, -normal, -float(normal @ a))
+        outside = clip_half_plane(rest, -normal, -float(normal @ a))
         if _area(outside) > _MIN_PIECE_M2:
             pieces.append(outside)
-        rest = _clip(rest, normal, float(normal @ a))
+        rest = clip_half_plane(rest, normal, float(normal @ a))
         if _area(rest) <= _MIN_PIECE_M2:
             break
     return pieces
@@ -276,12 +276,12 @@ def _drape_shadows(spec: mujoco.MjSpec, centre: np.ndarray, heading: float, half
             inside = xy
             for a, b in zip(rect, np.roll(rect, -1, axis=0), strict=True):
                 normal = np.array([b[1] - a[1], a[0] - b[0]])
-                inside = _clip(inside, normal, float(normal @ a))
+                inside = clip_half_plane(inside, normal, float(normal @ a))
             if _area(inside) <= _MIN_PIECE_M2:
                 continue
             for d0, d1 in zip(cuts[:-1], cuts[1:], strict=True):
-                strip = _clip(inside, t_hat, d1 + float(t_hat @ centre))
-                strip = _clip(strip, -t_hat, -(d0 + float(t_hat @ centre)))
+                strip = clip_half_plane(inside, t_hat, d1 + float(t_hat @ centre))
+                strip = clip_half_plane(strip, -t_hat, -(d0 + float(t_hat @ centre)))
                 if _area(strip) > _MIN_PIECE_M2:
                     draped.append(lift(strip))
         if not draped:

@@ -47,7 +47,7 @@ from lanekeep.scenario.schema import Conditions
 from lanekeep.world.groups import GROUP_SHADOW
 from lanekeep.world.lighting import LIGHTING, SKY_SCATTER, direct_sun_share
 from lanekeep.world.parts import OVERLAY_Z_M, add_mesh_geom
-from lanekeep.world.roadside import disjoint_pieces, polygon_mesh
+from lanekeep.world.roadside import clip_half_plane, disjoint_pieces, polygon_mesh
 from lanekeep.world.textures import tiled_noise
 
 SKY_SHARE = 0.2  # clear-sky diffuse light / direct sun on a surface facing it
@@ -78,19 +78,6 @@ def shade_transmission(darkness: float, conditions: Conditions) -> float:
     return float(umbra_transmission(conditions) ** (max(darkness, 0.0) / DARKNESS_UMBRA))
 
 
-def _half_plane(poly: np.ndarray, normal: np.ndarray, offset: float) -> np.ndarray:
-    """The part of a convex polygon (n, 2) where normal . p <= offset."""
-    d = poly @ normal - offset
-    out = []
-    for k in range(len(poly)):
-        j = (k + 1) % len(poly)
-        if d[k] <= 0.0:
-            out.append(poly[k])
-        if (d[k] < 0.0 < d[j]) or (d[j] < 0.0 < d[k]):
-            out.append(poly[k] + d[k] / (d[k] - d[j]) * (poly[j] - poly[k]))
-    return np.array(out, dtype=float).reshape(-1, 2)
-
-
 def grown(poly: np.ndarray, by_m: float) -> np.ndarray:
     """A convex CCW polygon (n, 2) grown by `by_m` (shrunk if < 0; corners of a grown one are
     rounded); an empty (0, 2) array when shrinking leaves nothing."""
@@ -107,7 +94,7 @@ def grown(poly: np.ndarray, by_m: float) -> np.ndarray:
         length = float(np.hypot(*normal))
         if length < 1e-9:
             continue
-        out = _half_plane(out, normal / length, float(normal @ a) / length + by_m)
+        out = clip_half_plane(out, normal / length, float(normal @ a) / length + by_m)
         if len(out) < 3:
             return np.zeros((0, 2))
     return out
