@@ -9,7 +9,7 @@ drive, exactly as the file says; any other seed draws, from its own stream
   - each other vehicle's timing: when the car meets it moves by a draw in +-`traffic_s`,
     i.e. the vehicle moves along its lane by its speed relative to the car's target speed
     times that draw (a lead car at the car's speed keeps its gap; oncoming traffic moves
-    most).
+    most); a vehicle in the car's own lane, its way, also takes the drawn speed change.
 The seed also draws, as before, the sensor noise, the image effects and weather particles
 (lanekeep/loop/episode.py's generator) and the world's details (textures, props, shadow
 casters: lanekeep/world/).
@@ -48,12 +48,22 @@ def with_nuisance(scenario: Scenario) -> Scenario:
         speed_mps=max(0.0, start.speed_mps + float(d_speed)) if start.speed_mps > 0
         else start.speed_mps)
     ego = scenario.target_speed_mps  # the file's: timing is when the car meets a vehicle
-    vehicles = tuple(dataclasses.replace(v, s_m=v.s_m + (v.speed_mps - ego) * float(dt))
-                     for v, dt in zip(scenario.conditions.vehicles, shifts, strict=True))
+    lane = scenario.road.ego_lane
+    vehicles = tuple(dataclasses.replace(
+        v, s_m=v.s_m + (v.speed_mps - ego) * float(dt),
+        speed_mps=v.speed_mps + (float(d_speed) if _ahead_in_lane(v, lane) else 0.0))
+        for v, dt in zip(scenario.conditions.vehicles, shifts, strict=True))
     return dataclasses.replace(
         scenario, start=start,
         target_speed_mps=max(0.0, scenario.target_speed_mps + float(d_speed)),
         conditions=dataclasses.replace(scenario.conditions, vehicles=vehicles))
+
+
+def _ahead_in_lane(vehicle, lane: int) -> bool:
+    """Whether a vehicle drives in the car's own lane, its way: it keeps the car's drawn speed
+    change, so a lead car at the car's speed keeps its gap (the car has no cruise control that
+    would keep it; a faster draw used to run it into the lead car)."""
+    return vehicle.lane == lane and vehicle.speed_mps > 0.0
 
 
 def nuisance_summary(scenario: Scenario) -> dict[str, float]:

@@ -49,3 +49,20 @@ def test_zero_jitter_keeps_every_seed_on_the_nominal_start():
     still = dataclasses.replace(base, seed=5, start=dataclasses.replace(
         base.start, jitter=StartJitter(0.0, 0.0, 0.0, 0.0)))
     assert with_nuisance(still) == still
+
+
+def test_a_lead_car_in_the_cars_lane_keeps_the_drawn_speed():
+    """Occlusion's lead car drives 7 m ahead at the car's speed: a seed that draws the car
+    faster must draw the lead car faster too, or the car (no cruise control) runs into it."""
+    base = load_scenario("occlusion")
+    lane = base.road.ego_lane
+    for seed in (13, 14, 1000):
+        moved = with_nuisance(_seeded("occlusion", seed))
+        d_speed = moved.target_speed_mps - base.target_speed_mps
+        assert d_speed != 0.0
+        for before, after in zip(base.conditions.vehicles, moved.conditions.vehicles,
+                                 strict=True):
+            same_way_ahead = before.lane == lane and before.speed_mps > 0.0
+            expected = before.speed_mps + (d_speed if same_way_ahead else 0.0)
+            assert after.speed_mps == expected
+        assert any(v.lane == lane for v in base.conditions.vehicles)
