@@ -143,6 +143,14 @@ def test_case2_model_2_is_worse_in_the_sharp_turn():
 
 
 @pytest.mark.slow
+@pytest.mark.xfail(strict=True, reason=(
+    "Not reproduced since [realism] (#44, 2026-11-27): with paint 40-70 DN above the road, "
+    "model #1 (hough) was re-tuned to binarise against the road beside each ridge, and it now "
+    "finds the lane in case 1's shade (valid in 100% of the shaded steps; this test needs "
+    "< 50%); a frame-wide threshold as the paper's (1.2x the ROI's 75th percentile, with or "
+    "without a floor of 90) still gave 96%, since the camera's auto-exposure lifts a shaded "
+    "road. Reproducing the paper's case 1 pattern is [observer] #43's part 3. Strict: this "
+    "fails the suite the day the pattern comes back, so that this mark goes."))
 def test_case1_model_1_loses_the_lane_in_shadow_and_the_mmae_follows_model_2():
     report, trace = paper_run("case1_building_shadows")
     _, shaded, selected, errors = trace.arrays()
