@@ -22,7 +22,7 @@ class ProgressLines(tqdm):
 
     def __init__(self, *args, step_s: float | None = None, **kwargs) -> None:
         self.step_s = step_s  # simulated seconds per step; None: counted in steps
-        self._shown_n: int | None = None
+        self._shown: tuple[int, int | None] | None = None  # (n, total) of the last line
         super().__init__(*args, **kwargs)
 
     def line(self) -> str:
@@ -44,12 +44,15 @@ class ProgressLines(tqdm):
             return False
         self.fp.write(self.line() + "\n")
         self.fp.flush()
-        self._shown_n = self.n
+        self._shown = (self.n, self.total)
         return True
 
     def close(self) -> None:
-        if not self.disable and self.n != self._shown_n:
-            self.display()  # where it ended, unless that was the last line shown
+        # Where it ended, unless that was the last line shown. The total counts too: an
+        # episode that ends early shrinks it, and its steps may all have been shown before
+        # the shrink arrived (how the lines fall depends on the machine's speed).
+        if not self.disable and (self.n, self.total) != self._shown:
+            self.display()
         super().close()
 
 

@@ -155,3 +155,18 @@ def test_without_a_terminal_progress_is_whole_lines_every_few_seconds(capsys, mo
     assert capsys.readouterr().err.splitlines() == [
         "bench (2 episodes): 0/7 steps (0%), wall 00:00, about ? left",
         "bench (2 episodes): 7/7 steps (100%), wall 00:00"]
+
+
+def test_the_last_line_shows_a_total_that_shrank_after_its_steps_were_shown(capsys, monkeypatch):
+    """A bench whose last episode ended early: every step it made was shown on a line before
+    the shrunk total arrived (on a slow machine the lines fall so). The line on close shows
+    where it ended, done == total, whatever the timing."""
+    import lanekeep.core.progress as progress
+
+    monkeypatch.setattr(progress, "LINE_INTERVAL_S", 0.0)
+    with progress.step_bar(16, "bench (2 episodes)") as bar:
+        progress.set_progress(bar, 13)          # shown: 13/16
+        progress.set_progress(bar, 13, 13)      # the turn ended early: no new step
+    lines = capsys.readouterr().err.splitlines()
+    assert lines[-2].startswith("bench (2 episodes): 13/16 steps (81%)")
+    assert lines[-1] == "bench (2 episodes): 13/13 steps (100%), wall 00:00"
