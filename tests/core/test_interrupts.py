@@ -18,13 +18,26 @@ BIN = Path(sys.executable).parent
 pytestmark = pytest.mark.slow
 
 
+LONG_S = 200.0  # an episode's simulated length: a minute or more of wall time at 320x180
+
+
 def small_scenario(tmp_path: Path, name: str) -> Path:
-    """clear_straight at 320x180 (fast), 20 s long, under another name."""
+    """clear_straight at 320x180 (fast) under another name, LONG_S long at 1.5 m/s (300 m of
+    its 400 m road): an episode is still running when the signal comes, however the machine's
+    speed and load place that moment (the first recording bytes land after about 2 s of wall
+    time; a 20 s episode took only about 6 s)."""
     text = Path(load_scenario("clear_straight").source).read_text(encoding="utf-8")
-    text = text.replace('name = "clear_straight"', f'name = "{name}"')
+    for old, new in (('name = "clear_straight"', f'name = "{name}"'),
+                     ("duration_s = 20.0", f"duration_s = {LONG_S}"),
+                     ("target_speed_mps = 15.0", "target_speed_mps = 1.5"),
+                     ("\nspeed_mps = 15.0", "\nspeed_mps = 1.5")):
+        assert old in text, old
+        text = text.replace(old, new, 1)
     path = tmp_path / f"{name}.toml"
     path.write_text(text + "\n[camera]\nwidth = 320\nheight = 180\n", encoding="utf-8")
-    assert load_scenario(path).camera.width == 320
+    scenario = load_scenario(path)
+    assert scenario.camera.width == 320 and scenario.duration_s == LONG_S
+    assert scenario.start.s_m + scenario.target_speed_mps * LONG_S < scenario.road.length_m
     return path
 
 
@@ -82,7 +95,7 @@ def test_sigterm_during_run_keeps_a_verified_recording_and_a_partial_report(tmp_
     assert "Traceback" not in err and "interrupted" in err
     document = json.loads(report.read_text(), parse_constant=pytest.fail)
     assert document["completed"] is False and document["stop_reason"] == "interrupted"
-    assert 0 < document["duration_s"] < 20.0
+    assert 0 < document["duration_s"] < LONG_S
     assert verify(rrd).returncode == 0
 
 
@@ -108,7 +121,11 @@ def test_an_interrupted_bench_keeps_its_reports_and_leaves_no_worker(tmp_path, h
             os.killpg(proc.pid, signal.SIGKILL)
     assert proc.returncode == 130, err
     assert "Traceback" not in err and "bench interrupted" in err
-    time.sleep(0.5)
+    # the children of the exited bench are reaped (by it, or once orphaned by init) within
+    # moments; an orphan left running would go on with its episode, a minute or more longer
+    deadline = time.monotonic() + 10.0
+    while [pid for pid in workers if alive(pid)] and time.monotonic() < deadline:
+        time.sleep(0.1)
     assert not [pid for pid in workers if alive(pid)], "orphan workers"
     document = json.loads(report.read_text(), parse_constant=pytest.fail)
     stopped = [label for label, r in document.items() if not r["completed"]]

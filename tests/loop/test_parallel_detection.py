@@ -4,7 +4,7 @@ counts and report, in the same order (lanekeep/loop/detection.py)."""
 from __future__ import annotations
 
 import threading
-import time
+from collections import Counter
 from dataclasses import replace
 
 import numpy as np
@@ -18,11 +18,13 @@ from lanekeep.scenario.schema import load_scenario
 
 
 class _Fake:
-    """A detector that sleeps (releasing the GIL, as OpenCV and torch do) and reports which
-    thread ran it; `fail` makes it raise."""
+    """A detector that reports which thread ran it; `meet` (a barrier) makes it wait there
+    (releasing the GIL, as OpenCV and torch do) until another detection is under way at the
+    same time; `fail` makes it raise."""
 
-    def __init__(self, offset: float, sleep_s: float = 0.0, fail: bool = False) -> None:
-        self.offset, self.sleep_s, self.fail = offset, sleep_s, fail
+    def __init__(self, offset: float, meet: threading.Barrier | None = None,
+                 fail: bool = False) -> None:
+        self.offset, self.meet, self.fail = offset, meet, fail
         self.threads: list[str] = []
 
     def reset(self) -> None:
@@ -30,7 +32,8 @@ class _Fake:
 
     def detect(self, frame: np.ndarray) -> LaneEstimate:
         self.threads.append(threading.current_thread().name)
-        time.sleep(self.sleep_s)
+        if self.meet is not None:
+            self.meet.wait()
         if self.fail:
             raise RuntimeError("boom")
         return LaneEstimate(valid=True, offset_m=self.offset, x_m=4.0)
@@ -42,21 +45,24 @@ def _jobs(detectors) -> list[DetectJob]:
 
 
 def test_two_threads_share_the_jobs_and_keep_their_order():
-    detectors = [_Fake(0.1 * i, sleep_s=0.05, fail=(i == 2)) for i in range(4)]
+    # Each detection waits at the barrier for a second one running at the same time: four
+    # jobs pass it in two rounds of two, one job of each thread a round; on one thread the
+    # first job would wait in vain (the timeout only ends a hang: the barrier breaks and the
+    # detections fail).
+    meet = threading.Barrier(2, timeout=60.0)
+    detectors = [_Fake(0.1 * i, meet=meet, fail=(i == 2)) for i in range(4)]
     runner = DetectionRunner(lambda: 2)
     try:
-        start = time.perf_counter()
         results = runner.run(_jobs(detectors), runner.parallel_now())
-        wall = time.perf_counter() - start
     finally:
         runner.close()
+    assert not meet.broken
     assert [r[0].estimate.offset_m for r in results if r[0].estimate.valid] == \
         pytest.approx([0.0, 0.1, 0.3])
     assert [bool(r[0].event) for r in results] == [False, False, True, False]
     assert results[2][0].event == "failed: boom" and not results[2][0].estimate.valid
-    ran_on = {t for d in detectors for t in d.threads}
-    assert len(ran_on) == 2, ran_on  # both threads took jobs
-    assert wall < 0.19, wall  # four 50 ms jobs in about two rounds, not four
+    ran_on = Counter(t for d in detectors for t in d.threads)
+    assert sorted(ran_on.values()) == [2, 2], ran_on  # four jobs in two rounds, not four
 
 
 def test_one_thread_runs_every_job_itself():

@@ -156,12 +156,12 @@ def test_web_viewer_draws_every_panel(tmp_path):
         url_line = viewer.stdout.readline()
         assert url_line.startswith("http://127.0.0.1:"), url_line
         url = url_line.split()[0]
-        _wait_for(f"http://127.0.0.1:{web_port}/", 30)
+        _wait_for(f"http://127.0.0.1:{web_port}/", 120)  # timeouts here only end a hang
         browser = subprocess.Popen(
             [CHROMIUM, *FLAGS, f"--user-data-dir={profile}",
              f"--remote-debugging-port={debug_port}", f"--window-size={WINDOW[0]},{WINDOW[1]}",
              "about:blank"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-        _wait_for(f"http://127.0.0.1:{debug_port}/json/version", 30)
+        _wait_for(f"http://127.0.0.1:{debug_port}/json/version", 120)
         shots = Path(os.environ.get("LANEKEEP_SHOTS", tmp_path))
         shots.mkdir(parents=True, exist_ok=True)
         shot = shots / "viewer.png"
@@ -170,20 +170,20 @@ def test_web_viewer_draws_every_panel(tmp_path):
             drawn = _panels_drawn(pixels)
             return all(drawn[name] > MIN_DRAWN.get(name, 0.01) for name in PANELS)
 
-        pixels = asyncio.run(_screenshots(debug_port, url, shot, ready, timeout_s=120))
+        pixels = asyncio.run(_screenshots(debug_port, url, shot, ready, timeout_s=360))
         drawn = _panels_drawn(pixels)
         assert all(drawn[name] > MIN_DRAWN.get(name, 0.01) for name in PANELS), (drawn, shot)
     finally:
         for proc in (browser, viewer):
             if proc is not None:
                 proc.terminate()
-                try:
-                    proc.wait(timeout=10)
+                try:  # `lanekeep view` may take 10 s (SIGTERM, then SIGKILL) to stop its group
+                    proc.wait(timeout=60)
                 except subprocess.TimeoutExpired:
                     proc.kill()
         shutil.rmtree(profile, ignore_errors=True)
     # Stopping `lanekeep view` stops the viewer binary under it too (once it kept serving).
-    deadline = time.monotonic() + 10
+    deadline = time.monotonic() + 60  # one left serving would serve on: no need to hurry
     while cli_view._listening(web_port) and time.monotonic() < deadline:
         time.sleep(0.2)
     assert not cli_view._listening(web_port), "the web viewer outlived `lanekeep view`"
