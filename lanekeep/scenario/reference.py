@@ -314,6 +314,11 @@ DESCRIPTIONS: dict[str, tuple[str, str]] = {
                                          "> 0; unset = not checked"),
     "criteria.max_fused_rmse_m": ("Pass limit: offset RMSE of the MMAE output.",
                                   "> 0; unset = not checked"),
+    "criteria.bad_episode_fused_rmse_m": (
+        "Not a pass limit: marks a two-mode scenario (markings hidden on some drives); an "
+        "episode whose fused RMSE exceeds it is a bad episode, and the regression gate "
+        "(`bench --baseline`) compares the rate of bad episodes instead of the RMSE.",
+        "> 0; unset = one mode"),
     "criteria.off_road_distance_m": ("End the episode as off road once the car's centre is "
                                      "this far from the ego lane's centre.",
                                      "> 0; unset = only when all wheels leave the pavement"),

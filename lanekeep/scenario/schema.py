@@ -397,6 +397,9 @@ class CriteriaConfig:
     max_lane_departures: int | None = None  # times a wheel crossed an ego-lane boundary
     max_car_lateral_error_m: float | None = None  # the car's largest |true offset| from centre
     max_fused_rmse_m: float | None = None  # offset RMSE of the MMAE output ("fused")
+    # Not a limit: marks a two-mode scenario for the regression gate (lanekeep/report/
+    # regression.py): an episode with a fused RMSE above it is a bad episode.
+    bad_episode_fused_rmse_m: float | None = None
     # Ends the episode as off road once the car's centre is this far (m) from the ego lane's
     # centre; None: only when all four wheels are off the paved surface (always checked).
     off_road_distance_m: float | None = None
@@ -405,7 +408,8 @@ class CriteriaConfig:
         if self.max_lane_departures is not None and not self.max_lane_departures >= 0:
             raise InvalidValue("max_lane_departures",
                                f"must be >= 0, got {self.max_lane_departures}")
-        for key in ("max_car_lateral_error_m", "max_fused_rmse_m", "off_road_distance_m"):
+        for key in ("max_car_lateral_error_m", "max_fused_rmse_m", "bad_episode_fused_rmse_m",
+                    "off_road_distance_m"):
             value = getattr(self, key)
             if value is not None and not (math.isfinite(value) and value > 0):
                 raise InvalidValue(key, f"must be a number > 0 (m), got {value}")
