@@ -40,6 +40,7 @@ import cv2
 import numpy as np
 import torch
 
+from lanekeep.core.reproducibility import portable_torch
 from lanekeep.detectors.base import LaneEstimate
 from lanekeep.detectors.birds_eye import detector_view
 from lanekeep.detectors.config import DetectorsConfig, GroundWindow, load_config
@@ -354,7 +355,7 @@ def _infer_together(detectors: list[LaneNetDetector], frames: list[np.ndarray]) 
     placed: list[tuple[LaneNetOutput | None, int]] = [(None, 0)] * len(detectors)
     # Every torch call inside: one outside would run on the process's thread count and, on
     # a machine whose other core is busy, wait milliseconds for its second thread.
-    with torch.inference_mode(), _one_thread():
+    with torch.inference_mode(), portable_torch(), _one_thread():
         for members in groups.values():
             items, starts = [], []
             for i in members:

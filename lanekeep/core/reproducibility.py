@@ -3,14 +3,18 @@ machines with AVX2 agree bit for bit.
 
 A closed loop grows a one-ulp difference into another drive within seconds, so a laptop, a CI
 runner and a Ray worker give comparable numbers only if every kernel rounds alike. Measured
-with tools/stage_hashes.py (docs/reproducibility.md): oneDNN's AVX-512 convolutions (LaneNet),
-numpy's AVX-512 loops and OpenBLAS's per-CPU kernels each change a detection; llvmpipe, OpenCV,
-MKL and ATen's own kernels did not, from AVX2 to AVX-512. `pin_kernels()` caps each library at
-AVX2 through the environment variables they read when they load; `import lanekeep` calls it
-first, so it takes effect wherever lanekeep is imported before numpy and torch (the CLI, bench
-workers, Ray tasks). `LANEKEEP_PIN=0` leaves the libraries to choose; a variable the user set
-wins. Every report carries `settings_now()` (its `reproducibility` key): two reports whose
-settings differ are not expected to agree to the bit.
+with tools/stage_hashes.py and tools/dispatch_matrix.py (docs/reproducibility.md): numpy's
+AVX-512 loops, OpenBLAS's per-CPU kernels, MKL's per-CPU branches and oneDNN's convolutions
+each change a detection. `pin_kernels()` caps numpy, OpenBLAS, OpenCV, ATen and llvmpipe at
+AVX2 and puts MKL in its reproducible mode on the AVX2 branch (honoured on Intel CPUs; AMD CPUs
+read it as AUTO, which in that mode still fixes cache sizes and reductions), through the
+environment variables they read when they load; `import lanekeep` calls it first, so it takes
+effect wherever lanekeep is imported before numpy and torch (the CLI, bench workers, Ray
+tasks). oneDNN cannot be pinned that way (its kernels' blocking follows the CPU's vendor and
+caches, which no variable sets), so `portable_torch()` takes it out of LaneNet's forward:
+torch's convolutions then run as ATen's im2col and MKL's GEMM. `LANEKEEP_PIN=0` leaves the
+libraries to choose; a variable the user set wins. Every report carries `settings_now()` (its
+`reproducibility` key): two reports whose settings differ are not expected to agree to the bit.
 """
 
 from __future__ import annotations
@@ -19,6 +23,9 @@ import ctypes
 import functools
 import os
 import sys
+import threading
+from collections.abc import Iterator
+from contextlib import contextmanager
 from typing import Any
 
 PIN_ENV = "LANEKEEP_PIN"
@@ -27,7 +34,10 @@ PIN_ENV = "LANEKEEP_PIN"
 # has. Names for numpy 2.4 (X86_V4, AVX512_*) and numpy 1.26 (AVX512F, ...); unknown names
 # are ignored by numpy.
 PINNED: dict[str, str] = {
-    "ONEDNN_MAX_CPU_ISA": "AVX2",          # torch's convolutions (LaneNet)
+    "ONEDNN_MAX_CPU_ISA": "AVX2",          # torch's oneDNN, wherever a caller still uses it
+    "MKL_CBWR": "AVX2,STRICT",             # torch's GEMM (LaneNet's convolutions): MKL's AVX2
+                                           # branch on Intel, AUTO with fixed cache sizes on AMD;
+                                           # STRICT: any thread count and alignment
     "ATEN_CPU_CAPABILITY": "avx2",         # torch's own vectorised ops
     "NPY_DISABLE_CPU_FEATURES": "X86_V4 AVX512_ICL AVX512_SPR AVX512F AVX512CD AVX512_KNL "
                                 "AVX512_KNM AVX512_SKX AVX512_CLX AVX512_CNL",
@@ -67,6 +77,62 @@ def pin_kernels() -> None:
     opencv = opencv_disable(_cpu_flags())
     if opencv:
         os.environ.setdefault("OPENCV_CPU_DISABLE", opencv)
+
+
+_TORCH_SWITCH = threading.Lock()
+
+
+@contextmanager
+def portable_torch() -> Iterator[None]:
+    """torch's convolutions on a path that every x86-64 CPU computes alike: ATen's im2col and
+    MKL's GEMM on its pinned branch, instead of oneDNN, whose kernels and blocking follow the
+    CPU (an Intel Xeon and an AMD EPYC, both capped at AVX2, gave other rear-camera detections
+    at step 0). torch's switch is process-wide, so the computations that need it hold a lock:
+    two at once would restore each other's switch mid-forward. Unpinned (`LANEKEEP_PIN=0`)
+    it changes nothing."""
+    if not pinning_enabled():
+        yield
+        return
+    import torch
+
+    with _TORCH_SWITCH:
+        before = torch.backends.mkldnn.enabled
+        torch.backends.mkldnn.enabled = False
+        try:
+            yield
+        finally:
+            torch.backends.mkldnn.enabled = before
+
+
+# MKL's CNR branch codes (mkl_cbwr_get), as named in MKL's documentation.
+_MKL_BRANCHES = {0: "OFF", 1: "BRANCH_OFF", 2: "AUTO", 3: "COMPATIBLE", 4: "SSE2",
+                 6: "SSSE3", 7: "SSE4_1", 8: "SSE4_2", 9: "AVX", 10: "AVX2", 11: "AVX512_MIC",
+                 12: "AVX512", 13: "AVX512_MIC_E1", 14: "AVX512_E1"}
+_MKL_STRICT = 0x10000
+
+
+def mkl_branch() -> str | None:
+    """The CNR branch MKL (inside torch) runs on, as MKL reports it, e.g. "COMPATIBLE,STRICT";
+    None where torch carries no MKL. A branch that this CPU's vendor does not honour reads
+    AUTO (MKL_CBWR=AVX2 on an AMD CPU)."""
+    import torch
+
+    path = os.path.join(os.path.dirname(torch.__file__), "lib", "libtorch_cpu.so")
+    try:
+        get = ctypes.CDLL(path).mkl_serv_cbwr_get
+    except (OSError, AttributeError):
+        return None
+    get.restype = ctypes.c_int
+    code = get(ctypes.c_int(-1))  # MKL_CBWR_ALL: the branch and the STRICT flag
+    name = _MKL_BRANCHES.get(code & ~_MKL_STRICT, str(code & ~_MKL_STRICT))
+    return name + (",STRICT" if code & _MKL_STRICT else "")
+
+
+def cpu_has_avx2_fma() -> bool:
+    """Whether this CPU takes the pinned paths (AVX2 and FMA): one without them computes other
+    bits whatever is pinned."""
+    flags = _cpu_flags()
+    return not flags or {"avx2", "fma"} <= flags
 
 
 def kernel_env() -> dict[str, str]:
@@ -159,9 +225,11 @@ def settings_now(renderer: bool = True) -> dict[str, Any]:
         "pinned": pinning_enabled() and not unpinned,
         "loaded_before_pin": unpinned,
         "renderer": gl_renderer() if renderer else None,
+        "cpu_avx2_fma": cpu_has_avx2_fma(),
         "torch": {"version": torch.__version__,
                   "cpu_capability": torch.backends.cpu.get_cpu_capability(),
-                  "mkldnn": bool(torch.backends.mkldnn.enabled),
+                  "conv_path": "aten+mkl" if pinning_enabled() else "onednn",
+                  "mkl_branch": mkl_branch(),
                   "threads": torch.get_num_threads()},
         "opencv": {"version": cv2.__version__, "optimized": bool(cv2.useOptimized()),
                    "avx512": bool(cv2.checkHardwareSupport(CV_CPU_AVX_512F)),
@@ -174,11 +242,12 @@ def settings_now(renderer: bool = True) -> dict[str, Any]:
 
 
 def kernel_differences(a: dict | None, b: dict | None) -> list[str]:
-    """Which parts of two `settings_now()` records differ (pinned, renderer, torch, opencv,
-    numpy, env), thread counts aside; [] when either is missing (a report from before them)."""
+    """Which parts of two `settings_now()` records differ (pinned, cpu_avx2_fma, renderer,
+    torch, opencv, numpy, env), thread counts aside; [] when either is missing (a report from
+    before them)."""
     if not isinstance(a, dict) or not isinstance(b, dict):
         return []
-    return [k for k in ("pinned", "renderer", "torch", "opencv", "numpy", "env")
+    return [k for k in ("pinned", "cpu_avx2_fma", "renderer", "torch", "opencv", "numpy", "env")
             if _kernels_only(a.get(k)) != _kernels_only(b.get(k))]
 
 

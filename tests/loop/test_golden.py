@@ -41,8 +41,8 @@ def test_golden_runs_match_this_machine():
 @pytest.mark.parametrize(("env", "stage"), [
     # llvmpipe without AVX and FMA (an older CPU): the renders change
     ({"GALLIUM_OVERRIDE_CPU_CAPS": "sse4.1"}, "stage render_front"),
-    # oneDNN on SSE4.1 kernels: LaneNet's convolutions sum in another order
-    ({"ONEDNN_MAX_CPU_ISA": "SSE41"}, "stage detections (lanenet, reference)"),
+    # MKL's SSE2 branch instead of the pinned AVX2 one: LaneNet's GEMMs sum in another order
+    ({"MKL_CBWR": "COMPATIBLE"}, "stage detections (lanenet, reference)"),
 ], ids=["renderer", "torch-kernels"])
 def test_golden_check_names_the_first_stage_a_setting_changes(env, stage):
     done = _check("--only", ONE, **env)
@@ -69,3 +69,19 @@ def test_golden_files_of_other_library_versions_are_not_compared(tmp_path):
     done = _check("--only", ONE, "--folder", str(tmp_path))
     assert done.returncode == 3, done.stdout + done.stderr
     assert "torch '0.0.0-elsewhere'" in done.stderr
+
+
+def test_the_cheap_rows_of_the_dispatch_matrix_give_the_golden_bits():
+    """tools/dispatch_matrix.py --quick: the pinned default, oneDNN offered AVX-512 (it is out
+    of LaneNet's forward), MKL offered AVX2 only, MKL's own branch, OpenBLAS told of a smaller
+    L2 cache and one llvmpipe thread, each its own process: every `cpu` row identical, every
+    difference named (docs/reproducibility.md has the whole matrix)."""
+    done = subprocess.run([sys.executable, str(ROOT / "tools" / "dispatch_matrix.py"), "--quick"],
+                          cwd=ROOT, capture_output=True, text=True, timeout=1800)
+    if "made with other library versions" in done.stderr + done.stdout:
+        pytest.skip("the golden files were made with other library versions")
+    assert done.returncode == 0, done.stdout + done.stderr
+    rows = [line for line in done.stdout.splitlines() if line.startswith(("ok ", "NO "))]
+    assert len(rows) == 6 and all(line.startswith("ok ") for line in rows), done.stdout
+    assert "identical" in rows[0] and "(pinned default)" in rows[0]
+    assert "6 of 6 rows as expected" in done.stdout
