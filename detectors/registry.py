@@ -33,6 +33,9 @@ where `camera` is the CameraModel it looks through (intrinsics, mounting, its na
 "rear"), `config` the shared detectors TOML and `distortion` the lens's OpenCV coefficients.
 The instance must meet `Detector` (detectors/base.py): `name`, `x_ref`, `window`,
 `detect(frame)` and `reset()`; anything else is a ConfigError naming it.
+
+A plug-in class that subclasses a registered detector is of that detector's family
+(`builtin_family`): the loop gives it what it keys by that name (docs/plugins.md).
 """
 
 from __future__ import annotations
@@ -130,6 +133,39 @@ def known_detectors() -> list[str]:
     return sorted(set(DETECTORS) | set(LAZY) | set(plugins.entry_point_names(plugins.DETECTORS)))
 
 
+def _registered_classes() -> dict[tuple[str, str], str]:
+    """(module, qualified name) of each registered detector class -> its registered name; a
+    lazy one by the names it was registered with, so that nothing is imported to find it."""
+    found = {(lazy.module, lazy.factory): name for name, lazy in LAZY.items()}
+    found.update({(f.__module__, f.__qualname__): name for name, f in DETECTORS.items()
+                  if inspect.isclass(f)})
+    return found
+
+
+def builtin_family(detector: object) -> str | None:
+    """The registered name of the nearest registered class `detector` (a detector, its class,
+    or a name `make_detector` takes) is, or inherits from: "lanenet" for a plug-in
+    `class Sham(LaneNetDetector)`, None for one that subclasses no registered detector.
+
+    Why: the loop keys what it measured per detector by name (a tracker's noise, the MMAE's
+    prior, paper mode's windows, a `[name]` settings table); a subclass that changes nothing
+    but its `name` must run the loop its built-in runs, not a plug-in's pooled defaults. A
+    plug-in that wraps a built-in instead of subclassing it says so with a class attribute
+    `family = "lanenet"` (examples/sabotage.py)."""
+    if isinstance(detector, str):
+        detector = _resolve(detector)
+    cls = detector if inspect.isclass(detector) else type(detector)
+    declared = getattr(cls, "family", None)  # a wrapper that holds a built-in says which
+    if isinstance(declared, str) and declared:
+        return declared
+    registered = _registered_classes()
+    for ancestor in cls.__mro__:
+        name = registered.get((ancestor.__module__, ancestor.__qualname__))
+        if name is not None:
+            return name
+    return None
+
+
 def front_labels(names: Sequence[str]) -> list[str]:
     """The labels reports, recordings and the agent faces give the front detectors `names`: a
     plug-in given by import path by its own `name` (lanekeep/core/plugins.py `plugin_labels`),
@@ -176,6 +212,7 @@ def make_detector(
     if weights is not None and takes_weights(name):
         extra["weights"] = weights
     if name not in DETECTORS:  # a plugin (import path, entry point): its errors name it
+        extra.update(_inherited_settings(factory, config))
         detector = plugins.build(name, plugins.DETECTORS, factory, camera, config=config,
                                  distortion=distortion, **extra)
     elif name not in SETTINGS:
@@ -190,6 +227,16 @@ def make_detector(
         raise ConfigError("", "", f"detector {name!r} made a {type(detector).__name__}, not a "
                                   f"Detector (missing: {', '.join(missing)})")
     return detector
+
+
+def _inherited_settings(factory: Factory, config: DetectorsConfig | None) -> dict:
+    """`{"settings": ...}` from the `[family]` table for a plug-in that subclasses a registered
+    detector with settings and keeps its constructor (so takes those settings); else {}."""
+    family = builtin_family(factory) if inspect.isclass(factory) else None
+    if family is None or factory.__init__ is not _resolve(family).__init__:
+        return {}
+    settings = detector_settings(family, config)
+    return {} if settings is None else {"settings": settings}
 
 
 def detector_settings(name: str, config: DetectorsConfig | None = None):

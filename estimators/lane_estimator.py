@@ -137,15 +137,20 @@ class LaneEstimator:
 
     def __init__(self, model_names: list[str], settings: EstimatorSettings,
                  reference_x_m: float,
-                 tracker: TrackerConfig | TrackerTuning | None = None) -> None:
+                 tracker: TrackerConfig | TrackerTuning | None = None,
+                 families: Mapping[str, str] | None = None) -> None:
+        """`families`: per model, the detector whose measured noise its tracker takes (a
+        plug-in that subclasses a built-in: the built-in's name); a model not in it, its own."""
         self.names = list(model_names)
+        families = families or {}
         self.settings = settings
         self.lane_width_m = settings.lane_width_prior_m
         self.reference_x_m = reference_x_m
         if tracker is None:  # the closed loop's own: what an Episode runs
             tracker = shipped_tracker()
         tuning = tracker if isinstance(tracker, TrackerTuning) else TrackerTuning(tracker)
-        self.tracker_configs = {name: tuning.for_detector(name) for name in self.names}
+        self.tracker_configs = {name: tuning.for_detector(families.get(name, name))
+                                for name in self.names}
         self.trackers = {name: LaneTracker(self.tracker_configs[name]) for name in self.names}
         # Distance-aligned residuals: each model's past lane estimate is carried by odometry to
         # the point the reference measures now (estimators/alignment.py), so the MMAE compares

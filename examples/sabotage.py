@@ -25,8 +25,14 @@ sys.path, and PYTHONPATH=. does the same for the `lanekeep` command):
 The reference (LaneNet on the rear camera) is biased the same way: with an honest reference
 the MMAE would see the front models disagree with it and could tell; a bias shared by every
 sensor cannot be seen from inside the loop, only against the truth, which is what the criteria
-score. The loop also differs in one way besides the bias: a plug-in's track gets the pooled
-tracker noise, not its built-in detector's own (estimators/lane_estimator.py TrackerTuning).
+score. Each class declares the built-in it wraps (`family`), so its track gets that
+detector's own tracker noise (detectors/registry.py builtin_family): the loop is the built-in's
+but for the bias. `ShiftedLaneNet` (2 cm, the front model only) and `ShamLaneNet` (no bias:
+the same loop as the built-in, to the bit) are the regression gate's checks
+(docs/statistics.md#the-regression-gate-against-a-baseline):
+
+    PYTHONPATH=. lanekeep bench --baseline base.json \
+        --front-detectors hough,sliding_window,examples.sabotage:ShiftedLaneNet   # exit 1
 """
 
 from __future__ import annotations
@@ -88,18 +94,30 @@ class Biased:
 
 
 class BiasedHough(Biased):
-    inner_name = "hough"
+    inner_name = family = "hough"
 
 
 class BiasedSlidingWindow(Biased):
-    inner_name = "sliding_window"
+    inner_name = family = "sliding_window"
 
 
 class BiasedLaneNet(Biased):
     """LaneNet, biased; takes `weights=` as LaneNet does, so `--weights` reaches it."""
 
-    inner_name = "lanenet"
+    inner_name = family = "lanenet"
 
     def __init__(self, camera, config=None, distortion=None, weights: str | None = None
                  ) -> None:
         self.wrap(make_detector(self.inner_name, camera, config, distortion, weights=weights))
+
+
+class ShiftedLaneNet(BiasedLaneNet):
+    """LaneNet's boundaries 2 cm to the left: a small regression of one front model."""
+
+    bias_m = 0.02
+
+
+class ShamLaneNet(BiasedLaneNet):
+    """LaneNet through the wrapper with no bias: the built-in's loop, to the bit."""
+
+    bias_m = 0.0

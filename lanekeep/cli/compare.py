@@ -2,11 +2,14 @@
 
 A and B are two `lanekeep bench --json` files on the same scenarios and seeds (two methods, or
 before and after a change). Each (scenario, seed) is a pair; per metric the mean of B - A over
-the seeds, its 95% interval (paired Student t over the per-seed differences,
-lanekeep/scoring/statistics.py) and a verdict for B: "better" or "worse" only when the interval
-excludes 0, else "indistinguishable". Errors are lower-better; valid_share is higher-better.
-The "all" row pools every (scenario, seed) pair: scenarios with larger errors weigh more there.
-With many metrics and scenarios about one verdict in twenty is chance: read the counts so.
+the seeds, its paired 95% interval (Student t over the per-seed differences; log ratios for
+errors, given back in cm; lanekeep/scoring/statistics.py) and a verdict for B against the
+metric's margin of practical relevance (docs/statistics.md#margins; `--margin` overrides):
+better / worse beyond the margin, equivalent within it, non-inferior / non-superior on one
+side, inconclusive when the interval reaches past both (with the smallest difference this n
+could detect), too few below 3 seeds. Departures: McNemar's exact test. Errors are
+lower-better; valid_share is higher-better. The "all" row is stratified: each scenario counts
+once. Counts of better / worse come with Holm's adjustment and with what chance alone gives.
 
 Exit codes: 0 compared (whatever the verdicts), 2 bad input: a missing or unreadable file, bad
 JSON, not a bench document, runs on other scenarios or seeds, an unknown metric or source.
@@ -26,6 +29,7 @@ from lanekeep.report.compare import (
     compare_runs,
     compare_table,
     metric_set,
+    parse_margins,
 )
 from lanekeep.report.json_io import write_json
 
@@ -52,6 +56,9 @@ def register(sub) -> None:
                         "fused.max_cm, fused.ade_cm, fused.fde_cm, fused.valid_share, "
                         "car_rms_cm, car_max_cm, lane_departures): SOURCE.FIELD or an "
                         "episode's key (car_rms_cm, mmae_switches, ...)")
+    p.add_argument("--margin", action="append", default=[], metavar="[LABEL:]METRIC=ABS[,REL%]",
+                   help="override a metric's margin, for every label or for one, e.g. "
+                        "fused.rmse_cm=0.2,5%% or occlusion:car_max_cm=1 (cm); repeatable")
     p.add_argument("--source", action="append", default=[], metavar="NAME",
                    help="also compare this source's rmse_cm, max_cm, ade_cm, fde_cm and "
                         "valid_share (e.g. hough:track, reference); repeatable")
@@ -75,8 +82,9 @@ def read_bench(path: str) -> Any:
 
 def _compare(args: argparse.Namespace) -> int:
     metrics = metric_set(args.metrics, args.source)
+    margins = parse_margins(args.margin)
     result = compare_runs(read_bench(args.a), read_bench(args.b), metrics,
-                          a_name=args.a, b_name=args.b)
+                          a_name=args.a, b_name=args.b, margins=margins)
     if args.json:
         try:
             write_json(args.json, compare_document(result))

@@ -47,6 +47,7 @@ from lanekeep.report.tables import (
 )
 from lanekeep.scenario.schema import ESTIMATION_MODES, Scenario
 from lanekeep.scoring import criteria as criteria_mod
+from lanekeep.tuning.scenarios import TUNING_SEEDS_START
 
 
 def check_options(args: argparse.Namespace) -> None:
@@ -130,12 +131,42 @@ def _cmd_run(args: argparse.Namespace) -> int:
 
 
 def bench_seeds(args: argparse.Namespace, scenario: Scenario) -> list[int | None]:
-    """The seeds `scenario` runs: `--seeds N` from `--seed` on (without it, from the file's own
-    seed, its nominal drive), else `--seed` alone (None: the file's own)."""
+    """The seeds `scenario` runs. `--seeds N` alone: the file's seed + 1 .. + N, N drawn drives;
+    the nominal drive (the file's own seed) is left out because development and the tests have
+    seen it, so it is no fresh sample (`run` or `bench` without `--seeds` drives it). `--seed S
+    --seeds N`: S .. S + N - 1, as the user chose. Without `--seeds`: `--seed` alone (None:
+    the file's own).
+
+    Raises:
+      ConfigError: the seeds cross from the scored ones (0-999) into the tuning tools' (1000+).
+    """
     if args.seeds is None:
         return [args.seed]
-    first = scenario.seed if args.seed is None else args.seed
-    return list(range(first, first + args.seeds))
+    first = scenario.seed + 1 if args.seed is None else args.seed
+    seeds = list(range(first, first + args.seeds))
+    if seeds[0] < TUNING_SEEDS_START <= seeds[-1]:
+        origin = (f"{scenario.name}'s seed {scenario.seed} + 1" if args.seed is None
+                  else f"--seed {args.seed}")
+        raise ConfigError("", "--seeds", f"{args.seeds} seeds from {origin} run seeds "
+                                         f"{seeds[0]}-{seeds[-1]}, across the scored seeds "
+                                         f"(0-{TUNING_SEEDS_START - 1}) and the tuning tools' "
+                                         f"({TUNING_SEEDS_START} and up; docs/statistics.md"
+                                         f"#seeds): run fewer seeds or start at --seed "
+                                         f"{TUNING_SEEDS_START}")
+    return seeds
+
+
+def seeds_note(args: argparse.Namespace) -> str:
+    """The bench's line on which seeds it scored ("" for one episode on a chosen seed): `--seeds`
+    alone leaves out each file's nominal drive, and the reader must know it and how to run it."""
+    if args.seeds is None or (args.seed is not None and args.seeds == 1):
+        return ""
+    if args.seed is not None:
+        return f"over {args.seeds} seeds each, {args.seed} on"
+    each = f"over {args.seeds} seeds each" if args.seeds > 1 else "on one seed each"
+    return (f"{each}, from each file's seed + 1 on: the nominal drive (the file's own seed) is "
+            f"not among the scored seeds; `lanekeep run SCENARIO` or `lanekeep bench` without "
+            f"--seeds runs it")
 
 
 def _cmd_bench(args: argparse.Namespace) -> int:
@@ -147,12 +178,15 @@ def _cmd_bench(args: argparse.Namespace) -> int:
         raise ConfigError("", "--seeds", f"must be >= 1, got {args.seeds}")
     overrides = criteria_mod.overrides_from_args(args)
     plugins = with_size(overrides_from_args(args), args)
-    names = args.scenarios or shipped_scenarios()
+    margins = bench_margins(args)
+    baseline, plan = read_baseline(args)
+    names = args.scenarios or (list(plan) if plan else shipped_scenarios())
     # as each episode will run them: the mode first (its own front models), then the command
     # line's detectors; fail fast on a bad name
     scenarios = {name: plugins.apply(with_mode(load_scenario(name), args.mode))
                  for name in names}
-    seeds = {name: bench_seeds(args, scenario) for name, scenario in scenarios.items()}
+    seeds = {name: list(plan[name]) if plan else bench_seeds(args, scenario)
+             for name, scenario in scenarios.items()}
     for name, scenario in scenarios.items():  # and on a bad scenario, before any worker starts
         for seed in seeds[name]:  # (shadow casters stand where the seed puts them)
             check_scenario(scenario if seed is None else
@@ -163,7 +197,7 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     check_outputs(args)
     if args.record_dir:
         Path(args.record_dir).mkdir(parents=True, exist_ok=True)
-    many = (args.seeds or 1) > 1
+    many = any(len(s) > 1 for s in seeds.values()) if plan else (args.seeds or 1) > 1
     main_jobs = [BenchJob(name, seed, args.mode, plugins=plugins, seed_in_label=many)
                  for name in names for seed in seeds[name]]
     jobs = list(main_jobs)
@@ -189,6 +223,8 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     documents = bench_documents(args, jobs, done_reports, scenarios, plugins)
     if args.json:  # first: a failing table must not lose the episodes
         write_json_output(args.json, documents)
+    if args.write_baseline:
+        write_json_output(args.write_baseline, documents)
     if args.junit:
         write_junit_output(args.junit, reports, wall)
     out = human_stream(args)
@@ -206,9 +242,8 @@ def _cmd_bench(args: argparse.Namespace) -> int:
             print("\n" + single_model_table(jobs, reports), file=out)
     main_docs = [documents[name_label] for name_label in dict.fromkeys(
         job.label for job in main_jobs)]
-    print(f"\nover {args.seeds} seeds each" + (f", {args.seed} on" if args.seed is not None
-                                                 else ", from each file's own seed on")
-          if many else "", file=out)
+    note = (f"on the baseline's seeds ({args.baseline})" if plan else seeds_note(args))
+    print("\n" + note if note else "", file=out)
     print(interval_table(main_docs, args.wide), file=out)
     if many or args.single_model:
         print("\n" + paired_table(main_docs), file=out)
@@ -217,7 +252,60 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     lines, code = bench_verdict(reports, main_labels,
                                 "episodes (scenario x seed)" if many else "scenarios")
     print("\n".join(lines), file=out)
+    if baseline is not None:
+        gate_code = _gate(baseline, documents, main_docs, scenarios, margins, out)
+        code = max(code, gate_code)
     return code
+
+
+def read_baseline(args: argparse.Namespace) -> tuple[dict | None, dict[str, list[int]]]:
+    """`--baseline F`: the baseline bench document and the scenarios and seeds it ran (those of
+    the scenarios named, if any); one ConfigError line for a file that cannot be one, or with
+    --seed / --seeds (the baseline's seeds are the ones paired)."""
+    if not args.baseline:
+        return None, {}
+    from lanekeep.cli.compare import read_bench
+    from lanekeep.report.regression import baseline_plan
+
+    if args.seed is not None or args.seeds is not None:
+        raise ConfigError("", "--baseline", "runs the baseline's own seeds: drop --seed and "
+                                            "--seeds")
+    try:
+        baseline = read_bench(args.baseline)
+        return baseline, baseline_plan(baseline, args.scenarios)
+    except ValueError as err:  # CompareInputError, IncomparableRuns
+        raise ConfigError("", "--baseline", " ".join(str(err).split())) from None
+
+
+def bench_margins(args: argparse.Namespace) -> dict:
+    """`--margin` values (compare's syntax) as margins; one ConfigError line for a bad one."""
+    from lanekeep.report.compare import parse_margins
+
+    try:
+        return parse_margins(args.margin or [])
+    except ValueError as err:
+        raise ConfigError("", "--margin", str(err)) from None
+
+
+def _gate(baseline: dict, documents: dict, main_docs: list[dict],
+          scenarios: dict[str, Scenario], margins: dict, out) -> int:
+    """The regression gate against `baseline` (lanekeep/report/regression.py), printed; 1 when
+    a scenario got worse beyond its margin."""
+    import json
+
+    from lanekeep.report.json_io import dumps
+    from lanekeep.report.regression import gate_text, regression_gate
+
+    mains = json.loads(dumps({d["label"]: documents[d["label"]] for d in main_docs}))
+    two_mode = {name: s.criteria.bad_episode_fused_rmse_m for name, s in scenarios.items()
+                if s.criteria.bad_episode_fused_rmse_m is not None}
+    try:
+        gate = regression_gate(baseline, mains, margins=margins, two_mode=two_mode)
+    except ValueError as err:  # the baseline and this run cannot be paired
+        print(f"regression gate: cannot compare with the baseline: {err}", file=out)
+        return 2
+    print("\n" + gate_text(gate), file=out)
+    return 0 if gate.passed else 1
 
 
 def bench_documents(args: argparse.Namespace, jobs: list[BenchJob], reports: list,
@@ -305,14 +393,16 @@ def register(sub) -> None:
                    help="episodes run at once, each in its own process (default: 2)")
     p.add_argument("--seed", type=int, default=None,
                    help="the seed of every episode (default: each file's); with --seeds, the "
-                        "first seed")
+                        "first seed (S .. S+N-1)")
     p.add_argument("--seeds", type=int, default=None, metavar="N",
-                   help="run each scenario on N seeds, from --seed on or, without it, from "
-                        "the file's own seed (its nominal drive; other seeds draw the start "
-                        "and traffic timing within [start.jitter] besides the noise): every "
-                        "metric gets its mean, sd and 95%% interval and the fused output a "
-                        "paired verdict against each model's own track. Seeds 0-999 are the "
-                        "bench's (scored), 1000 and up the tuning tools' (docs/statistics.md)")
+                   help="run each scenario on N seeds, from --seed on or, without it, the "
+                        "file's seed + 1 .. + N: N drawn drives (the start and traffic timing "
+                        "within [start.jitter] besides the noise); the file's own seed, its "
+                        "nominal drive, is not scored (`lanekeep run SCENARIO` or bench "
+                        "without --seeds runs it). Every metric gets its mean, sd and 95%% "
+                        "interval and the fused output a paired verdict against each model's "
+                        "own track. Seeds 0-999 are the bench's (scored), 1000 and up the "
+                        "tuning tools' (docs/statistics.md); a plan across both is refused")
     p.add_argument("--seconds", type=float, default=None,
                    help="stop every episode after S simulated seconds (default: each "
                         "scenario's duration)")
@@ -333,6 +423,16 @@ def register(sub) -> None:
     p.add_argument("--junit", metavar="FILE", default=None,
                    help="write JUnit XML for CI: one test case per episode (and per "
                         "single-model run), a <failure> naming each criterion not met")
+    p.add_argument("--baseline", metavar="BASE.json", default=None,
+                   help="the regression gate: run BASE's scenarios (or those named) on BASE's "
+                        "seeds, pair each episode with BASE's and exit 1 when a scenario's "
+                        "fused RMSE, car RMS, car max or departures got worse beyond its "
+                        "margin (docs/statistics.md#the-regression-gate-against-a-baseline)")
+    p.add_argument("--write-baseline", metavar="FILE", default=None,
+                   help="write this bench as a baseline for --baseline (the --json document)")
+    p.add_argument("--margin", action="append", default=[],
+                   metavar="[LABEL:]METRIC=ABS[,REL%%]",
+                   help="with --baseline: override a metric's margin, as `compare --margin`")
     add_display_options(p)
     add_weights_option(p)
     criteria_mod.add_options(p)

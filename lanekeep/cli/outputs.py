@@ -24,7 +24,8 @@ STDOUT = "-"
 # (option, attribute, whether it names a folder rather than a file)
 OUTPUT_OPTIONS = (("--json", "json", False), ("--junit", "junit", False),
                   ("--plots", "plots", True), ("--record", "record", False),
-                  ("--record-dir", "record_dir", True))
+                  ("--record-dir", "record_dir", True),
+                  ("--write-baseline", "write_baseline", False))
 
 
 def human_stream(args: argparse.Namespace) -> TextIO:

@@ -47,7 +47,8 @@ def _check_world(spec) -> None:
         for value in p.values:
             values = tuple(value if j == i else q.values[0]
                            for j, q in enumerate(spec.parameters))
-            scenario = cell_scenario(spec.cell_table(values, spec.seeds[0]), spec.source)
+            scenario = cell_scenario(spec.cell_table(values, spec.seeds[0]), spec.source,
+                                     spec.nominal_seed)
             try:
                 check_scenario(scenario, spec.seconds)
             except ConfigError as err:

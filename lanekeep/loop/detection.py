@@ -7,9 +7,10 @@ take jobs from one list (longest first), so the split balances itself; every res
 to its job's place, so the estimates, events and error counts come out in the same order and
 with the same values on one thread or two (tests/loop/test_parallel_detection.py).
 
-On one thread, learned detectors of one class and weights (front LaneNet and the LaneNet
-reference) run as one batch (`LaneNetDetector.detect_many`, 1.1x less CPU than two calls); on
-two threads they run apart, one per thread, each on one torch thread (detectors/lanenet.py).
+On one thread, learned detectors of one class and weights (front LaneNet, or a plug-in
+subclass that keeps its `detect`, and the LaneNet reference) run as one batch
+(`LaneNetDetector.detect_many`, 1.1x less CPU than two calls); on two threads they run apart,
+one per thread, each on one torch thread (detectors/lanenet.py).
 A bench worker has one core (lanekeep/core/workers.py) and runs every job on its own thread.
 """
 
@@ -62,16 +63,27 @@ def _is_learned(detector: Detector) -> bool:
     return model is not None and hasattr(model, "parameters")  # a torch module
 
 
+def _batch_class(detector: Detector) -> type:
+    """The class whose `detect_many` may run `detector` in a batch: the nearest in its MRO
+    that defines one, so that a plug-in subclass of LaneNet that keeps LaneNet's `detect`
+    batches with the LaneNet reference as LaneNet does; its own class if it overrides
+    `detect` (a batch would skip the override) or no class defines one."""
+    cls = type(detector)
+    owner = next((c for c in cls.__mro__ if "detect_many" in vars(c)), None)
+    return owner if owner is not None and cls.detect is owner.detect else cls
+
+
 def _batch_key(detector: Detector) -> tuple:
-    return type(detector), getattr(detector, "weights_path", None)
+    return _batch_class(detector), getattr(detector, "weights_path", None)
 
 
 def _run_batch(detectors: list[Detector], frames: list[np.ndarray]
                ) -> list[tuple[LaneEstimate, str]]:
-    """Detectors of one class and weights: one `detect_many` call where the class has one
-    (LaneNet), else one at a time; a batch that fails is run one at a time to find whose
-    fault it was."""
-    many = getattr(type(detectors[0]), "detect_many", None)
+    """Detectors of one batch class and weights (`_batch_key`): one `detect_many` call where
+    that class defines it and `detect` is its own (LaneNet), else one at a time; a batch that
+    fails is run one at a time to find whose fault it was."""
+    owner = _batch_class(detectors[0])
+    many = getattr(owner, "detect_many", None) if "detect_many" in vars(owner) else None
     if many is not None and len(detectors) > 1:
         try:
             estimates = many(detectors, frames)

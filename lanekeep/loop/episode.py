@@ -31,7 +31,7 @@ from lanekeep.core.signals import VehicleSignals
 from lanekeep.core.timing import StageClock
 from lanekeep.core.workers import threads_now
 from lanekeep.detectors.base import Detector, LaneEstimate
-from lanekeep.detectors.registry import front_labels, make_detector
+from lanekeep.detectors.registry import builtin_family, front_labels, make_detector
 from lanekeep.estimators.lane_estimator import EstimatorOutput, LaneEstimator
 from lanekeep.estimators.odometry import DeadReckoning
 from lanekeep.estimators.roll import RollFilter, corrected
@@ -40,10 +40,11 @@ from lanekeep.loop.paper_mode import estimator_settings, front_detector_config, 
 from lanekeep.report.record import EpisodeInfo, NullRecorder, Recorder
 from lanekeep.scenario.nuisance import with_nuisance
 from lanekeep.scenario.schema import Scenario
+from lanekeep.scenario.streams import stream_entropy
 from lanekeep.scoring.departures import off_road_reason, wheels_outside_lane
 from lanekeep.scoring.gate import Truth
-from lanekeep.scoring.metrics import EpisodeReport, Metrics
-from lanekeep.scoring.step_score import REFERENCE, score_estimates, source_names
+from lanekeep.scoring.metrics import EpisodeReport
+from lanekeep.scoring.step_score import REFERENCE, loop_metrics, score_estimates
 from lanekeep.scoring.step_truth import StepTruth, step_truth
 from lanekeep.sensing.cameras import CameraRig, RenderSettings
 from lanekeep.sensing.paint_visibility import visible_paint
@@ -138,15 +139,20 @@ class Episode:
         self.estimation = est = scenario.estimation
         width, height = render_size or (scenario.camera.width, scenario.camera.height)
         self.rig = CameraRig(world.model, RenderSettings.of(scenario, width, height))
-        self.rng = np.random.default_rng(scenario.seed)
+        # seed and name: scenarios on one seed draw independent noise (scenario/streams.py)
+        self.rng = np.random.default_rng(stream_entropy(scenario))
         # One effects pipeline per camera: lens drops and the auto-exposure keep state.
         self.effects = make_effects(scenario, world, self.rig, self.rng)
         self.dt_s = scenario.control_period_s
         # keyed by label: a plug-in given by import path by its own `name` (core/plugins.py)
         labels = front_labels(est.front_detectors)
+        # What the loop measured per built-in (paper mode's windows, the trackers' noise) goes
+        # to a plug-in that subclasses one too (detectors/registry.py `builtin_family`).
+        families = {label: builtin_family(name) or name
+                    for label, name in zip(labels, est.front_detectors, strict=True)}
         self.front: dict[str, Detector] = {
             label: make_detector(name, self.rig.cameras["front"],
-                                 front_detector_config(name, est.mode),
+                                 front_detector_config(families[label], est.mode),
                                  self.rig.distortion("front"))
             for label, name in zip(labels, est.front_detectors, strict=True)
         }
@@ -159,6 +165,7 @@ class Episode:
             list(self.front),
             estimator_settings(est),
             reference_x_m=float(self.reference.x_ref),
+            families=families,
         )
         geometry = world.car.geometry  # the car's spec sheet, not its state
         # The sensors draw from their own stream of the episode's generator, so that they do
@@ -170,7 +177,7 @@ class Episode:
         self.controller: Controller = make_controller(scenario.control.controller,
                                                       ControlContext.of(scenario, geometry))
         self.controller.reset()
-        self.metrics = Metrics(source_names(list(self.front)))
+        self.metrics = loop_metrics(list(self.front))
         self.recorder: Recorder = recorder or NullRecorder()
         self.recorder.start(EpisodeInfo(world.road, dict(self.rig.cameras), list(self.front),
                                         float(self.dt_s),

@@ -1,23 +1,28 @@
-"""Two `bench --json` runs paired seed by seed: is B better than A?
+"""Two `bench --json` runs paired seed by seed: is B better than A, by a margin that matters?
 
 A user changes a detector, an estimator, a controller or a setting and runs the bench again on
 the same scenarios and seeds. Both runs drove the same seeded episodes, so each (scenario,
 seed) is a pair and what the seed does to both (the drive, the start, the noise) cancels in
-the difference. For each metric and label: the mean of the per-seed differences B - A, its
-95% paired t interval and the verdict for B (lanekeep/scoring/statistics.py): "better" or
-"worse" only when the interval excludes 0, else "indistinguishable".
+the difference. For each metric and label: B - A per seed (a log ratio for errors, given back
+in cm), its paired 95% interval, the metric's margin of practical relevance and the verdict for
+B (lanekeep/scoring/statistics.py): better / worse only beyond the margin, equivalent within
+it, non-inferior / non-superior on one side, inconclusive (with the smallest difference this
+n detects), too few below three seeds. Departures: McNemar's exact test per seed.
 
-The "all" row pools every (label, seed) pair of every label into one paired interval: a label
-with larger errors (a hard scenario, a model-only loop) weighs more there, so read it beside
-the per-label rows and the verdict counts, which count each label once (never raw wins).
+The "all" row is stratified: each label's own mean difference and standard error, averaged
+with equal weight (each scenario counts once), Welch-Satterthwaite degrees of freedom, and a
+sign test over the labels; it never pools the raw pairs (one noisy scenario would swamp the
+rest). The verdict counts come with Holm-adjusted counts of better / worse within each metric
+and the number chance alone would give.
 
 a_mean and b_mean are the means over the n pairs where both values are finite (a source with
-no estimate gives NaN / null), so that diff = b_mean - a_mean.
+no estimate gives NaN / null); `dropped` counts the pairs left out, and a note names them.
 """
 
 from __future__ import annotations
 
 import math
+import textwrap
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -180,13 +185,90 @@ def _pairs(a: Run, b: Run, label: str, metric: Metric) -> list[tuple[float, floa
             for s in sorted(ea)]
 
 
-def compare_pairs(pairs: Sequence[tuple[float, float]], metric: Metric) -> dict[str, Any]:
-    """{a_mean, b_mean, diff, ci95, verdict, n} of B - A over `pairs` (verdict for B)."""
+def parse_margins(texts: Sequence[str]) -> dict[str, stats.Margin]:
+    """`--margin [LABEL:]METRIC=ABS[,REL%]` values as {"[LABEL:]METRIC": Margin}; ValueError
+    with the text that is wrong."""
+    out = {}
+    for text in texts:
+        key, sep, value = text.partition("=")
+        metric = key.rpartition(":")[2]
+        try:
+            if not sep or not key:
+                raise ValueError
+            parse_metric(metric)
+            parts = [p.strip() for p in value.split(",")]
+            absolute = float(parts[0])
+            relative = float(parts[1].rstrip("%")) / 100.0 if len(parts) > 1 else 0.0
+            if len(parts) > 2 or not (absolute >= 0 and relative >= 0):  # NaN too
+                raise ValueError
+        except ValueError:
+            raise ValueError(f"--margin {text!r}: expected [LABEL:]METRIC=ABS[,REL%] with a "
+                             "known metric, e.g. fused.rmse_cm=0.2,5% or "
+                             "occlusion:car_max_cm=1") from None
+        out[key] = stats.Margin(absolute, relative)
+    return out
+
+
+def margin_of(metric: Metric, label: str | None,
+              margins: dict[str, stats.Margin] | None) -> stats.Margin:
+    """The margin in force: the label's own override, the metric's override, the declared."""
+    margins = margins or {}
+    if label is not None and f"{label}:{metric.key}" in margins:
+        return margins[f"{label}:{metric.key}"]
+    return margins.get(metric.key, stats.margin_for(metric.field))
+
+
+def compare_pairs(pairs: Sequence[tuple[float, float]], metric: Metric,
+                  margin: stats.Margin | None = None) -> dict[str, Any]:
+    """{a_mean, b_mean, diff, ci95, verdict, n, margin, p_worse, p_better, detectable,
+    dropped, ratio, ratio_ci95} of B - A over `pairs` (verdict for B)."""
     both = [(x, y) for x, y in pairs if math.isfinite(x) and math.isfinite(y)]
     a_values, b_values = [x for x, _ in both], [y for _, y in both]
-    p = stats.paired(b_values, a_values, metric.lower_is_better)
-    return {"a_mean": _mean(a_values), "b_mean": _mean(b_values), "diff": p.diff,
-            "ci95": list(p.ci95), "verdict": p.verdict, "n": p.n}
+    if stats.is_exact(metric.field):
+        p = stats.paired_events([y > 0 for y in b_values], [x > 0 for x in a_values])
+    else:
+        p = stats.paired(b_values, a_values, metric.lower_is_better,
+                         margin=margin or stats.margin_for(metric.field),
+                         log_scale=stats.is_log_scale(metric.field))
+    out = {"a_mean": _mean(a_values), "b_mean": _mean(b_values), **p.as_dict("")}
+    out["dropped"] = len(pairs) - len(both)
+    return out
+
+
+def pool_labels(per_label_pairs: Sequence[Sequence[tuple[float, float]]], metric: Metric,
+                margin: stats.Margin | None = None) -> dict[str, Any]:
+    """The stratified "all" row of one metric over labels (statistics.pooled); departures:
+    McNemar over every (label, seed) pair (exact; the pairs are the units)."""
+    if stats.is_exact(metric.field):
+        every = [pair for pairs in per_label_pairs for pair in pairs
+                 if math.isfinite(pair[0]) and math.isfinite(pair[1])]
+        p = stats.paired_events([y > 0 for _, y in every], [x > 0 for x, _ in every])
+        return {"diff": p.diff, "ci95": list(p.ci95), "verdict": p.verdict, "scale": "rate",
+                "labels": len(per_label_pairs), "n": p.n, "p_worse": p.p_worse,
+                "p_better": p.p_better}
+    pool = stats.pooled([([y for _, y in pairs], [x for x, _ in pairs])
+                         for pairs in per_label_pairs], metric.lower_is_better,
+                        metric.field, margin)
+    return {"diff": pool.diff, "ci95": list(pool.ci95), "verdict": pool.verdict,
+            "scale": "ratio" if pool.log_scale else "difference", "labels": pool.labels,
+            "df": pool.df, "margin": pool.margin, "sign_test_p": pool.sign_p,
+            "labels_up": pool.up, "labels_down": pool.down}
+
+
+def claim_counts(entries: Sequence[dict]) -> dict[str, Any]:
+    """The verdicts of one metric over labels, with Holm's adjustment of the better / worse
+    claims (each label's one-sided p-values) and what chance alone gives."""
+    counts: dict[str, Any] = stats.count_verdicts([e["verdict"] for e in entries])
+    for claim, key in (("better", "p_better"), ("worse", "p_worse")):
+        adjusted = stats.holm([_finite(e.get(key)) for e in entries])
+        counts[f"{claim}_holm"] = sum(1 for p, e in zip(adjusted, entries, strict=True)
+                                      if p < stats.ALPHA_ONE_SIDED and e["verdict"] == claim)
+    counts["expected_by_chance"] = stats.expected_by_chance(len(entries))
+    return counts
+
+
+def _finite(value: Any) -> float:
+    return float(value) if isinstance(value, (int, float)) and math.isfinite(value) else math.nan
 
 
 def _mean(values: Sequence[float]) -> float:
@@ -214,12 +296,17 @@ def _notes(a: Run, b: Run, labels: Sequence[str]) -> list[str]:
     for run in (a, b):
         for label in labels:
             for seed, e in sorted(run.episodes(label).items()):
+                fused = (e.get("sources") or {}).get("fused") or {}
+                if fused.get("rmse_cm") is None:
+                    notes.append(f"{run.name}: {label} seed {seed} has no fused estimate: "
+                                 "its pairs are dropped from the error metrics (counted in "
+                                 "`dropped`)")
                 if e.get("status", "completed") != "completed":
                     notes.append(f"{run.name}: {label} seed {seed} did not complete "
                                  f"({e.get('status')}): its metrics cover part of the drive")
-    if all(len(a.docs[label]["seeds"]) < 2 for label in labels):
-        notes.append("one seed per label: no interval, every per-label verdict "
-                     "indistinguishable (run bench with --seeds N)")
+    if all(len(a.docs[label]["seeds"]) < stats.MIN_PAIRS for label in labels):
+        notes.append(f"fewer than {stats.MIN_PAIRS} seeds per label: no verdict (run bench "
+                     "with --seeds N)")
     return notes
 
 
@@ -229,31 +316,36 @@ def run_settings(doc: dict) -> dict[str, Any]:
 
 
 def compare_runs(a: dict, b: dict, metrics: Iterable[Metric | str] = DEFAULT_METRICS,
-                 a_name: str = "A", b_name: str = "B") -> dict[str, Any]:
-    """B - A per label and metric, paired over seeds, and pooled over every pair ("all").
+                 a_name: str = "A", b_name: str = "B",
+                 margins: dict[str, stats.Margin] | None = None) -> dict[str, Any]:
+    """B - A per label and metric, paired over seeds, and stratified over labels ("all").
 
     `a`, `b`: two bench --json documents (label -> document); `a_name`, `b_name` name them in
-    messages and in the result. IncomparableRuns if they cannot be paired. Returns {a, b,
-    a_overrides, b_overrides, seeds, better_when, labels, all, counts, notes} (KEYS_HELP)."""
+    messages and in the result; `margins` overrides declared margins ("METRIC" or
+    "LABEL:METRIC", see parse_margins). IncomparableRuns if they cannot be paired. Returns {a,
+    b, a_overrides, b_overrides, seeds, better_when, margins, labels, all, counts, notes}
+    (KEYS_HELP)."""
     ra, rb = check_bench(a, a_name), check_bench(b, b_name)
     labels = check_pairing(ra, rb)
     chosen = tuple(m if isinstance(m, Metric) else parse_metric(m) for m in metrics)
     per_label: dict[str, dict[str, Any]] = {label: {} for label in labels}
     pooled: dict[str, Any] = {}
+    counts: dict[str, Any] = {}
     for metric in chosen:
         every = []
         for label in labels:
             pairs = _pairs(ra, rb, label, metric)
-            per_label[label][metric.key] = compare_pairs(pairs, metric)
-            every += pairs
-        pooled[metric.key] = compare_pairs(every, metric)
-    counts = {m.key: stats.count_verdicts([per_label[label][m.key]["verdict"]
-                                           for label in labels]) for m in chosen}
+            per_label[label][metric.key] = compare_pairs(pairs, metric,
+                                                         margin_of(metric, label, margins))
+            every.append(pairs)
+        pooled[metric.key] = pool_labels(every, metric, margin_of(metric, None, margins))
+        counts[metric.key] = claim_counts([per_label[label][metric.key] for label in labels])
     return {
         "a": a_name, "b": b_name,
         "a_overrides": run_settings(ra.first()), "b_overrides": run_settings(rb.first()),
         "seeds": {label: sorted(ra.docs[label]["seeds"]) for label in labels},
         "better_when": {m.key: "lower" if m.lower_is_better else "higher" for m in chosen},
+        "margins": {m.key: margin_of(m, None, margins).text() for m in chosen},
         "labels": per_label, "all": pooled, "counts": counts, "notes": _notes(ra, rb, labels),
     }
 
@@ -272,16 +364,29 @@ compare --json: one document (strict JSON: NaN is null):
                                        and its mode, from its first document
   seeds.LABEL                          the seeds paired
   better_when.METRIC                   "lower" or "higher" (valid_share)
-  labels.LABEL.METRIC                  {a_mean, b_mean, diff, ci95, verdict, n}: diff = mean of
-                                       B - A per seed = b_mean - a_mean, means over the n pairs
-                                       where both are finite; ci95 its paired 95% t interval
-                                       [lo, hi]; verdict for B: better / worse /
-                                       indistinguishable
-  all.METRIC                           the same over every (label, seed) pair pooled (labels
-                                       with larger errors weigh more)
-  counts.METRIC                        {better, worse, indistinguishable}: verdicts over labels
+  margins.METRIC                       the margin of practical relevance in force, e.g.
+                                       "max(0.1, 5%)" (cm, or a share of A's size)
+  labels.LABEL.METRIC                  {a_mean, b_mean, diff, ci95, verdict, n, margin,
+                                       p_worse, p_better, detectable, dropped, ratio,
+                                       ratio_ci95}: diff = B - A per seed averaged (on the log
+                                       scale for errors: A's geometric mean x (ratio - 1), cm),
+                                       ci95 its paired 95% interval; margin in cm; verdict for
+                                       B: better / worse (beyond the margin), equivalent,
+                                       non-inferior, non-superior, inconclusive, too few (< 3
+                                       seeds); p_worse / p_better the one-sided p-values
+                                       against the margin; detectable the smallest difference
+                                       this n finds (80% power); dropped the pairs left out
+                                       (no value); departures: McNemar's exact test, diff the
+                                       difference of the departure rates
+  all.METRIC                           stratified over labels (each counts once): {diff, ci95,
+                                       verdict, scale ("ratio" for errors: B / A, geometric
+                                       mean over labels; "difference"; "rate"), labels, df,
+                                       margin, sign_test_p, labels_up, labels_down}
+  counts.METRIC                        verdicts over labels, better_holm / worse_holm (those
+                                       that survive Holm's adjustment within the metric) and
+                                       expected_by_chance (of each claim, at most)
   notes                                scenario files or versions that differ, episodes that
-                                       did not complete
+                                       did not complete or had no estimate
 METRIC: SOURCE.FIELD (fused.rmse_cm, hough:track.max_cm, ...) or an episode's car_rms_cm,
 car_max_cm, lane_departures, ...
 """
@@ -301,12 +406,17 @@ def _signed(x: float, digits: int) -> str:
 
 
 def cell_text(entry: dict, key: str) -> str:
-    """"+0.12 [-0.40, +0.64] i": B - A, its interval, the verdict's letter; "-" for no pair."""
+    """"+0.12 [-0.40, +0.64] i": B - A, its interval, the verdict's letter; "-" for no pair.
+    A stratified row on the ratio scale reads "+3.1% [-1.0, +7.3] e"."""
     diff, (lo, hi) = entry["diff"], entry["ci95"]
     if diff is None or not math.isfinite(diff):
         return "-"
+    letter = stats.LETTERS.get(entry["verdict"], "?")
+    if entry.get("scale") == "ratio":
+        def pct(x: float | None) -> str:
+            return "?" if x is None or not math.isfinite(x) else f"{100 * (x - 1):+.1f}"
+        return f"{pct(diff)}% [{pct(lo)}, {pct(hi)}] {letter}"
     d = _digits(key)
-    letter = entry["verdict"][0]
     if lo is None or hi is None or not (math.isfinite(lo) and math.isfinite(hi)):
         return f"{_signed(diff, d)} {letter}"
     return f"{_signed(diff, d)} [{_signed(lo, d)}, {_signed(hi, d)}] {letter}"
@@ -342,7 +452,7 @@ def _differences(result: dict) -> str:
 def _block(result: dict, keys: Sequence[str]) -> list[str]:
     """Rows = labels and "all", columns = `keys`."""
     rows = [(label, result["labels"][label]) for label in result["labels"]]
-    rows.append(("all (pooled)", result["all"]))
+    rows.append(("all (stratified)", result["all"]))
     label_w = max(len(r[0]) for r in rows) + 2
     cells = [[cell_text(entry[k], k) for k in keys] for _, entry in rows]
     widths = [max(len(k), *(len(c[i]) for c in cells)) + 2 for i, k in enumerate(keys)]
@@ -383,14 +493,19 @@ def compare_table(result: dict) -> str:
     n_text = "/".join(str(n) for n in sorted(seeds))
     lines = [f"A = {result['a']}", f"B = {result['b']}",
              f"differs: {_differences(result)}",
-             f"B - A: mean of the per-seed differences over {n_text} seeds [paired 95% t "
-             "interval] and the verdict for B,",
-             "b / w / i = better / worse / indistinguishable; better = B lower (higher for "
-             "valid_share)", ""]
+             *textwrap.wrap(f"B - A: mean of the per-seed differences over {n_text} seeds "
+                            "[paired 95% interval; errors on the log scale] and the verdict "
+                            "for B against each metric's margin:", WIDTH),
+             *_wrapped("", [f"{k} {v}" for k, v in result.get("margins", {}).items()]),
+             *textwrap.wrap(stats.LEGEND + "; better = B lower (higher for valid_share)",
+                            WIDTH),
+             "all (stratified): each scenario counts once; errors as the ratio B / A", ""]
     for group in _column_groups(result, table_keys(result)):
         lines += [*_block(result, group), ""]
-    counts = [f"{k} {c['better']}b {c['worse']}w {c['indistinguishable']}i"
+    counts = [f"{k} {stats.counts_text(c)} (Holm: {c['better_holm']}b {c['worse_holm']}w)"
               for k, c in result["counts"].items()]
-    lines += _wrapped(f"verdicts for B over {len(result['labels'])} labels (b / w / i):", counts)
+    chance = stats.expected_by_chance(len(result["labels"]))
+    lines += _wrapped(f"verdicts for B over {len(result['labels'])} labels (chance alone gives "
+                      f"at most {chance:.1f} b and {chance:.1f} w per metric):", counts)
     lines += [f"note: {n}" for n in result["notes"]]
     return "\n".join(lines)

@@ -31,7 +31,7 @@ from pathlib import Path
 from typing import Any
 
 from lanekeep.core.reproducibility import settings_now
-from lanekeep.scoring.metrics import EpisodeReport, SourceReport
+from lanekeep.scoring.metrics import CommonSteps, EpisodeReport, SourceReport
 
 SCHEMA_VERSION = 2  # 2: bench documents summarise seeds (lanekeep/report/seed_summary.py)
 METADATA_KEYS = ("schema_version", "lanekeep_version", "scenario_sha256", "seed",
@@ -133,4 +133,6 @@ def report_from_dict(data: dict) -> EpisodeReport:
     d = _floats_back(EpisodeReport, data)
     d["sources"] = {name: SourceReport(**_floats_back(SourceReport, values))
                     for name, values in d["sources"].items()}
+    d["fused_vs_track"] = {name: CommonSteps(**_floats_back(CommonSteps, values))
+                           for name, values in d.get("fused_vs_track", {}).items()}
     return EpisodeReport(**d)

@@ -3,8 +3,9 @@ and 95% interval, the departure rate with its exact interval, paired verdicts, a
 episode's own report so that `lanekeep compare` can pair two runs seed by seed.
 
 The document of each bench label: KEYS_HELP below (`lanekeep bench --help` prints it).
-Intervals: lanekeep/scoring/statistics.py (t over seeds; exact binomial for rates). With one
-seed every interval is null and every verdict "indistinguishable".
+Intervals and verdicts: lanekeep/scoring/statistics.py (t over seeds, on the log scale for
+errors; exact tests for departures; each metric's margin). With one seed every interval is
+null; below three seeds every verdict is "too few".
 """
 
 from __future__ import annotations
@@ -27,19 +28,26 @@ bench --json: one document per label (a scenario, or "SCENARIO@MODEL" for a mode
                                   (front_detectors, reference_detector, controller, settings)
   sources.NAME.KEY                mean over seeds of SourceReport's KEY (rmse_cm, max_cm,
                                   ade_cm, fde_cm, drift_cm, valid_share), NaN runs left out
-  sources.NAME.KEY_sd, KEY_ci95   sample sd and the mean's 95% t interval [lo, hi]
+  sources.NAME.KEY_sd, KEY_ci95   sample sd and a 95% interval [lo, hi]: for the errors
+                                  (rmse, max, ade, fde) the geometric mean's (log scale, never
+                                  below 0), given as KEY_gmean; else the mean's t interval
   car_rms_cm, car_max_cm, lane_departures, mmae_switches, reference_repairs, no_estimate_s
-                                  means, each with _sd and _ci95 likewise
+                                  means, each with _sd and _ci95 likewise (car_* log scale)
   departure_rate, departure_rate_ci95, departed_episodes
                                   share of episodes with >= 1 lane departure, its
                                   Clopper-Pearson 95% interval, the count
   completed, passed               every episode completed / met its criteria
   completed_episodes, passed_episodes
   wall_s                          the episodes' wall time, summed
-  paired.fused_vs.MODEL:track     {diff_cm, ci95, verdict, n}: fused RMSE - the model's own
-                                  track RMSE per seed ("better": fused lower, interval < 0)
-  paired.mmae_loop_vs.MODEL.KEY   with --single-model: the MMAE loop's car_rms_cm, car_max_cm,
-                                  lane_departures minus the loop driven by MODEL alone
+  paired.fused_vs.MODEL:track     {diff_cm, ci95, verdict, n, margin, p_worse, p_better,
+                                  detectable, dropped, ratio, ratio_ci95}: fused RMSE - the
+                                  model's own track RMSE per seed, both over the steps where
+                                  both had an estimate where the episodes say so
+                                  (common_share: that share of the steps); verdict for fused
+                                  against the rmse margin (statistics.MARGINS)
+  paired.mmae_loop_vs.MODEL.KEY   with --single-model: the MMAE loop's car_rms_cm, car_max_cm
+                                  minus the loop driven by MODEL alone (paired, margins), and
+                                  lane_departures as episodes with one, McNemar's exact test
   episodes                        each seed's report document (as `run --json` writes it)
 """
 SOURCE_KEYS = tuple(f.name for f in dataclasses.fields(SourceReport))
@@ -50,8 +58,11 @@ HIGHER_IS_BETTER = frozenset({"valid_share"})
 
 
 def _spread_keys(key: str, values: Sequence[float]) -> dict[str, Any]:
-    s = stats.spread([float(v) for v in values])
-    return {key: s.mean, f"{key}_sd": s.sd, f"{key}_ci95": list(s.ci95)}
+    s = stats.spread([float(v) for v in values], stats.is_log_scale(key))
+    out = {key: s.mean, f"{key}_sd": s.sd, f"{key}_ci95": list(s.ci95)}
+    if s.log_scale:
+        out[f"{key}_gmean"] = s.center
+    return out
 
 
 def summarise(label: str, reports: Sequence[EpisodeReport], scenario,
@@ -99,10 +110,7 @@ def paired_block(reports: Sequence[EpisodeReport],
     """Fused vs each model's own track (RMSE, per seed); the MMAE loop vs each model-only
     loop (car error and departures, per seed) where those ran."""
     tracks = [n for n in reports[0].sources if n.endswith(":track")]
-    block: dict[str, Any] = {"fused_vs": {
-        t: stats.paired([r.sources["fused"].rmse_cm for r in reports],
-                        [r.sources[t].rmse_cm for r in reports]).as_dict("cm")
-        for t in tracks}}
+    block: dict[str, Any] = {"fused_vs": {t: fused_vs_track(reports, t) for t in tracks}}
     if single_model:
         loops = {}
         for model, alone in single_model.items():
@@ -110,15 +118,38 @@ def paired_block(reports: Sequence[EpisodeReport],
             pairs = [(r, by_seed[r.seed]) for r in reports if r.seed in by_seed]
             loops[model] = {
                 key: stats.paired([float(getattr(a, key)) for a, _ in pairs],
-                                  [float(getattr(b, key)) for _, b in pairs]
-                                  ).as_dict("" if key == "lane_departures" else "cm")
-                for key in LOOP_KEYS}
+                                  [float(getattr(b, key)) for _, b in pairs],
+                                  metric=key).as_dict("cm")
+                for key in LOOP_KEYS if key != "lane_departures"}
+            loops[model]["lane_departures"] = stats.paired_events(
+                [a.lane_departures > 0 for a, _ in pairs],
+                [b.lane_departures > 0 for _, b in pairs]).as_dict("")
         block["mmae_loop_vs"] = loops
     return block
 
 
+def fused_vs_track(reports: Sequence[EpisodeReport], track: str) -> dict[str, Any]:
+    """Fused RMSE against a model's own track, paired over seeds: on the steps where both had
+    an estimate where the episode reports carry those (`fused_vs_track`), else each over its
+    own valid steps (older reports), with the common steps' mean share."""
+    fused, other, shares = [], [], []
+    for r in reports:
+        common = (getattr(r, "fused_vs_track", None) or {}).get(track)
+        if common is not None:
+            fused.append(common.rmse_a_cm)
+            other.append(common.rmse_b_cm)
+            shares.append(common.share)
+        else:
+            fused.append(r.sources["fused"].rmse_cm)
+            other.append(r.sources[track].rmse_cm)
+    out = stats.paired(fused, other, metric="rmse_cm").as_dict("cm")
+    out["common_share"] = sum(shares) / len(shares) if shares else None
+    return out
+
+
 def fused_verdicts(docs: Sequence[dict]) -> dict[str, int]:
-    """The count of fused-vs-track verdicts over `docs` (never raw wins)."""
+    """The count of fused-vs-track verdicts over `docs` (never raw wins), each verdict of
+    statistics.VERDICTS."""
     return stats.count_verdicts([p["verdict"] for d in docs
                                  for p in d["paired"]["fused_vs"].values()])
 

@@ -233,23 +233,36 @@ def interval_table(docs: list[dict], wide: bool = False) -> str:
                 else f"{d['departed_episodes']}/{d['n']}")
         lines.append(
             f"{d['label']:<{scen_w}}{d['n']:>3}  "
-            f"{interval_text(fused['rmse_cm'], fused['rmse_cm_ci95']):<22}{best_text:<{best_w}}"
-            f"{counts['better']}b {counts['worse']}w {counts['indistinguishable']}i"
-            f"{'':<7}{interval_text(d['car_rms_cm'], d['car_rms_cm_ci95'], 1):<22}"
+            f"{_center_text(fused, 'rmse_cm'):<22}{best_text:<{best_w}}"
+            f"{stats.counts_text(counts):<17}{_center_text(d, 'car_rms_cm', 1):<22}"
             f"{rate:<18}{d['passed_episodes']}/{d['n']}")
-    lines.append(_fused_vs_total(docs) + " (b / w / i per scenario)")
-    lines.append("(cm; mean over seeds [95% t interval]; departed = episodes with a lane "
-                 "departure [Clopper-Pearson 95%]; a verdict needs the paired 95% interval to "
-                 "exclude 0)")
+    lines.extend(textwrap.wrap(_fused_vs_total(docs), WIDTH))
+    lines.extend(textwrap.wrap(
+        "(cm; geometric mean over seeds [95% interval, log scale]; departed = episodes with a "
+        "lane departure [Clopper-Pearson 95%]; verdicts per scenario: " + stats.LEGEND
+        + "; margins: docs/statistics.md#margins)", WIDTH))
     return "\n".join(lines)
+
+
+def _center_text(doc: dict, key: str, digits: int = 2) -> str:
+    """A metric's centre over seeds and its interval: the geometric mean where the interval is
+    on the log scale (errors), else the mean."""
+    center = doc.get(f"{key}_gmean", doc.get(key))
+    return interval_text(center, doc.get(f"{key}_ci95"), digits)
 
 
 def _fused_vs_total(docs: list[dict]) -> str:
     """The verdicts of the fused output against each model's own track, over all scenarios."""
-    total = stats.count_verdicts([p["verdict"] for d in docs
-                                  for p in d["paired"]["fused_vs"].values()])
-    return (f"fused vs each model's own track, paired over seeds: {total['better']} better, "
-            f"{total['worse']} worse, {total['indistinguishable']} indistinguishable")
+    verdicts = [p["verdict"] for d in docs for p in d["paired"]["fused_vs"].values()]
+    total = stats.count_verdicts(verdicts)
+    if total["too few"] == len(verdicts):
+        return ("fused vs each model's own track: no verdict (fewer than "
+                f"{stats.MIN_PAIRS} seeds; run bench with --seeds N)")
+    shown = ", ".join(f"{n} {v}" for v, n in total.items() if n or v in stats.CLAIMS)
+    chance = stats.expected_by_chance(len(verdicts))
+    return (f"fused vs each model's own track, paired over seeds: {shown} (of "
+            f"{len(verdicts)}; about {chance:.1f} better and {chance:.1f} worse expected by "
+            "chance alone)")
 
 
 def _compact_interval_table(docs: list[dict]) -> str:
@@ -260,18 +273,19 @@ def _compact_interval_table(docs: list[dict]) -> str:
     for d in docs:
         counts = stats.count_verdicts([p["verdict"] for p in d["paired"]["fused_vs"].values()])
         fused = d["sources"]["fused"]
-        verdicts = f"{counts['better']}b {counts['worse']}w {counts['indistinguishable']}i"
+        verdicts = stats.counts_text(counts)
         lines.append(
             f"{d['label']:<{scen_w}}{d['n']:>3}  "
-            f"{interval_text(fused['rmse_cm'], fused['rmse_cm_ci95']):<20}{verdicts:<11}"
-            f"{interval_text(d['car_rms_cm'], d['car_rms_cm_ci95'], 1):<18}"
+            f"{_center_text(fused, 'rmse_cm'):<20}{verdicts:<11}"
+            f"{_center_text(d, 'car_rms_cm', 1):<18}"
             f"{str(d['departed_episodes']) + '/' + str(d['n']):<10}"
             f"{d['passed_episodes']}/{d['n']}")
-    lines.append(_fused_vs_total(docs))
+    lines.extend(textwrap.wrap(_fused_vs_total(docs), WIDTH))
     lines.extend(textwrap.wrap(
-        "(b / w / i per scenario; cm; mean over seeds [95% t interval]; departed = episodes "
-        "with a lane departure; a verdict needs the paired 95% interval to exclude 0; --wide "
-        "adds the best track and the departures' Clopper-Pearson interval)", WIDTH))
+        "(cm; geometric mean over seeds [95% interval, log scale]; departed = episodes with a "
+        "lane departure; verdicts per scenario: " + stats.LEGEND + "; margins: "
+        "docs/statistics.md#margins; --wide adds the best track and the departures' "
+        "Clopper-Pearson interval)", WIDTH))
     return "\n".join(lines)
 
 
@@ -288,12 +302,19 @@ def paired_table(docs: list[dict]) -> str:
                              p.get("diff_cm", p.get("diff")), p))
     scen_w = max([28, *(len(d["label"]) + 2 for d in docs)])
     comp_w = max([34, *(len(r[1]) + 2 for r in rows)])
-    header = f"{'scenario':<{scen_w}}{'comparison':<{comp_w}}{'diff [95% CI]':<26}verdict"
+    header = (f"{'scenario':<{scen_w}}{'comparison':<{comp_w}}{'diff [95% CI]':<28}"
+              f"{'margin':<8}verdict")
     lines = ["paired over seeds (difference = first - second; negative = first lower)", header,
              "-" * len(header)]
     last = None
     for label, what, diff, p in rows:
+        margin = p.get("margin")
+        margin_text = f"{margin:.2f}" if margin is not None and math.isfinite(margin) else "-"
+        detect = p.get("detectable")
+        note = (f" (detectable: {detect:.2f})" if p["verdict"] == "inconclusive"
+                and detect is not None and math.isfinite(detect) else "")
         lines.append(f"{label if label != last else '':<{scen_w}}{what:<{comp_w}}"
-                     f"{interval_text(diff, p['ci95'], 3):<26}{p['verdict']}")
+                     f"{interval_text(diff, p['ci95'], 3):<28}{margin_text:<8}"
+                     f"{p['verdict']}{note}")
         last = label
     return "\n".join(lines)

@@ -3,7 +3,8 @@
 Why: a bench over seeds should sample drives, not replay one drive with other pixel noise.
 The file's own seed (`Scenario.nominal_seed`; 0 for a scenario built in memory) is the nominal
 drive, exactly as the file says; any other seed draws, from its own stream
-`[seed, NUISANCE_STREAM]` (so it shifts no other draw):
+`stream_entropy(scenario, NUISANCE_STREAM)` (the seed and a key of the scenario's name:
+lanekeep/scenario/streams.py; its own tag, so it shifts no other draw):
   - the start's lateral offset, heading and speed (start and target speed move together),
     uniform within the file's `[start.jitter]` half-widths;
   - each other vehicle's timing: when the car meets it moves by a draw in +-`traffic_s`,
@@ -11,8 +12,8 @@ drive, exactly as the file says; any other seed draws, from its own stream
     times that draw (a lead car at the car's speed keeps its gap; oncoming traffic moves
     most); a vehicle in the car's own lane, its way, also takes the drawn speed change.
 The seed also draws, as before, the sensor noise, the image effects and weather particles
-(lanekeep/loop/episode.py's generator) and the world's details (textures, props, shadow
-casters: lanekeep/world/).
+(lanekeep/loop/episode.py's generator, which folds in the name too) and the world's details
+(textures, props, shadow casters: lanekeep/world/, from the seed alone).
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ import dataclasses
 import numpy as np
 
 from lanekeep.scenario.schema import Scenario
+from lanekeep.scenario.streams import stream_entropy
 
 NUISANCE_STREAM = 0x5EED
 
@@ -37,7 +39,7 @@ def with_nuisance(scenario: Scenario) -> Scenario:
     if is_nominal(scenario):
         return scenario
     jitter = scenario.start.jitter
-    rng = np.random.default_rng([scenario.seed, NUISANCE_STREAM])
+    rng = np.random.default_rng(stream_entropy(scenario, NUISANCE_STREAM))
     d_offset, d_heading, d_speed = rng.uniform(-1.0, 1.0, 3) * (
         jitter.offset_m, jitter.heading_deg, jitter.speed_mps)
     shifts = rng.uniform(-1.0, 1.0, len(scenario.conditions.vehicles)) * jitter.traffic_s

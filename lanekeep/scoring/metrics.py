@@ -19,6 +19,11 @@ Definitions (all against ground truth from the road, never from images):
     time). A quadratic estimate cannot follow a tight arc exactly: on case2_sharp_turn's 40 m
     radius even the best quadratic over 4-20 m scores ADE ~0.9 cm, FDE ~2.4 cm;
   - valid share: the share of steps with a valid estimate (time with none is reported too);
+  - fused vs track on common steps (`fused_vs_track`, per "<model>:track"): the RMSE of the
+    fused output and of the model's track over the steps where both had an offset, their
+    number and their share of the episode's steps. Each source's own RMSE is over its own
+    valid steps: a track that abstains on the hard frames looks better than the output that
+    had to answer there; on common steps the two are compared like for like;
   - the car's own lateral error: RMS and max of the true offset at x = 0;
   - lane departures: times a wheel's contact point crosses an ego-lane boundary (counted on
     entry, not per step);
@@ -86,6 +91,19 @@ class SourceReport:
 
 
 @dataclass(frozen=True)
+class CommonSteps:
+    """The fused output against one model's own track over the steps where BOTH had an offset
+    (cm): each source's own RMSE (SourceReport) is over its own valid steps, so a track that
+    abstains on the hard frames looks better than the output that had to answer there, and
+    "fused vs track" compared different steps. NaN RMSEs when no step is common."""
+
+    rmse_a_cm: float  # a: the fused output
+    rmse_b_cm: float  # b: the model's track
+    steps: int  # the steps both had an offset
+    share: float  # `steps` over the episode's scored steps
+
+
+@dataclass(frozen=True)
 class EpisodeReport:
     scenario: str
     seed: int
@@ -106,6 +124,8 @@ class EpisodeReport:
     criteria: tuple[Verdict, ...] = ()
     # (nearest, farthest) look-ahead (m) of ADE / FDE, for the table's footer.
     ade_range_m: tuple[float, float] = (ADE_POINTS_M[0], ADE_POINTS_M[-1])
+    # The fused output against each model's track ("hough:track") on their common steps.
+    fused_vs_track: dict[str, CommonSteps] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         # A report read back from JSON carries a list; keep reports equal after a round trip.
@@ -214,6 +234,18 @@ class _PairSums:
 
 
 @dataclass
+class _CommonAccumulator:
+    """Both sources' errors over the steps where both had one."""
+
+    a: _ErrorSums = field(default_factory=_ErrorSums)
+    b: _ErrorSums = field(default_factory=_ErrorSums)
+
+    def add(self, error_a_m: float, error_b_m: float) -> None:
+        self.a.add(error_a_m)
+        self.b.add(error_b_m)
+
+
+@dataclass
 class _SourceAccumulator:
     offsets: _ErrorSums = field(default_factory=_ErrorSums)
     drift: _ErrorSums = field(default_factory=_ErrorSums)
@@ -229,8 +261,10 @@ class _SourceAccumulator:
 class Metrics:
     """Accumulates per-step errors; `report()` summarises them."""
 
-    def __init__(self, source_names: list[str], ade_points_m: tuple[float, ...] = ADE_POINTS_M
-                 ) -> None:
+    def __init__(self, source_names: list[str], ade_points_m: tuple[float, ...] = ADE_POINTS_M,
+                 fused: str | None = None, tracks: tuple[str, ...] = ()) -> None:
+        """`fused` and `tracks`: the sources the report's `fused_vs_track` compares on their
+        common steps (lanekeep/scoring/step_score.py names them)."""
         self.ade_points_m = np.asarray(ade_points_m, dtype=float)
         if self.ade_points_m.ndim != 1 or not np.all(np.diff(self.ade_points_m) > 0):
             raise ValueError(f"ade_points_m must increase (FDE is at the last), got {ade_points_m}")
@@ -243,6 +277,12 @@ class Metrics:
         self._no_estimate_steps = 0
         self._last_selected: int | None = None
         self._step_errors: dict[str, float] = {}  # this step's error (m) per valid source
+        unknown = [n for n in (fused, *tracks) if n is not None and n not in self._sources]
+        if unknown or (tracks and fused is None):
+            raise ValueError(f"fused_vs_track needs a fused source and tracks among the "
+                             f"sources, got fused={fused!r}, tracks={tracks}")
+        self._fused = fused
+        self._common = {track: _CommonAccumulator() for track in tracks}
 
     def add_offset(self, name: str, estimate_m: float | None, truth_m: float) -> None:
         acc = self._sources[name]
@@ -259,12 +299,18 @@ class Metrics:
 
     def pair_with_reference(self, reference: str) -> None:
         """End of a step's offsets: pair each source's error with `reference`'s (when both
-        had one) for `reference_error_corr`, then forget the step's errors."""
+        had one) for `reference_error_corr`, and the fused output's with each track's for
+        `fused_vs_track`, then forget the step's errors."""
         ref = self._step_errors.get(reference)
         if ref is not None:
             for name, error in self._step_errors.items():
                 if name != reference:
                     self._sources[name].with_reference.add(error, ref)
+        fused = self._step_errors.get(self._fused) if self._fused is not None else None
+        if fused is not None:
+            for track, common in self._common.items():
+                if track in self._step_errors:
+                    common.add(fused, self._step_errors[track])
         self._step_errors.clear()
 
     def add_lane(self, name: str, centre: np.ndarray | None, truth_y: np.ndarray) -> None:
@@ -313,6 +359,12 @@ class Metrics:
                 reference_error_corr=acc.with_reference.corr(),
             )
         car = self._car
+        steps = self._sources[self._fused].steps if self._fused is not None else 0
+        fused_vs_track = {
+            track: CommonSteps(rmse_a_cm=common.a.rms_cm(), rmse_b_cm=common.b.rms_cm(),
+                               steps=common.a.count,
+                               share=common.a.count / steps if steps else 0.0)
+            for track, common in self._common.items()}
         return EpisodeReport(
             scenario=scenario,
             seed=seed,
@@ -330,4 +382,5 @@ class Metrics:
             stop_reason=stop_reason,
             status=status or ("completed" if completed else "interrupted"),
             ade_range_m=(float(self.ade_points_m[0]), float(self.ade_points_m[-1])),
+            fused_vs_track=fused_vs_track,
         )

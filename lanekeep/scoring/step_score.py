@@ -29,6 +29,13 @@ def source_names(models: list[str]) -> list[str]:
     return [n for m in models for n in (m, track_source(m))] + [FUSED, REFERENCE]
 
 
+def loop_metrics(models: list[str]) -> Metrics:
+    """The metrics of a loop with front models `models`: its columns (`source_names`), and the
+    fused output against each model's track on their common steps (`fused_vs_track`)."""
+    return Metrics(source_names(models), fused=FUSED,
+                   tracks=tuple(track_source(m) for m in models))
+
+
 def score_estimates(metrics: Metrics, models: list[str], estimates: Mapping[str, LaneEstimate],
                     estimate: EstimatorOutput, truth: StepTruth,
                     centre_of: Callable[[LaneEstimate], np.ndarray | None]

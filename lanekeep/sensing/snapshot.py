@@ -2,9 +2,9 @@
 
 The RGB frames are what the car's cameras deliver: the render with the scenario's weather (fog,
 rain, snow, motion blur, from the render's depth) and camera model (vignetting, exposure, noise,
-tone, JPEG), drawn from the scenario seed as an episode draws them, so the snapshot at the
-start pose is the episode's first frame; `effects=False` gives the bare render (without fog
-where the scenario's fog is done in image space).
+tone, JPEG), drawn from the scenario's seed and name as an episode draws them, so the snapshot
+at the start pose is the episode's first frame; `effects=False` gives the bare render (without
+fog where the scenario's fog is done in image space).
 """
 
 from __future__ import annotations
@@ -17,6 +17,7 @@ import numpy as np
 
 from lanekeep.core.config_io import ConfigError
 from lanekeep.scenario.schema import Scenario, ScenarioError
+from lanekeep.scenario.streams import stream_entropy
 from lanekeep.sensing.cameras import CameraRig, RenderSettings
 from lanekeep.sensing.image_effects import ImageEffects
 from lanekeep.world.build import World, build
@@ -109,7 +110,7 @@ def render_snapshot(scenario: Scenario, out_dir: Path, at_s: float | None = None
     settings = RenderSettings.of(scenario)
     speed = scenario.start.speed_mps
     with CameraRig(world.model, settings) as rig:
-        rng = np.random.default_rng(scenario.seed)  # as Episode: one stream, cameras in order
+        rng = np.random.default_rng(stream_entropy(scenario))  # as Episode: cameras in order
         camera_effects = make_effects(scenario, world, rig, rng)
         for cam in rig.CAMERA_NAMES:
             rgb = camera_frame(rig, world, cam, camera_effects[cam] if effects else None, rng,

@@ -2,9 +2,11 @@
 and the plot of margin against each parameter.
 
 A failing case's file is the candidate's whole scenario table (lanekeep/sweep/falsify_spec.py:
-its seed, length, render size and criteria included), so `lanekeep run FILE` drives the same
-episode and judges it alike: exit 1, the same margin. The exact command is in the file's first
-lines and in summary.json.
+its length, render size and criteria included), so `lanekeep run FILE --seed S` drives the same
+episode and judges it alike: exit 1, the same margin. The file's own `seed` is the base's, so
+that, as in the search, the base's seed is the nominal drive and seed S (`--seed`) draws the
+start and traffic as the search's cell did (lanekeep/sweep/spec.py `Cell.nominal_seed`). The
+exact command is in the file's first lines and in summary.json.
 """
 
 from __future__ import annotations
@@ -57,14 +59,15 @@ def write_case(spec: FalsifySpec, path: Path, label: str, trial: int, values: tu
     import tomli_w
 
     case = Case(path, label, trial, values, seed, margin, binding)
-    table = spec.table(values, seed)
+    table = {**spec.table(values, seed), "seed": spec.sweep.nominal_seed}  # module docstring
     params = ", ".join(f"{k} = {v!r}" for k, v in zip(spec.keys, values, strict=True))
     head = [f"# {label} of `lanekeep falsify {spec.source}` ({how}): trial {trial}, "
             f"seed {seed}",
             f"# margin {margin:.4f} (binding: {binding}); parameters: {params}",
             f"# Reproduce (exit 1, the same margin): {case.command}",
-            "# The whole scenario: the base's table with the parameters, seed, duration_s "
-            "and [criteria] of the search.", ""]
+            "# The whole scenario: the base's table with the parameters, duration_s and "
+            "[criteria] of the search; `seed` is the base's (its nominal drive): --seed "
+            "gives the drive.", ""]
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text("\n".join(head) + tomli_w.dumps(table), encoding="utf-8")
     return case

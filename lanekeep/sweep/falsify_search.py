@@ -70,7 +70,7 @@ class Evaluator:
             cid = table_id(table)
             ids.append(cid)
             if self.store.finished(cid) is None and cid not in todo:
-                todo[cid] = (c, Cell(cid, c.values, c.seed, table))
+                todo[cid] = (c, Cell(cid, c.values, c.seed, table, self.spec.sweep.nominal_seed))
         for cid in ids:  # read back: counted by the progress bar all the same
             if cid not in todo:
                 self.on_episode(self.store.latest(cid))

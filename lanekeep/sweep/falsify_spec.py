@@ -40,7 +40,7 @@ from lanekeep.scenario.keys import parse_key, scenario_table
 from lanekeep.scenario.schema import scenario_from_dict
 from lanekeep.sweep.falsify_objective import OBJECTIVE_KEYS, objective_of
 from lanekeep.sweep.fields import SweepError
-from lanekeep.sweep.spec import SweepSpec, parse_sweep
+from lanekeep.sweep.spec import SweepSpec, cell_scenario, parse_sweep
 
 RANGE_KEYS = ("low", "high", "integer")
 
@@ -203,7 +203,8 @@ def check_world(spec: FalsifySpec) -> None:
         for value in p.values:
             values = tuple(value if j == i else q.values[0]
                            for j, q in enumerate(sweep.parameters))
-            scenario = scenario_from_dict(spec.table(values, sweep.seeds[0]), spec.source)
+            scenario = cell_scenario(spec.table(values, sweep.seeds[0]), spec.source,
+                                     sweep.nominal_seed)
             try:
                 check_scenario(scenario, None)
             except ConfigError as err:

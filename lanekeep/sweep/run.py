@@ -35,9 +35,11 @@ class CellResult:
     wall_s: float
 
 
-def run_cell(cell_id: str, table: dict, source: str, seconds: float | None) -> CellResult:
+def run_cell(cell_id: str, table: dict, source: str, seconds: float | None,
+             nominal_seed: int) -> CellResult:
     """One episode of a cell, judged by its criteria; whatever it raises becomes "failed".
-    Runs in a worker process or Ray task, so it imports what it needs."""
+    Runs in a worker process or Ray task, so it imports what it needs. `nominal_seed`: the
+    base file's own seed (lanekeep/sweep/spec.py `Cell.nominal_seed`)."""
     start = time.perf_counter()
     try:
         import lanekeep  # noqa: F401 - MUJOCO_GL before mujoco
@@ -47,7 +49,7 @@ def run_cell(cell_id: str, table: dict, source: str, seconds: float | None) -> C
         from lanekeep.scoring import criteria
         from lanekeep.sweep.spec import cell_scenario
 
-        scenario = with_mode(cell_scenario(table, source), None)
+        scenario = with_mode(cell_scenario(table, source, nominal_seed), None)
         check_scenario(scenario, seconds)
         judged_by = criteria.for_run(scenario.criteria, None,
                                      seconds is None or seconds >= scenario.duration_s)
@@ -65,7 +67,8 @@ def run_local(cells: list[Cell], source: str, seconds: float | None, workers: in
     """The cells in `workers` spawned processes (spawn: EGL and MuJoCo state never forked)."""
     pool = worker_pool(workers)
     try:
-        futures = {pool.submit(run_cell, c.cell_id, c.table, source, seconds): c for c in cells}
+        futures = {pool.submit(run_cell, c.cell_id, c.table, source, seconds,
+                               c.nominal_seed): c for c in cells}
         pending = set(futures)
         while pending:
             finished, pending = wait(pending, timeout=0.5, return_when=FIRST_COMPLETED)
@@ -109,7 +112,8 @@ def run_ray(cells: list[Cell], source: str, seconds: float | None, on_result: On
         task = ray.remote(num_cpus=1, max_retries=0)(_ray_cell)
         refs: dict = {}
         try:
-            refs = {task.remote(c.cell_id, c.table, source, seconds): c for c in cells}
+            refs = {task.remote(c.cell_id, c.table, source, seconds, c.nominal_seed): c
+                    for c in cells}
             pending = list(refs)
             while pending:
                 done, pending = ray.wait(pending, num_returns=1, timeout=0.5)
@@ -149,8 +153,9 @@ def ray_session(address: str | None = None, num_cpus: int | None = None):
             ray.shutdown()
 
 
-def _ray_cell(cell_id: str, table: dict, source: str, seconds: float | None) -> CellResult:
+def _ray_cell(cell_id: str, table: dict, source: str, seconds: float | None,
+              nominal_seed: int) -> CellResult:
     import cv2
 
     cv2.setNumThreads(1)
-    return run_cell(cell_id, table, source, seconds)
+    return run_cell(cell_id, table, source, seconds, nominal_seed)

@@ -4,6 +4,9 @@ A researcher's question ("how does the fused error grow with rain and curvature,
 seeds?") is a grid of episodes. The file names the grid; each cell is the base scenario's TOML
 table with the parameters set, read by the same strict loader as a scenario file
 (`lanekeep.scenario.schema.scenario_from_dict`), so a cell can hold nothing a file could not.
+A cell's seed N is `Scenario.seed = N`, as `lanekeep run --seed N` and `bench` take it, and its
+nominal seed is the base file's own `seed` (`SweepSpec.nominal_seed`): on that seed the cell
+drives the file's start and traffic, on any other it draws them (lanekeep/scenario/nuisance.py).
 
     base = "heavy_rain"                # shipped name, or a path relative to this file
     seeds = 4                          # seeds 0..3, or a list [3, 7]
@@ -18,6 +21,7 @@ table with the parameters set, read by the same strict loader as a scenario file
 from __future__ import annotations
 
 import copy
+import dataclasses
 import hashlib
 import itertools
 import json
@@ -58,6 +62,7 @@ class Cell:
     values: tuple[Any, ...]
     seed: int
     table: dict  # the scenario's TOML table with everything set
+    nominal_seed: int  # the base file's own seed: the cell's nominal drive (module docstring)
 
 
 @dataclass(frozen=True)
@@ -76,6 +81,12 @@ class SweepSpec:
     def keys(self) -> tuple[str, ...]:
         return tuple(p.key for p in self.parameters)
 
+    @property
+    def nominal_seed(self) -> int:
+        """The base file's own seed (the schema's 0 when it gives none): a cell on it drives
+        the file's start and traffic, as `lanekeep run BASE` does."""
+        return int(self.base_table.get("seed", 0))
+
     def fingerprint(self) -> str:
         """What must match for `--out` to resume: the file's content and the base scenario."""
         text = json.dumps({"name": self.name, "base": self.base_table,
@@ -91,7 +102,7 @@ class SweepSpec:
         for values in itertools.product(*(p.values for p in self.parameters)):
             for seed in self.seeds:
                 out.append(Cell(cell_id(self.keys, values, seed), values, seed,
-                                self.cell_table(values, seed)))
+                                self.cell_table(values, seed), self.nominal_seed))
         return out
 
     def cell_table(self, values: tuple[Any, ...], seed: int) -> dict:
@@ -111,9 +122,11 @@ def cell_id(keys: tuple[str, ...], values: tuple[Any, ...], seed: int) -> str:
     return hashlib.sha256(text.encode()).hexdigest()[:16]
 
 
-def cell_scenario(table: dict, source: str) -> Scenario:
-    """A cell's scenario through the scenario files' loader (ScenarioError names the key)."""
-    return scenario_from_dict(table, source)
+def cell_scenario(table: dict, source: str, nominal_seed: int) -> Scenario:
+    """A cell's scenario through the scenario files' loader (ScenarioError names the key),
+    its nominal seed the base file's (`SweepSpec.nominal_seed`): built in memory, it would
+    otherwise be 0, and seed N would draw another drive in a sweep than in `bench`."""
+    return dataclasses.replace(scenario_from_dict(table, source), nominal_seed=nominal_seed)
 
 
 def _base(source: str, base: Any) -> tuple[str, dict]:
@@ -183,7 +196,8 @@ def check_values(spec: SweepSpec) -> None:
 
 def _load(spec: SweepSpec, values: tuple, key: str, what: str) -> Scenario:
     try:
-        scenario = cell_scenario(spec.cell_table(values, spec.seeds[0]), spec.source)
+        scenario = cell_scenario(spec.cell_table(values, spec.seeds[0]), spec.source,
+                                 spec.nominal_seed)
     except ConfigError as err:
         raise SweepError(spec.source, key, f"{what} makes an invalid scenario: "
                                            f"{err.key}: {err.message}") from None

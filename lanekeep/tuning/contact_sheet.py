@@ -47,7 +47,8 @@ def mid_drive_s(scenario) -> float:
 
 def scenario_tiles(scenario) -> list[Tile]:
     """The four VIEWS of a scenario, each as `render_snapshot(scenario, at_s=s)` renders it
-    (a fresh effects stream from the scenario seed per pose, cameras in the rig's order)."""
+    (a fresh effects stream, the episode's, per pose, cameras in the rig's order)."""
+    from lanekeep.scenario.streams import stream_entropy
     from lanekeep.sensing.cameras import CameraRig, RenderSettings
     from lanekeep.sensing.snapshot import camera_frame, make_effects, place_on_road
     from lanekeep.world.build import build
@@ -58,7 +59,7 @@ def scenario_tiles(scenario) -> list[Tile]:
     with CameraRig(world.model, RenderSettings.of(scenario)) as rig:
         for pose, s in poses.items():
             place_on_road(world, s)
-            rng = np.random.default_rng(scenario.seed)
+            rng = np.random.default_rng(stream_entropy(scenario))
             effects = make_effects(scenario, world, rig, rng)
             for cam in rig.CAMERA_NAMES:
                 frames[cam, pose] = camera_frame(rig, world, cam, effects[cam], rng,

@@ -58,10 +58,11 @@ def render_front(scenario, at_s: float | None = None
     """(RGB, marking mask, horizon row) of a scenario's front camera at a road pose.
 
     The RGB is exactly render_snapshot(scenario, ..., effects=True)'s front.png: the same
-    world, pose, render settings and image effects drawn from the scenario seed in the same
+    world, pose, render settings and image effects drawn from the episode's stream in the same
     order (both cameras' effects are made, then the front's are applied); the test checks it.
     Only the front camera is rendered, plus its segmentation for the marking mask.
     """
+    from lanekeep.scenario.streams import stream_entropy
     from lanekeep.sensing.cameras import CameraRig, RenderSettings
     from lanekeep.sensing.snapshot import camera_frame, make_effects, place_on_road
     from lanekeep.world.build import build
@@ -74,7 +75,7 @@ def render_front(scenario, at_s: float | None = None
     place_on_road(world, s)
     settings = RenderSettings.of(scenario)
     with CameraRig(world.model, settings) as rig:
-        rng = np.random.default_rng(scenario.seed)
+        rng = np.random.default_rng(stream_entropy(scenario))
         effects = make_effects(scenario, world, rig, rng)
         rgb = camera_frame(rig, world, "front", effects["front"], rng, scenario.start.speed_mps)
         paint = world.marking_mask(rig.render_segmentation(world.data, "front"))

@@ -1,5 +1,6 @@
 """A scenario's `[traffic]` table (lanekeep/scenario/traffic.py) as vehicles: cars, vans and trucks
-of real sizes and colours in the lanes beside the car's, drawn from the scenario seed.
+of real sizes and colours in the lanes beside the car's, drawn from the scenario seed and a key
+of its name (lanekeep/scenario/streams.py), so two scenarios on one seed meet other traffic.
 
 Why one speed per lane: the vehicles are driven kinematically (lanekeep/world/traffic.py moves
 each at a constant speed along its lane), so vehicles of one lane at two speeds would drive
@@ -15,8 +16,9 @@ import numpy as np
 
 from lanekeep.geometry.road import Road
 from lanekeep.scenario.schema import Scenario, VehicleSpec
+from lanekeep.scenario.streams import stream_entropy
 
-TRAFFIC_STREAM = 0x7AF1C  # the traffic's own generator: [scenario seed, this]
+TRAFFIC_STREAM = 0x7AF1C  # the traffic's own generator: stream_entropy(scenario, this)
 SPAN_BEYOND_M = 60.0  # vehicles are drawn this far beyond both ends of an open road
 MIN_GAP_M = 8.0  # bumper to bumper, plus one second at the lane's speed
 LINE_CLEARANCE_M = 0.3  # from a vehicle's side to its lane's lines, at least
@@ -43,7 +45,7 @@ def traffic_vehicles(scenario: Scenario, road: Road) -> tuple[VehicleSpec, ...]:
                          f"got {len(cfg.directions)}")
     if cfg.vehicles_per_km <= 0.0:
         return ()
-    rng = np.random.default_rng([scenario.seed, TRAFFIC_STREAM])
+    rng = np.random.default_rng(stream_entropy(scenario, TRAFFIC_STREAM))
     s0, s1 = (0.0, road.length_m) if road.closed else (-SPAN_BEYOND_M,
                                                         road.length_m + SPAN_BEYOND_M)
     ego_s = scenario.start.s_m

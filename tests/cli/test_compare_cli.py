@@ -9,7 +9,9 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import numpy as np
 import pytest
+from scipy.stats import gmean
 
 from lanekeep.cli.main import main
 from lanekeep.report.json_io import SCHEMA_VERSION, report_document, write_json
@@ -20,6 +22,7 @@ from lanekeep.scoring.metrics import EpisodeReport, SourceReport
 SCENARIO = load_scenario("clear_straight")
 SEEDS = (0, 1, 2, 3)
 A_RMSE = [1.0, 3.0, 2.0, 4.0]
+B_RMSE = [0.7 * v + 0.01 * i for i, v in enumerate(A_RMSE)]
 
 
 def _episode(seed: int, rmse: float) -> EpisodeReport:
@@ -42,8 +45,9 @@ def _bench_file(path: Path, rmse: list[float], seeds=SEEDS, controller=None) -> 
 @pytest.fixture
 def runs(tmp_path: Path) -> tuple[str, str]:
     a = _bench_file(tmp_path / "a.json", A_RMSE)
-    b = _bench_file(tmp_path / "b.json", [v - 0.5 + 0.01 * i for i, v in enumerate(A_RMSE)],
-                    controller="stanley")
+    # B 30% lower on every seed: errors are judged as ratios (log scale) against a margin of
+    # max(0.1 cm, 5%), so a fixed 0.5 cm (the old fixture) is no longer a clear claim
+    b = _bench_file(tmp_path / "b.json", B_RMSE, controller="stanley")
     return a, b
 
 
@@ -65,7 +69,8 @@ def test_compare_prints_the_table_and_exits_0(runs, capsys):
     out = capsys.readouterr().out
     assert f"A = {a}" in out and f"B = {b}" in out
     assert "controller: (scenario file's) -> stanley" in out
-    assert "fused.rmse_cm 2b 0w 0i" in out  # B lower on every seed of both labels
+    assert "fused.rmse_cm 2b 0w (Holm: 2b 0w)" in out  # B lower on every seed of both labels
+    assert "fused.rmse_cm max(0.1, 5%)" in out  # the margin in force
     assert max(len(line) for line in out.splitlines()) <= 120
 
 
@@ -79,9 +84,18 @@ def test_json_holds_every_metric_per_label_pooled_and_counted(runs, tmp_path, ca
     assert doc["a_overrides"]["controller"] is None
     entry = doc["labels"]["clear_straight"]["fused.rmse_cm"]
     assert entry["verdict"] == "better" and entry["n"] == 4
-    assert entry["diff"] == pytest.approx(-0.485)
-    assert doc["all"]["fused.rmse_cm"]["n"] == 8
-    assert doc["counts"]["car_rms_cm"] == {"better": 2, "worse": 0, "indistinguishable": 0}
+    # the log scale given back in cm: gmean(B) - gmean(A)
+    assert entry["diff"] == pytest.approx(gmean(B_RMSE) - gmean(A_RMSE))
+    assert entry["ratio"] == pytest.approx(gmean(np.divide(B_RMSE, A_RMSE)))
+    pooled = doc["all"]["fused.rmse_cm"]  # stratified: each label once, as a ratio
+    assert pooled["labels"] == 2 and pooled["scale"] == "ratio"
+    assert pooled["diff"] == pytest.approx(entry["ratio"])
+    assert pooled["verdict"] == "too few"  # two labels: too few to pool
+    assert doc["counts"]["car_rms_cm"] == {
+        "better": 2, "worse": 0, "equivalent": 0, "non-inferior": 0, "non-superior": 0,
+        "inconclusive": 0, "too few": 0, "better_holm": 0, "worse_holm": 0,
+        "expected_by_chance": pytest.approx(0.05)}  # p_better ~2% twice: Holm keeps neither
+    assert doc["margins"]["fused.rmse_cm"] == "max(0.1, 5%)"
     assert set(doc["labels"]["case2_sharp_turn"]) == set(doc["better_when"])
     assert doc["notes"] == []
 
@@ -96,6 +110,34 @@ def test_source_and_metrics_choose_what_is_compared(runs, tmp_path, capsys):
                     "hough:track.max_cm", "hough:track.ade_cm", "hough:track.fde_cm",
                     "hough:track.valid_share"]
     assert "hough:track.rmse_cm" in capsys.readouterr().out
+
+
+def test_a_huge_margin_turns_better_into_equivalent(runs, tmp_path, capsys):
+    """Issue case 7: --margin overrides the declared margin, for every label or for one."""
+    a, b = runs
+    out = tmp_path / "cmp.json"
+    assert main(["compare", a, b, "--margin", "fused.rmse_cm=5", "--json", str(out)]) == 0
+    text = capsys.readouterr().out
+    doc = json.loads(out.read_text())
+    for label in ("clear_straight", "case2_sharp_turn"):
+        entry = doc["labels"][label]["fused.rmse_cm"]
+        assert entry["verdict"] in ("equivalent", "non-inferior") and entry["margin"] == 5.0
+        assert doc["labels"][label]["car_rms_cm"]["verdict"] == "better"  # untouched
+    assert doc["margins"]["fused.rmse_cm"] == "5"
+    assert "fused.rmse_cm 5" in text and "fused.rmse_cm 0b 0w 2e" in text
+    # a label's own override: that label only
+    assert main(["compare", a, b, "--margin", "clear_straight:fused.rmse_cm=5,10%",
+                 "--json", str(out)]) == 0
+    doc = json.loads(out.read_text())
+    assert doc["labels"]["clear_straight"]["fused.rmse_cm"]["verdict"] == "equivalent"
+    assert doc["labels"]["case2_sharp_turn"]["fused.rmse_cm"]["verdict"] == "better"
+
+
+@pytest.mark.parametrize("bad", ["fused.rmse_cm=abc", "fused.speed=1", "fused.rmse_cm",
+                                 "occlusion:car_max_cm=-1"])
+def test_a_bad_margin_is_one_line(runs, capsys, bad):
+    code = main(["compare", *runs, "--margin", bad])
+    _one_error_line(capsys, code, f"--margin {bad!r}", "[LABEL:]METRIC=ABS[,REL%]")
 
 
 def test_a_missing_source_is_one_line(runs, capsys):
@@ -139,6 +181,9 @@ def test_help_documents_the_json_keys_and_the_interval(capsys):
         main(["compare", "--help"])
     assert exit_.value.code == 0
     out = capsys.readouterr().out
-    for needle in ("labels.LABEL.METRIC", "counts.METRIC", "a_overrides", "paired Student t",
+    for needle in ("labels.LABEL.METRIC", "counts.METRIC", "a_overrides",
+                   "Student t over the per-seed differences", "log ratios for",
+                   "margin of practical relevance", "--margin", "McNemar", "Holm",
+                   "stratified", "better_holm", "expected_by_chance", "too few",
                    "lanekeep/scoring/statistics.py", "--source", "--metrics"):
         assert needle in out, needle

@@ -13,6 +13,7 @@ import pytest
 import torch
 from torch.overrides import TorchFunctionMode
 
+from lanekeep.core.reproducibility import portable_torch
 from lanekeep.detectors import lanenet
 from lanekeep.detectors.lanenet import LaneNetDetector, LaneNetSettings, save_weights
 from lanekeep.detectors.lanenet_decode import Proposals
@@ -75,7 +76,7 @@ def _plain_candidates(model, frames: list[np.ndarray], mirror: bool) -> list[Pro
             batch = torch.from_numpy(np.ascontiguousarray(image.transpose(2, 0, 1)))[None, None]
             if mirror:
                 batch = torch.cat([batch, batch.flip(-1)])
-            with torch.inference_mode():
+            with torch.inference_mode(), portable_torch():  # the detector's kernel path
                 heads, state = model(batch, state)
             rows, cols = model.config.grid
             grid = CellGrid(frame.shape[1], frame.shape[0], rows, cols)

@@ -7,6 +7,7 @@ import pytest
 from shared_runs import shared
 
 from lanekeep.loop.episode import Episode
+from lanekeep.report.seed_summary import fused_vs_track
 from lanekeep.scenario.schema import load_scenario, shipped_scenarios
 from lanekeep.scoring import statistics as stats
 
@@ -89,34 +90,44 @@ def _two_model_run(name: str):
     return shared(f"two-models-{name}", run)
 
 
-def _fused_vs(reports: dict, source: str):
-    """Fused RMSE minus `source`'s, paired over the five cases (each at its file's seed):
-    lanekeep/scoring/statistics.py's t interval and verdict for the fused output."""
-    return stats.paired([r.sources["fused"].rmse_cm for r in reports.values()],
-                        [r.sources[source].rmse_cm for r in reports.values()])
+def _tables(reports) -> str:
+    return "\n\n".join(f"{r.scenario} seed {r.seed}\n{r.table()}" for r in reports)
 
 
-def _tables(reports: dict) -> str:
-    return "\n\n".join(f"{n}\n{r.table()}" for n, r in reports.items())
-
-
-@pytest.mark.slow
-def test_fused_is_not_worse_than_any_models_own_track_on_the_paper_cases(paper_reports):
-    """The default loop (three front models): the fused output against each model's own Kalman
-    track at the same look-ahead, paired over the five cases. A regression guard sized to the
-    noise (the cases' own spread), not a margin: a fused output made worse than a track on the
-    cases by more than their spread fails. Over tuning seeds (2026-11-27, five per case,
-    docs/statistics.md) the fused output is better than hough's and sliding_window's tracks
-    in every case and indistinguishable from LaneNet's: not "better than the best track"."""
-    for track in ("hough:track", "sliding_window:track", "lanenet:track"):
-        p = _fused_vs(paper_reports, track)
-        assert p.n == 5 and p.verdict != "worse", f"{track}: {p}\n{_tables(paper_reports)}"
-    assert all(r.lane_departures == 0 for r in paper_reports.values()), _tables(paper_reports)
+# What "not worse" means (lanekeep/scoring/statistics.py): the fused output non-inferior to a
+# track, i.e. the paired 95% interval of fused - track lies below the RMSE's margin; or better
+# than it, or equivalent.
+NOT_WORSE = ("better", "equivalent", "non-inferior")
+SEEDS_AFTER_NOMINAL = 5  # drawn drives: the file's seed + 1 .. + 5, as `bench --seeds 5`
 
 
 @pytest.fixture(scope="module")
-def two_model_reports():
-    return {name: _two_model_run(name) for name in PAPER_CASES}
+def case3_over_seeds():
+    """Case 3 (a turn with shade and bumps: the trackers, the roll, the MMAE all at work) on
+    five drawn drives, 10 s each at the shipped camera size."""
+    nominal = load_scenario("case3_mild_turn_shade_bumps").seed
+    return [_run("case3_mild_turn_shade_bumps", seconds=10.0, seed=nominal + k)
+            for k in range(1, SEEDS_AFTER_NOMINAL + 1)]
+
+
+@pytest.mark.slow
+def test_fused_is_non_inferior_to_every_models_own_track_over_seeds(case3_over_seeds):
+    """The default loop's fused output against each front model's own Kalman track, paired
+    over five seeds within one case, on the steps where both had an estimate: non-inferior
+    within the RMSE's margin (max(0.1 cm, 5%)), not merely "no difference found". Before
+    (to 2026-11-28) this paired five cases at one seed each and passed on anything short of
+    "worse", which a 10 cm regression in one case did (docs/statistics.md#margins)."""
+    for track in ("hough:track", "sliding_window:track", "lanenet:track"):
+        p = fused_vs_track(case3_over_seeds, track)
+        assert p["n"] == 5 and p["verdict"] in NOT_WORSE, \
+            f"{track}: {p}\n{_tables(case3_over_seeds)}"
+    assert all(r.lane_departures == 0 for r in case3_over_seeds), _tables(case3_over_seeds)
+
+
+@pytest.mark.slow
+def test_no_departure_in_the_paper_cases(paper_reports):
+    assert all(r.lane_departures == 0 for r in paper_reports.values()), \
+        _tables(paper_reports.values())
 
 
 @pytest.mark.slow
@@ -129,14 +140,19 @@ def test_the_papers_two_models_keep_the_lane(name):
 
 
 @pytest.mark.slow
-def test_the_papers_two_models_fused_against_their_tracks_and_raw_detections(
-        two_model_reports):
-    """As the paper's Tables 3-4 compare, paired over the five cases: the fused output is not
-    worse than either model's own track, nor than either model's raw detections (the paper
-    claims "better" against raw; with five cases we measure what the test says)."""
-    for source in ("hough:track", "sliding_window:track", "hough", "sliding_window"):
-        p = _fused_vs(two_model_reports, source)
-        assert p.n == 5 and p.verdict != "worse", f"{source}: {p}\n{_tables(two_model_reports)}"
+@pytest.mark.parametrize("name", PAPER_CASES)
+def test_the_papers_two_models_fused_is_within_the_margin_of_their_worse_track(name):
+    """Paper Tables 3-4's loop, one case a test at its nominal seed: the fused output is not
+    worse than the worse of the two models' own tracks by more than the RMSE's margin
+    (statistics.MARGINS). One seed is one drive, so this is a guard on each case, not a
+    verdict (a verdict pairs seeds within a case: `lanekeep bench CASE --mode paper --seeds
+    10`). Before (to 2026-11-28) this paired the five cases as if they were seeds, where one
+    case 10 cm worse went unnoticed."""
+    report = _two_model_run(name)
+    tracks = [report.sources[t].rmse_cm for t in ("hough:track", "sliding_window:track")]
+    worse_track = max(tracks)
+    allowed = worse_track + stats.margin_for("rmse_cm").of(worse_track)
+    assert report.sources["fused"].rmse_cm <= allowed, report.table()
 
 
 def test_same_scenario_twice_gives_identical_metrics():

@@ -52,7 +52,7 @@ def test_the_same_loop_passes_and_a_2_cm_bias_fails_naming_the_scenario():
     assert not gate.passed
     assert [(f.label, f.metric) for f in gate.failures] == [("b", "fused.rmse_cm")]
     text = gate_text(gate)
-    assert "regression gate: FAIL (1 worse beyond the margin)" in text
+    assert "regression gate: FAIL (1 worse beyond the margin, Holm-adjusted" in text
     assert "b: fused.rmse_cm +2" in text
 
 
@@ -91,3 +91,22 @@ def test_a_two_mode_scenario_is_judged_by_its_rate_of_bad_episodes():
     assert gate.failures[0].metric == "bad episodes (fused RMSE > 5 cm)"
     assert "occ (two-mode): bad episodes (fused RMSE > 5 cm) baseline 2/10, this run 8/10" \
         in gate_text(gate)
+
+
+def test_a_worse_that_holm_does_not_confirm_is_shown_not_failed():
+    """Sixteen scenarios, one of them worse with p about 1% on its own: among sixteen chances
+    that is what chance gives, so the gate shows it and passes; the same scenario worse with
+    a clear margin fails."""
+    labels = [f"s{i}" for i in range(16)]
+    big = [10 * v for v in BASE]  # 5-7 cm: the 5% of the margin is above its 0.1 cm floor
+    base = bench({label: big for label in labels})
+    # s0: +11% on average against a 5% margin, spread so that its own p_worse is ~1%
+    nudged = [v * (1.11 + j * 16) for v, j in zip(big, JITTER, strict=True)]
+    gate = regression_gate(base, bench({**{label: big for label in labels}, "s0": nudged}))
+    entry = gate.comparison["labels"]["s0"]["fused.rmse_cm"]
+    assert entry["verdict"] == "worse" and 0.025 / 16 < entry["p_worse"] < 0.025, entry
+    assert gate.passed and [f.label for f in gate.unconfirmed] == ["s0"]
+    assert "worse on their own, not after Holm" in gate_text(gate)
+    clear = [v * (1.5 + j) for v, j in zip(big, JITTER, strict=True)]
+    gate = regression_gate(base, bench({**{label: big for label in labels}, "s0": clear}))
+    assert not gate.passed and [f.label for f in gate.failures] == ["s0"]

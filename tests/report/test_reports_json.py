@@ -5,6 +5,7 @@ a number an episode could not measure is null. Each report carries the schema ve
 lanekeep version, the SHA-256 of the scenario file and the seed.
 """
 
+import dataclasses
 import hashlib
 import json
 import math
@@ -23,7 +24,7 @@ from lanekeep.report.json_io import (
     write_json,
 )
 from lanekeep.scenario.schema import load_scenario, parse_scenario
-from lanekeep.scoring.metrics import EpisodeReport, SourceReport
+from lanekeep.scoring.metrics import CommonSteps, EpisodeReport, SourceReport
 
 NAN = math.nan
 
@@ -145,3 +146,26 @@ def test_write_json_is_atomic(tmp_path):
     assert [p.name for p in tmp_path.iterdir()] == ["report.json"]
     write_json(tmp_path / "new" / "deeper.json", [NAN])  # folders are made
     assert strict_load(tmp_path / "new" / "deeper.json") == [None]
+
+
+def test_fused_vs_track_survives_the_json_round_trip(tmp_path):
+    """The common-step comparison is written (NaN as null, a track never beside the output)
+    and read back as CommonSteps (report_from_dict: what a bench worker's report becomes)."""
+    common = {"hough:track": CommonSteps(1.25, 0.75, 8, 0.8),
+              "lanenet:track": CommonSteps(NAN, NAN, 0, 0.0)}
+    report = dataclasses.replace(_nan_report(), fused_vs_track=common)
+    path = write_json(tmp_path / "common.json",
+                      report_document(report, load_scenario("clear_straight")))
+    doc = strict_load(path)
+    assert doc["fused_vs_track"] == {
+        "hough:track": {"rmse_a_cm": 1.25, "rmse_b_cm": 0.75, "steps": 8, "share": 0.8},
+        "lanenet:track": {"rmse_a_cm": None, "rmse_b_cm": None, "steps": 0,
+                          "share": 0.0}}
+    back = report_from_dict(doc)
+    assert back.fused_vs_track["hough:track"] == common["hough:track"]
+    assert math.isnan(back.fused_vs_track["lanenet:track"].rmse_a_cm)
+    assert back.fused_vs_track["lanenet:track"].steps == 0
+    assert report_from_dict(report.to_dict()).fused_vs_track["hough:track"] == common[
+        "hough:track"]  # the bench worker's path: to_dict() in the worker, back in the parent
+    assert report_from_dict({k: v for k, v in doc.items() if k != "fused_vs_track"}
+                            ).fused_vs_track == {}  # a document from before the key

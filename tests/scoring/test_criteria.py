@@ -111,16 +111,18 @@ def test_summary_tables_never_cut_a_name():
     assert long in table and "a_detector_with_a_long_name only" in table
 
 
-def test_every_shipped_scenario_has_criteria():
-    """0 departures and the car within 0.5 m everywhere; a fused RMSE bound per scenario,
-    calibrated on tuning seeds by tools/calibrate_criteria.py (each file's comment says the
-    rule, the command and the numbers), not "twice one run"."""
+def test_every_shipped_scenario_states_the_acceptance_requirements():
+    """The same stated requirements everywhere, not limits fitted to this loop (each file's
+    comment says so and links the reasoning): no departure, the car within 0.5 m of the lane
+    centre, the fused lane within 10 cm RMS. Before 2026-11-28 the fused limit was a
+    prediction bound over five tuning seeds (tools/calibrate_criteria.py), 0.7-3.0 cm."""
     for name in shipped_scenarios():
         scenario = load_scenario(name)
         c = scenario.criteria
         assert c.max_lane_departures == 0 and c.max_car_lateral_error_m == 0.5, name
-        assert c.max_fused_rmse_m is not None and c.max_fused_rmse_m > 0, name
-        assert "tools/calibrate_criteria.py" in Path(scenario.source).read_text(), name
+        assert c.max_fused_rmse_m == 0.10, name
+        text = Path(scenario.source).read_text()
+        assert "docs/statistics.md#acceptance" in text and "not fitted" in text, name
 
 
 def test_a_run_cut_short_is_not_judged_by_the_files_fused_rmse_limit():

@@ -149,3 +149,47 @@ def test_reference_error_corr_follows_the_errors_the_reference_shares():
     assert sources["against"].reference_error_corr == pytest.approx(-1.0)
     assert math.isnan(sources["alone"].reference_error_corr)  # a constant error: no spread
     assert math.isnan(sources["reference"].reference_error_corr)
+
+
+def test_fused_vs_track_compares_the_two_on_the_steps_both_answered():
+    """A track that abstains on the hard steps (2, 5, 8) scores 2 cm over its own steps, the
+    fused output 3 cm over its own (it had to answer the hard steps: 5 cm there): the track
+    looks better. On the 6 steps both answered the output errs 1 cm, the track 2 cm. Step 9,
+    where the output abstains, is no common step either; a track that always answers is
+    compared on the output's 9 steps."""
+    m = Metrics(["abstains:track", "always:track", "fused", "reference"], fused="fused",
+                tracks=("abstains:track", "always:track"))
+    hard, silent = {2, 5, 8}, {9}
+    for k in range(10):
+        t = 0.1 * k
+        m.add_offset("abstains:track", None if k in hard else t + 0.02, t)
+        m.add_offset("always:track", t - 0.03, t)
+        m.add_offset("fused", None if k in silent else t + (0.05 if k in hard else 0.01), t)
+        m.add_offset("reference", t, t)
+        m.pair_with_reference("reference")
+    report = m.report("s", 0, 0.1)
+    assert report.sources["abstains:track"].rmse_cm == pytest.approx(2.0)
+    assert report.sources["fused"].rmse_cm == pytest.approx(3.0)
+    common = report.fused_vs_track["abstains:track"]
+    assert common.rmse_a_cm == pytest.approx(1.0)
+    assert common.rmse_b_cm == pytest.approx(2.0)
+    assert (common.steps, common.share) == (6, pytest.approx(0.6))
+    always = report.fused_vs_track["always:track"]
+    assert always.rmse_a_cm == pytest.approx(report.sources["fused"].rmse_cm)
+    assert always.rmse_b_cm == pytest.approx(3.0)
+    assert (always.steps, always.share) == (9, pytest.approx(0.9))
+
+
+def test_fused_vs_track_is_empty_unless_asked_and_names_real_sources():
+    assert Metrics(["a"]).report("s", 0, 0.1).fused_vs_track == {}
+    with pytest.raises(ValueError, match="fused_vs_track"):
+        Metrics(["fused", "a:track"], fused="fused", tracks=("b:track",))
+
+
+def test_the_loop_compares_the_output_with_every_models_track():
+    from lanekeep.scoring.step_score import loop_metrics
+
+    report = loop_metrics(["hough", "lanenet"]).report("s", 0, 0.1)
+    assert list(report.fused_vs_track) == ["hough:track", "lanenet:track"]
+    assert report.fused_vs_track["hough:track"].steps == 0
+    assert math.isnan(report.fused_vs_track["hough:track"].rmse_a_cm)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import sys
 import textwrap
@@ -10,8 +11,10 @@ from pathlib import Path
 import pytest
 
 from lanekeep.cli.main import main
+from lanekeep.scenario.nuisance import is_nominal, with_nuisance
+from lanekeep.scenario.schema import load_scenario
 from lanekeep.scoring.statistics import spread
-from lanekeep.sweep.spec import SweepError, check_values, parse_sweep
+from lanekeep.sweep.spec import SweepError, cell_scenario, check_values, parse_sweep
 
 pq = pytest.importorskip("pyarrow.parquet")
 
@@ -67,6 +70,25 @@ def test_ranges_and_indexed_keys():
     table = spec.cells()[0].table
     assert table["road"]["segments"][2]["curvature_1pm"] == 0.004
     assert table["estimation"]["front_detectors"] == ["hough"]
+
+
+def test_a_cells_nominal_seed_is_the_base_files_and_seed_n_drives_as_in_bench():
+    """A cell is built in memory, so its nominal seed used to be 0 whatever the base's: on
+    occlusion (seed 12) a sweep's seed 12 drew a drive and its seed 0 drove the file's start,
+    the other way round from `run`/`bench`. Now both take the file's seed as the nominal one."""
+    spec = parse_sweep('base = "occlusion"\nseeds = [12, 3]\n[parameters]\n'
+                       '"target_speed_mps" = [15.0]', "s.toml")  # the file's own speed
+    base = load_scenario("occlusion")
+    assert spec.nominal_seed == base.seed == 12
+    assert [(c.seed, c.nominal_seed) for c in spec.cells()] == [(12, 12), (3, 12)]
+    nominal, drawn = (cell_scenario(c.table, spec.source, c.nominal_seed) for c in spec.cells())
+    assert is_nominal(nominal) and with_nuisance(nominal) == nominal
+    assert not is_nominal(drawn)
+    # seed 3 of the sweep is seed 3 of `lanekeep run occlusion --seed 3` (bench's seed 3)
+    as_run = with_nuisance(dataclasses.replace(base, seed=3))
+    assert dataclasses.replace(with_nuisance(drawn), source="") == dataclasses.replace(
+        as_run, source="")
+    assert as_run.start != base.start  # a drawn drive, not the file's
 
 
 @pytest.mark.parametrize(("text", "message"), [
