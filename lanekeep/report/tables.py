@@ -90,6 +90,11 @@ def bench_verdict(reports: dict[str, EpisodeReport], main_labels: list[str],
     main_failed = [label for label in failed if label in main_labels]
     lines.append(f"criteria: {len(main_labels) - len(main_failed)} of {len(main_labels)} "
                  f"{unit} passed")
+    if len(main_labels) > 1:  # what a rule's false-fail rate can be, read on these episodes
+        lo, hi = stats.rate_interval(len(main_failed), len(main_labels))
+        lines.append(f"observed fail rate {len(main_failed)}/{len(main_labels)} = "
+                     f"{len(main_failed) / len(main_labels):.3f} [{lo:.3f}, {hi:.3f}] "
+                     "(Clopper-Pearson 95%)")
     extra = len(reports) - len(main_labels)
     if extra:
         lines.append(f"model-only loops: {extra - (len(failed) - len(main_failed))} of {extra} "

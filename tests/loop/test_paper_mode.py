@@ -136,9 +136,9 @@ def test_case2_model_2_is_worse_in_the_sharp_turn():
         sliding.append(report.sources["sliding_window"].rmse_cm)
         turn_hough.append(100.0 * in_turn[HOUGH])
         turn_sliding.append(100.0 * in_turn[SLIDING])
-    overall = stats.paired(sliding, hough)
+    overall = stats.paired(sliding, hough, metric="rmse_cm")  # worse beyond the margin
     assert overall.verdict == "worse", (overall, hough, sliding)
-    in_the_turn = stats.paired(turn_sliding, turn_hough)
+    in_the_turn = stats.paired(turn_sliding, turn_hough, metric="rmse_cm")
     assert in_the_turn.verdict == "worse", (in_the_turn, turn_hough, turn_sliding)
 
 

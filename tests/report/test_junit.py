@@ -105,6 +105,7 @@ def test_bench_junit_has_one_case_per_scenario_and_exits_1_on_a_failure(tmp_path
     captured = capsys.readouterr()
     assert "FAILED turn: status off_road" in captured.out
     assert "criteria: 1 of 2 scenarios passed" in captured.out
+    assert "observed fail rate 1/2 = 0.500 [0.013, 0.987] (Clopper-Pearson 95%)" in captured.out
     assert f"wrote {out}" in captured.err
     last = [line for line in captured.err.splitlines() if line.startswith("bench (2 ")][-1]
     done, total = last.split(" s simulated")[0].split()[-1].split("/")
