@@ -187,6 +187,8 @@ def _cmd_bench(args: argparse.Namespace) -> int:
                  for name in names}
     seeds = {name: list(plan[name]) if plan else bench_seeds(args, scenario)
              for name, scenario in scenarios.items()}
+    if baseline is not None:
+        file_margins(scenarios)  # a file's bad margin fails now, not after the episodes
     for name, scenario in scenarios.items():  # and on a bad scenario, before any worker starts
         for seed in seeds[name]:  # (shadow casters stand where the seed puts them)
             check_scenario(scenario if seed is None else
@@ -287,6 +289,20 @@ def bench_margins(args: argparse.Namespace) -> dict:
         raise ConfigError("", "--margin", str(err)) from None
 
 
+def file_margins(scenarios: dict[str, Scenario]) -> dict:
+    """Each scenario's own `[criteria] margins`, keyed "LABEL:METRIC" as `--margin` keys a
+    scenario's; ConfigError naming the file for a metric that does not exist."""
+    from lanekeep.report.compare import parse_margins
+
+    out = {}
+    for name, scenario in scenarios.items():
+        try:
+            out.update(parse_margins([f"{name}:{t}" for t in scenario.criteria.margins]))
+        except ValueError as err:
+            raise ConfigError(scenario.source or name, "criteria.margins", str(err)) from None
+    return out
+
+
 def _gate(baseline: dict, documents: dict, main_docs: list[dict],
           scenarios: dict[str, Scenario], margins: dict, out) -> int:
     """The regression gate against `baseline` (lanekeep/report/regression.py), printed; 1 when
@@ -300,7 +316,8 @@ def _gate(baseline: dict, documents: dict, main_docs: list[dict],
     two_mode = {name: s.criteria.bad_episode_fused_rmse_m for name, s in scenarios.items()
                 if s.criteria.bad_episode_fused_rmse_m is not None}
     try:
-        gate = regression_gate(baseline, mains, margins=margins, two_mode=two_mode)
+        gate = regression_gate(baseline, mains, margins={**file_margins(scenarios), **margins},
+                               two_mode=two_mode)
     except ValueError as err:  # the baseline and this run cannot be paired
         print(f"regression gate: cannot compare with the baseline: {err}", file=out)
         return 2

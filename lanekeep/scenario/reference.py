@@ -319,6 +319,11 @@ DESCRIPTIONS: dict[str, tuple[str, str]] = {
         "episode whose fused RMSE exceeds it is a bad episode, and the regression gate "
         "(`bench --baseline`) compares the rate of bad episodes instead of the RMSE.",
         "> 0; unset = one mode"),
+    "criteria.margins": (
+        "Not a pass limit: this scenario's margins of practical relevance for the regression "
+        "gate (`bench --baseline`), each \"METRIC=ABS[,REL%]\" as `--margin` takes them "
+        "(docs/statistics.md#margins); the command line's win.",
+        "METRIC=ABS[,REL%] each"),
     "criteria.off_road_distance_m": ("End the episode as off road once the car's centre is "
                                      "this far from the ego lane's centre.",
                                      "> 0; unset = only when all wheels leave the pavement"),

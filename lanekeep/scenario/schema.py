@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import re
 import tomllib
 from dataclasses import dataclass, field
 from importlib import resources
@@ -389,6 +390,9 @@ class EstimationConfig(EstimatorSettings):
                                     for f in dataclasses.fields(EstimatorSettings)})
 
 
+_MARGIN_TEXT = re.compile(r"[a-z_:]+(\.[a-z_]+)?=\d+(\.\d*)?(,\d+(\.\d*)?%)?")
+
+
 @dataclass(frozen=True)
 class CriteriaConfig:
     """Pass/fail limits of an episode (`[criteria]`, judged by lanekeep/scoring/criteria.py); None =
@@ -400,6 +404,10 @@ class CriteriaConfig:
     # Not a limit: marks a two-mode scenario for the regression gate (lanekeep/report/
     # regression.py): an episode with a fused RMSE above it is a bad episode.
     bad_episode_fused_rmse_m: float | None = None
+    # Not a limit: this scenario's own margins of practical relevance for the regression gate
+    # (`bench --baseline`), "METRIC=ABS[,REL%]" each, e.g. "car_max_cm=2" (cm) for a noisy one;
+    # the command line's `--margin` wins.
+    margins: tuple[str, ...] = ()
     # Ends the episode as off road once the car's centre is this far (m) from the ego lane's
     # centre; None: only when all four wheels are off the paved surface (always checked).
     off_road_distance_m: float | None = None
@@ -408,6 +416,10 @@ class CriteriaConfig:
         if self.max_lane_departures is not None and not self.max_lane_departures >= 0:
             raise InvalidValue("max_lane_departures",
                                f"must be >= 0, got {self.max_lane_departures}")
+        for text in self.margins:
+            if not _MARGIN_TEXT.fullmatch(text):
+                raise InvalidValue("margins", f"{text!r}: expected METRIC=ABS[,REL%], e.g. "
+                                              "fused.rmse_cm=0.2,5%")
         for key in ("max_car_lateral_error_m", "max_fused_rmse_m", "bad_episode_fused_rmse_m",
                     "off_road_distance_m"):
             value = getattr(self, key)

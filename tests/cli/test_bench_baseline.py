@@ -70,3 +70,31 @@ def test_a_missing_baseline_file_is_one_line(tmp_path, capsys):
     code = main(["bench", "--baseline", str(tmp_path / "nope.json")])
     err = capsys.readouterr().err
     assert code == 2 and "nope.json: no such file" in err and len(err.strip().splitlines()) == 1
+
+
+def test_a_scenarios_own_margins_key_it_and_a_bad_one_is_refused(tmp_path):
+    from lanekeep.cli.episode import file_margins
+    from lanekeep.core.config_io import ConfigError
+    from lanekeep.scenario.schema import load_scenario
+
+    base = load_scenario("clear_curve")
+    text = Path(base.source).read_text().replace(
+        "max_fused_rmse_m = 0.10", 'max_fused_rmse_m = 0.10\nmargins = ["car_max_cm=2,10%"]')
+    path = tmp_path / "noisy.toml"
+    path.write_text(text)
+    margins = file_margins({"noisy": load_scenario(str(path))})
+    assert set(margins) == {"noisy:car_max_cm"}
+    assert (margins["noisy:car_max_cm"].absolute, margins["noisy:car_max_cm"].relative) == \
+        (2.0, 0.1)
+    with pytest.raises(ConfigError, match=r"criteria.margins: 'car max 2 cm': expected"):
+        load_scenario(_write(
+            tmp_path / "spaces.toml", text.replace("car_max_cm=2,10%", "car max 2 cm")))
+    bad = tmp_path / "bad.toml"
+    bad.write_text(text.replace("car_max_cm=2,10%", "car_speed_cm=2"))
+    with pytest.raises(ConfigError, match=r"bad.toml: criteria.margins: .*car_speed_cm=2"):
+        file_margins({"bad": load_scenario(str(bad))})
+
+
+def _write(path: Path, text: str) -> str:
+    path.write_text(text)
+    return str(path)
