@@ -251,6 +251,25 @@ def kernel_differences(a: dict | None, b: dict | None) -> list[str]:
             if _kernels_only(a.get(k)) != _kernels_only(b.get(k))]
 
 
+def setting_details(a: dict | None, b: dict | None) -> list[str]:
+    """What differs between two `settings_now()` records, key by key, in words ("torch.
+    mkl_branch 'AUTO,STRICT' -> 'AVX2,STRICT'"), thread counts aside: the golden check names
+    these, so that a machine that computes otherwise says which library chose otherwise."""
+    if not isinstance(a, dict) or not isinstance(b, dict):
+        return []
+    out = []
+    for key in ("pinned", "cpu_avx2_fma", "renderer", "torch", "opencv", "numpy", "env"):
+        x, y = _kernels_only(a.get(key)), _kernels_only(b.get(key))
+        if x == y:
+            continue
+        if isinstance(x, dict) and isinstance(y, dict):
+            out += [f"{key}.{k} {x.get(k)!r} -> {y.get(k)!r}" for k in sorted(set(x) | set(y))
+                    if x.get(k) != y.get(k)]
+        else:
+            out.append(f"{key} {x!r} -> {y!r}")
+    return out
+
+
 def _kernels_only(value: Any) -> Any:
     """A setting without its thread counts: the loop gives the same numbers on any number of
     threads (docs/reproducibility.md), so those do not make two runs incomparable."""

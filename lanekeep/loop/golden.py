@@ -15,7 +15,12 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
-from lanekeep.core.reproducibility import kernel_differences, library_versions, settings_now
+from lanekeep.core.reproducibility import (
+    kernel_differences,
+    library_versions,
+    setting_details,
+    settings_now,
+)
 from lanekeep.loop.episode import Episode
 from lanekeep.loop.stage_hashes import first_difference, hash_episode
 from lanekeep.report.json_io import dumps, report_document
@@ -102,9 +107,12 @@ def check(folder: Path, cases: tuple[GoldenCase, ...] = CASES) -> dict[str, list
         expected = json.loads(path.read_text())
         made = expected.get("made_with", {})
         problems = differences(expected, golden_document(case, expected))
-        settings = kernel_differences(made, settings_now()) if problems else []
+        now = settings_now() if problems else None
+        settings = kernel_differences(made, now) if problems else []
         if settings:
             problems.append("settings differ from the golden file's in: " + ", ".join(settings))
+            problems.append("  (the file's -> here: "
+                            + "; ".join(setting_details(made, now)) + ")")
         result[case.scenario] = problems
     return result
 

@@ -9,7 +9,11 @@ import subprocess
 import sys
 
 from lanekeep.core import reproducibility as repro
-from lanekeep.core.reproducibility import kernel_differences, library_versions
+from lanekeep.core.reproducibility import (
+    kernel_differences,
+    library_versions,
+    setting_details,
+)
 from lanekeep.report.json_io import with_metadata
 from lanekeep.scenario.schema import load_scenario
 
@@ -62,6 +66,10 @@ def test_import_lanekeep_first_pins_numpy_torch_and_the_blas():
     assert settings["torch"]["cpu_capability"] in ("AVX2", "DEFAULT")
     assert settings["opencv"]["avx512"] is False
     assert settings["env"]["ONEDNN_MAX_CPU_ISA"] == "AVX2"
+    # MKL in its reproducible mode: Intel's AVX2 branch; an AMD CPU reads it as AUTO
+    assert settings["torch"]["mkl_branch"] in ("AVX2,STRICT", "AUTO,STRICT")
+    assert settings["torch"]["conv_path"] == "aten+mkl"  # oneDNN out of LaneNet's forward
+    assert settings["cpu_avx2_fma"] is True
 
 
 def test_numpy_loaded_before_lanekeep_is_reported_as_unpinned():
@@ -86,6 +94,9 @@ def test_reports_differ_in_kernels_but_not_in_thread_counts():
     unpinned = {**a, "pinned": False, "torch": {"cpu_capability": "AVX512", "threads": 1}}
     assert kernel_differences(a, unpinned) == ["pinned", "torch"]
     assert kernel_differences(a, None) == []  # a report from before the key
+    assert setting_details(a, unpinned) == ["pinned True -> False",
+                                           "torch.cpu_capability 'AVX2' -> 'AVX512'"]
+    assert setting_details(a, threads) == []
 
 
 def test_library_versions_name_what_makes_another_computation():
