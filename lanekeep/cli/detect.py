@@ -1,12 +1,16 @@
 """`lanekeep detect` (lane detectors on real photos) and `lanekeep calibrate`.
 
-Thin: argument parsing and output; the work is in detectors/ and lanekeep/realcam/calibration.py.
-Images are read by lanekeep/realcam/image_io.py, which rejects missing, empty, truncated and corrupt
-files. `detect` checks every input (and the overlay folder) before it runs anything: one bad input
-and nothing is detected or written.
+Thin: argument parsing and output; the work is in lanekeep/evaluation/real_frames.py (a detector
+on real frames: its camera, its output line, its overlay), lanekeep/realcam/frames.py (photos,
+sequences, videos) and lanekeep/realcam/calibration.py. Images are read by
+lanekeep/realcam/image_io.py, which rejects missing, empty, truncated and corrupt files. `detect`
+checks every input (and the overlay folder) before it runs anything: one bad input and nothing
+is detected or written. `detect --sequence` runs one detector through a sequence of frames or a
+video, keeping its state (LaneNet's memory) from frame to frame.
 Exit codes: 0 success, 1 a failure while running (an overlay that could not be written),
-2 bad input (a missing, empty, truncated, corrupt or wrongly sized image, an output folder that
-cannot be written, a weights file that is missing, empty, corrupt or of another architecture, too
+2 bad input (a missing, empty, truncated, corrupt or wrongly sized image, a sequence of mixed
+sizes, a video that cannot be read or given without --sequence, an output folder that cannot be
+written, a weights file that is missing, empty, corrupt or of another architecture, too
 few chessboards); each bad input is one "lanekeep CMD: error:" line.
 
 A detector that sees every boundary (LaneNet: `detector.last.boundaries`) reports them all: in
@@ -23,78 +27,23 @@ import os
 import secrets
 import sys
 import tempfile
-import time
 from pathlib import Path
 
 from lanekeep.cli.outputs import folder_problem
+from lanekeep.evaluation.real_frames import (  # noqa: F401 - SLOT_COLOURS: public here too
+    SEQUENCE_HORIZON_FRAMES,
+    SLOT_COLOURS,
+    draw_overlay,
+)
+
+_overlay = draw_overlay  # its name here before it moved to the library
 
 EXIT_OK, EXIT_FAILURE, EXIT_BAD_INPUT = 0, 1, 2
-MIN_IMAGE_PX = 64
-# What a folder given to `detect` contributes: its files with these suffixes (any case).
-IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff", ".webp")
 
 
 def _error(command: str, message: str) -> int:
     print(f"lanekeep {command}: error: {message}", file=sys.stderr)
     return EXIT_BAD_INPUT
-
-
-# Overlay colours (BGR): the ego pair green / red, the next boundaries orange / magenta, the
-# "other" ones (up to three) cyan, blue and pink; unnamed lanes (classical) alternate as before.
-SLOT_COLOURS = {"ego-left": (0, 255, 0), "ego-right": (0, 0, 255), "next-left": (0, 165, 255),
-                "next-right": (255, 0, 255)}
-OTHER_COLOURS = [(255, 255, 0), (255, 128, 0), (180, 130, 255)]
-UNNAMED_COLOURS = [(0, 255, 0), (255, 0, 0)]
-
-
-def _lane_colour(name: str | None, k: int, n_other: int) -> tuple[int, int, int]:
-    if name is None:
-        return UNNAMED_COLOURS[k % 2]
-    return SLOT_COLOURS.get(name, OTHER_COLOURS[n_other % len(OTHER_COLOURS)])
-
-
-def _overlay(image, estimate, lanes: list[tuple[str | None, list[int]]], h_samples,
-             horizon: float, verdict=None):
-    """The image with each lane (name or None, x per h_sample) drawn, named at its bottom."""
-    import cv2
-
-    out = image[..., ::-1].copy()
-    n_other, labels = 0, []
-    for k, (name, xs) in enumerate(lanes):
-        colour = _lane_colour(name, k, n_other)
-        n_other += name is not None and name not in SLOT_COLOURS
-        pts = [(x, v) for x, v in zip(xs, h_samples, strict=True) if x >= 0]
-        for a, b in zip(pts, pts[1:], strict=False):
-            cv2.line(out, a, b, colour, 3)
-        if name is not None and pts:
-            x, v = pts[-1]  # the lowest row it reaches
-            x, v = min(max(x - 40, 5), out.shape[1] - 140), max(v - 12, 20)
-            while any(abs(x - lx) < 130 and abs(v - lv) < 26 for lx, lv in labels):
-                v -= 26  # above a neighbour's name rather than over it
-            labels.append((x, v))
-            cv2.putText(out, name, (x, v), cv2.FONT_HERSHEY_SIMPLEX, 0.8, colour, 2)
-    cv2.line(out, (0, int(horizon)), (out.shape[1] - 1, int(horizon)), (0, 255, 255), 1)
-    text = (f"offset {estimate.offset_m:+.2f} m at x={estimate.x_m:.1f} m" if estimate.valid
-            else f"no lane: {estimate.reason}")
-    cv2.putText(out, text, (20, 40), cv2.FONT_HERSHEY_SIMPLEX, 1.0, (255, 255, 255), 2)
-    if verdict is not None and estimate.valid:  # the geometry's word on it (plausibility)
-        words = "plausible" if verdict.valid else "implausible"
-        note = f"{words}, confidence {verdict.confidence:.2f}"
-        for k, line in enumerate([note, *verdict.reasons[:3]]):
-            cv2.putText(out, line, (20, 80 + 34 * k), cv2.FONT_HERSHEY_SIMPLEX, 0.8,
-                        (0, 255, 255) if verdict.valid else (0, 0, 255), 2)
-    return out
-
-
-def _plausibility(estimate, detector, image, camera, config):
-    """Whether the detection looks like a lane (detectors/plausibility.py): reporting only,
-    the detection itself is unchanged."""
-    from lanekeep.detectors.plausibility import check, support_share, vehicle_cover
-
-    window = detector.window
-    covered = vehicle_cover(image, camera, config.preprocess) if estimate.valid else None
-    return check(estimate, (window.x_near_m, window.x_far_m),
-                 support_share(estimate, covered))
 
 
 def _make_output_dir(folder: str) -> str | None:
@@ -133,26 +82,42 @@ def _overlay_path(folder: str, image: str) -> Path:
     return Path(folder) / (Path(image).stem + ".png")
 
 
-def expand_folders(paths: list[str]) -> tuple[list[str], list[str]]:
-    """(images, problems): each folder in `paths` replaced by its images (IMAGE_SUFFIXES, not
-    hidden, not in subfolders) sorted by name; a folder with none is a problem."""
-    images, problems = [], []
-    for path in paths:
-        if not Path(path).is_dir():
-            images.append(path)
-            continue
-        found = sorted(str(p) for p in Path(path).iterdir()
-                       if p.is_file() and not p.name.startswith(".")
-                       and p.suffix.lower() in IMAGE_SUFFIXES)
-        if not found:
-            problems.append(f"{path}: a folder with no images in it "
-                            f"({', '.join(IMAGE_SUFFIXES)})")
-        images.extend(found)
-    return images, problems
+def _frame_overlay_path(folder: str, index: int, image: str, n_frames: int) -> Path:
+    """A sequence's frame overlay: its index first (names sort in the sequence's order), then
+    its image's stem, e.g. 000007_1_10.png."""
+    width = max(6, len(str(n_frames - 1)))
+    return Path(folder) / f"{index:0{width}d}_{Path(image).stem}.png"
+
+
+def _video_overlay_path(folder: str, video: str) -> Path:
+    from lanekeep.realcam.frames import VIDEO_SUFFIX
+
+    return Path(folder) / (Path(video).stem + VIDEO_SUFFIX)
+
+
+def _overlay_failed(path: Path, err: OSError) -> int:
+    print(f"lanekeep detect: error: {path}: cannot write the overlay: "
+          f"{getattr(err, 'strerror', None) or err}", file=sys.stderr)
+    return EXIT_FAILURE
+
+
+def _write_png(path: Path, bgr) -> int | None:
+    """The overlay image as a PNG at `path` (atomically); an exit code when it failed."""
+    import cv2
+
+    ok, encoded = cv2.imencode(".png", bgr)
+    try:
+        if not ok:
+            raise OSError("OpenCV cannot encode the overlay")
+        _write_atomically(path, encoded.tobytes())
+    except OSError as err:
+        return _overlay_failed(path, err)
+    return None
 
 
 def _input_problems(args: argparse.Namespace, camera_file) -> list[str]:
     """Every problem with the inputs and outputs of `detect`, found before anything runs."""
+    from lanekeep.realcam.frames import is_video, size_problem
     from lanekeep.realcam.image_io import read_image
 
     problems = []
@@ -161,6 +126,10 @@ def _input_problems(args: argparse.Namespace, camera_file) -> list[str]:
         if problem:
             problems.append(problem)
     for path in args.images:
+        if Path(path).is_file() and is_video(path):
+            problems.append(f"{path}: a video; give --sequence to run the detector through its "
+                            f"frames (lanekeep detect --sequence {path})")
+            continue
         try:
             h, w = read_image(path).shape[:2]
         except ValueError as err:
@@ -168,9 +137,9 @@ def _input_problems(args: argparse.Namespace, camera_file) -> list[str]:
                 raise
             problems.append(str(err))
             continue
-        if h < MIN_IMAGE_PX or w < MIN_IMAGE_PX:
-            problems.append(f"{path}: image is {w}x{h}, too small for lane detection "
-                            f"(at least {MIN_IMAGE_PX}x{MIN_IMAGE_PX})")
+        too_small = size_problem(path, w, h)
+        if too_small:
+            problems.append(too_small)
         elif camera_file is not None and (w, h) != (camera_file.width, camera_file.height):
             problems.append(
                 f"{path}: image is {w}x{h} but camera file {args.camera} is calibrated for "
@@ -205,13 +174,102 @@ def _weights_problem(args: argparse.Namespace, config) -> str | None:
     return None
 
 
-def cmd_detect(args: argparse.Namespace) -> int:
-    import cv2
+def _sequence_problems(args: argparse.Namespace, source, camera_file) -> list[str]:
+    """What stops a checked sequence: its size against the camera file, overlays that would
+    overwrite an input."""
+    from lanekeep.realcam.frames import VideoFrames
 
+    video = isinstance(source, VideoFrames)
+    first = source.path if video else source.paths[0]
+    w, h = source.size
+    if camera_file is not None and (w, h) != (camera_file.width, camera_file.height):
+        return [f"{first}: frames are {w}x{h} but camera file {args.camera} is calibrated for "
+                f"{camera_file.width}x{camera_file.height} (calibrate at this size, or give "
+                f"frames of that size)"]
+    if not args.overlay:
+        return []
+    if video:
+        target = _video_overlay_path(args.overlay, source.path)
+        if target.resolve() == Path(source.path).resolve():
+            return [f"{source.path}: its overlay {target} would overwrite the video itself"]
+        return []
+    inputs = {Path(path).resolve() for path in source.paths}
+    for k, path in enumerate(source.paths):
+        target = _frame_overlay_path(args.overlay, k, path, len(source.paths))
+        if target.resolve() in inputs:
+            return [f"{path}: its overlay {target} would overwrite an image of the sequence"]
+    return []
+
+
+def _detect_sequence(args: argparse.Namespace, config, camera_file) -> int:
+    """`detect --sequence`: one detector through the frames or the video, one line a frame."""
+    from lanekeep.evaluation.real_frames import sequence_detector
+    from lanekeep.realcam.frames import VideoFrames, VideoOut, open_sequence
+    from lanekeep.realcam.image_io import ImageError
+
+    problems = []
+    if args.overlay:
+        problem = folder_problem(Path(args.overlay))
+        problems += [problem] if problem else []
+    source, found = open_sequence(args.images)
+    problems += found
+    if source is not None:
+        problems += _sequence_problems(args, source, camera_file)
+    weights_problem = _weights_problem(args, config)
+    problems += [weights_problem] if weights_problem else []
+    if not problems and args.overlay:
+        problem = _make_output_dir(args.overlay)
+        problems += [problem] if problem else []
+    if problems:
+        for problem in problems:
+            _error("detect", problem)
+        return EXIT_BAD_INPUT
+    try:  # one camera and one detector for every frame
+        detect = sequence_detector(source.frames(), args.detector, config, camera_file,
+                                   args.weights)
+    except ValueError as err:  # a frame or the weights file changed since it was checked
+        if getattr(args, "debug", False):
+            raise
+        return _error("detect", str(err))
+    video = isinstance(source, VideoFrames)
+    n_frames = None if video else len(source.paths)
+    target = _video_overlay_path(args.overlay, source.path) if args.overlay and video else None
+    out = None
+    if target is not None:
+        try:
+            out = VideoOut(target, source.fps, source.size)
+        except OSError as err:
+            return _overlay_failed(target, err)
+    try:
+        for frame in source.frames():
+            result = detect(frame.image)
+            print(json.dumps(result.line(frame.label, args.format)), flush=True)
+            if out is not None:
+                out.write(result.overlay(frame.image))
+            elif args.overlay:
+                png = _frame_overlay_path(args.overlay, frame.index, frame.label, n_frames)
+                failed = _write_png(png, result.overlay(frame.image))
+                if failed:
+                    return failed
+    except BaseException as err:
+        if out is not None:  # no half-written video left behind
+            out.abort()
+        if isinstance(err, ImageError):  # a frame changed since it was checked
+            return _error("detect", str(err))
+        raise
+    if out is not None:
+        try:
+            out.close()
+        except OSError as err:
+            return _overlay_failed(target, err)
+    return EXIT_OK
+
+
+def cmd_detect(args: argparse.Namespace) -> int:
     from lanekeep.detectors.config import load_config
-    from lanekeep.detectors.registry import make_detector
-    from lanekeep.detectors.tusimple import estimate_lanes, every_lane, h_samples_for, record
-    from lanekeep.realcam.camera_file import camera_for_image, read_camera_file
+    from lanekeep.evaluation.real_frames import frame_detector
+    from lanekeep.realcam.camera_file import read_camera_file
+    from lanekeep.realcam.frames import expand_folders
     from lanekeep.realcam.image_io import read_image
 
     try:
@@ -223,7 +281,8 @@ def cmd_detect(args: argparse.Namespace) -> int:
         if isinstance(err, OSError) and err.filename:
             return _error("detect", f"{err.filename}: cannot read it: {err.strerror or err}")
         return _error("detect", str(err))
-    dash = config.dashcam
+    if args.sequence:
+        return _detect_sequence(args, config, camera_file)
     # All inputs first: a bad one stops the command before any detection or output.
     args.images, problems = expand_folders(args.images)
     problems += _input_problems(args, camera_file)
@@ -241,61 +300,18 @@ def cmd_detect(args: argparse.Namespace) -> int:
             image = read_image(path)  # checked above; changed since, it is still an error
         except ValueError as err:
             return _error("detect", str(err))
-        h, w = image.shape[:2]
-        camera, cam_file, horizon = camera_for_image(
-            image, camera_file, dash.hfov_deg, dash.height_m, dash.horizon_fraction,
-            dash.min_horizon_fraction, dash.max_horizon_fraction)
-        distortion = None if camera_file is None else cam_file.distortion
-        try:  # a new detector per photo: a learned one's memory of another photo would mislead
-            detector = make_detector(args.detector, camera, config, distortion, args.weights)
+        try:  # a new camera and detector per photo: a learned one's memory would mislead
+            detect = frame_detector([image], args.detector, config, camera_file, args.weights)
         except ValueError as err:  # the weights file changed since it was checked
             if getattr(args, "debug", False):
                 raise
             return _error("detect", str(err))
-        start = time.perf_counter()
-        estimate = detector.detect(image)
-        ms = (time.perf_counter() - start) * 1000.0
-        verdict = _plausibility(estimate, detector, image, camera, config)
-        h_samples = h_samples_for(h)
-        # Detectors that see every boundary keep them with the frame's other outputs.
-        named = every_lane(detector, camera, camera_file is not None, h_samples, (w, h), horizon)
-        if named is not None:
-            lanes = [lane.xs for lane in named]
-            drawn = [(lane.name, lane.xs) for lane in named]
-        else:
-            window = detector.window
-            x_range = (float(camera.position_m[0]) + 1.0, window.x_far_m * 1.3)
-            lanes = estimate_lanes(estimate, camera, h_samples, x_range)
-            drawn = [(None, xs) for xs in lanes]
-        if args.format == "tusimple":
-            line = record(str(path), lanes, h_samples, ms)
-        else:
-            line = {
-                "raw_file": str(path), **verdict.to_dict(),
-                "detector_valid": estimate.valid, "detector_confidence": estimate.confidence,
-                "offset_m": estimate.offset_m, "x_m": estimate.x_m,
-                "left": None if estimate.left is None else [float(c) for c in estimate.left],
-                "right": None if estimate.right is None else [float(c) for c in estimate.right],
-                "reason": estimate.reason,
-                "horizon_row": horizon, "run_time_ms": round(ms, 2),
-            }
-            if named is not None:
-                line["h_samples"] = list(h_samples)
-                line["boundaries"] = [{"slot": lane.name, "xs": lane.xs,
-                                       "score": round(lane.score, 4)} for lane in named]
-        print(json.dumps(line), flush=True)
+        result = detect(image)
+        print(json.dumps(result.line(str(path), args.format)), flush=True)
         if args.overlay:
-            png = _overlay_path(args.overlay, path)
-            ok, encoded = cv2.imencode(
-                ".png", _overlay(image, estimate, drawn, h_samples, horizon, verdict))
-            try:
-                if not ok:
-                    raise OSError("OpenCV cannot encode the overlay")
-                _write_atomically(png, encoded.tobytes())
-            except OSError as err:
-                print(f"lanekeep detect: error: {png}: cannot write the overlay: "
-                      f"{getattr(err, 'strerror', None) or err}", file=sys.stderr)
-                return EXIT_FAILURE
+            failed = _write_png(_overlay_path(args.overlay, path), result.overlay(image))
+            if failed:
+                return failed
     return EXIT_OK
 
 
@@ -365,10 +381,14 @@ def register(subparsers) -> None:
                     "image, too small or (with --camera) not the camera file's size, or the "
                     "--overlay folder cannot be written, or the weights file cannot be loaded, "
                     "each problem is one error line, "
-                    "nothing is detected or written, and the exit code is 2.")
+                    "nothing is detected or written, and the exit code is 2. With --sequence "
+                    "the inputs are one sequence (frames in the order given, a folder's in "
+                    "natural order: 1_4 before 1_10) or one video file, all of one size, run "
+                    "through one detector that keeps its state, one camera for all frames "
+                    f"(horizon: the median over the first {SEQUENCE_HORIZON_FRAMES}).")
     p.add_argument("images", nargs="+", metavar="IMAGE_OR_FOLDER",
                    help="image files (PNG, JPEG; truncated or corrupt ones are rejected) or "
-                        "folders of them")
+                        "folders of them; with --sequence also one video (MP4, AVI, MOV, MKV)")
     p.add_argument("--detector", default="sliding_window", metavar="NAME",
                    help=f"{', '.join(known_detectors())}, or an import path "
                         f"package.module:Class (default: sliding_window)")
@@ -381,7 +401,14 @@ def register(subparsers) -> None:
     p.add_argument("--format", choices=("json", "tusimple"), default="json",
                    help="tusimple: one {lanes, h_samples, raw_file, run_time} line per image "
                         "(lanenet: every boundary it found, left to right)")
-    p.add_argument("--overlay", help="folder for PNGs with the detected lanes drawn")
+    p.add_argument("--sequence", action="store_true",
+                   help="the inputs are one sequence of frames or one video: one detector for "
+                        "all frames, its state (LaneNet's memory) kept; one line per frame, "
+                        "raw_file a frame's path or VIDEO#N (N from 0)")
+    p.add_argument("--overlay", metavar="DIR",
+                   help="folder for PNGs with the detected lanes drawn (a sequence: "
+                        "NNNNNN_STEM.png in its order; a video: STEM.avi, Motion-JPEG at its "
+                        "frame rate)")
     p.set_defaults(func=cmd_detect)
 
     p = subparsers.add_parser("calibrate", help="chessboard calibration -> camera TOML")

@@ -1,2 +1,2 @@
 """Open-loop evaluation of detectors: the LaneNet dataset, the fixed eval sets, lane metrics (AP,
-IoU, ADE, FDE)."""
+IoU, ADE, FDE), detectors on real photos and videos (`lanekeep detect`)."""

@@ -1,1 +1,2 @@
-"""Real cameras: camera files, OpenCV calibration from chessboard photos, strict image reading."""
+"""Real cameras: camera files, OpenCV calibration from chessboard photos, strict image reading,
+frame sequences and videos."""

@@ -18,13 +18,16 @@ camera is a pinhole with a 60 deg horizontal field of view, centred principal po
 1.5 m high, and its pitch follows from the horizon row found in each image: the vanishing
 point of its lane lines (lanekeep/realcam/horizon.py), taken as
 pitch = atan((v_horizon - cy) / fy). When no vanishing point is found, the horizon is assumed
-at the image middle (a level camera). Numbers: detectors.toml [dashcam].
+at the image middle (a level camera). Numbers: detectors.toml [dashcam]. A sequence of frames
+(`lanekeep detect --sequence`) gets one camera, its horizon the median over its first frames
+(`camera_for_frames`), so that the camera does not jump from frame to frame.
 """
 
 from __future__ import annotations
 
 import math
 import tomllib
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -116,7 +119,24 @@ def camera_for_image(
     max_fraction: float = 0.75,
 ) -> tuple[CameraModel, CameraFile, float]:
     """The camera model for one real image: (model, intrinsics file, horizon row used)."""
-    h, w = image.shape[:2]
+    return camera_for_frames([image], camera_file, hfov_deg, height_m, horizon_fraction,
+                             min_fraction, max_fraction)
+
+
+def camera_for_frames(
+    images: Sequence[np.ndarray],
+    camera_file: CameraFile | None,
+    hfov_deg: float = 60.0,
+    height_m: float = 1.5,
+    horizon_fraction: float = 0.5,
+    min_fraction: float = 0.2,
+    max_fraction: float = 0.75,
+) -> tuple[CameraModel, CameraFile, float]:
+    """One camera model for frames of one size (a video's first frames): (model, intrinsics
+    file, horizon row used). Without a pitch in the camera file the horizon is the median of
+    the vanishing points found in `images` (the image middle, `horizon_fraction`, when none
+    is), so that one frame whose lines mislead the vanishing point does not tilt the camera."""
+    h, w = images[0].shape[:2]
     cam = camera_file or default_camera(w, h, hfov_deg, height_m)
     if (cam.width, cam.height) != (w, h):
         cam = cam.scaled(w, h)
@@ -124,7 +144,8 @@ def camera_for_image(
         pitch = math.radians(cam.pitch_deg)
         horizon = cam.cy + cam.fy * math.tan(pitch)
     else:
-        found = horizon_row(image, min_fraction, max_fraction)
-        horizon = found if found is not None else horizon_fraction * h
+        found = [row for row in (horizon_row(image, min_fraction, max_fraction)
+                                 for image in images) if row is not None]
+        horizon = float(np.median(found)) if found else horizon_fraction * h
         pitch = math.atan((horizon - cam.cy) / cam.fy)
     return cam.model(pitch), cam, horizon

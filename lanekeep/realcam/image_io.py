@@ -28,7 +28,9 @@ import re
 import struct
 import tempfile
 import zlib
+from collections.abc import Callable
 from pathlib import Path
+from typing import TypeVar
 
 import cv2
 import numpy as np
@@ -43,6 +45,7 @@ _JPEG_DAMAGE = ("Premature end of JPEG file", "premature end of data segment",
 # In entropy-coded data a marker is FF (after any FF fill bytes) followed by a byte that is not
 # 00 (a stuffed FF data byte) and not a restart marker D0-D7.
 _NEXT_MARKER = re.compile(rb"\xff+[^\x00\xd0-\xd7\xff]")
+T = TypeVar("T")
 
 
 class ImageError(ConfigError):
@@ -104,25 +107,32 @@ def png_problem(data: bytes) -> str | None:
     return "truncated PNG: the data ends before the IEND chunk (incomplete file)"
 
 
-def _decode_quietly(data: bytes) -> tuple[np.ndarray | None, str]:
-    """cv2.imdecode with fd 2 captured: (BGR image or None, what the decoders printed)."""
-    buf = np.frombuffer(data, np.uint8)
+def call_quietly(fn: Callable[..., T], *args: object) -> tuple[T, str]:
+    """fn(*args) with the process's stderr (fd 2) captured: (its result, what was printed there).
+
+    Native decoders (libjpeg, FFmpeg) write their warnings to fd 2 directly, past sys.stderr;
+    captured, they become the caller's to judge and never reach the user."""
     try:
         saved = os.dup(2)
     except OSError:  # no stderr to redirect
-        return cv2.imdecode(buf, cv2.IMREAD_COLOR), ""
+        return fn(*args), ""
     try:
         with tempfile.TemporaryFile() as sink:
             os.dup2(sink.fileno(), 2)
             try:
-                image = cv2.imdecode(buf, cv2.IMREAD_COLOR)
+                result = fn(*args)
             finally:
                 os.dup2(saved, 2)
             sink.seek(0)
             said = sink.read().decode("utf-8", "replace")
     finally:
         os.close(saved)
-    return image, said
+    return result, said
+
+
+def _decode_quietly(data: bytes) -> tuple[np.ndarray | None, str]:
+    """cv2.imdecode with fd 2 captured: (BGR image or None, what the decoders printed)."""
+    return call_quietly(cv2.imdecode, np.frombuffer(data, np.uint8), cv2.IMREAD_COLOR)
 
 
 def read_image(path: str | Path) -> np.ndarray:
