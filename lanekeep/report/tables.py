@@ -278,7 +278,7 @@ def _compact_interval_table(docs: list[dict]) -> str:
     for d in docs:
         counts = stats.count_verdicts([p["verdict"] for p in d["paired"]["fused_vs"].values()])
         fused = d["sources"]["fused"]
-        verdicts = stats.counts_text(counts)
+        verdicts = stats.counts_text(counts) + " "
         lines.append(
             f"{d['label']:<{scen_w}}{d['n']:>3}  "
             f"{_center_text(fused, 'rmse_cm'):<20}{verdicts:<11}"
