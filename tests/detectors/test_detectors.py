@@ -4,6 +4,7 @@ Each scenario's 15 poses (lateral offsets x heading errors) are rendered once at
 shared by both detectors. Errors are measured at each estimate's own look-ahead x_m.
 """
 
+import dataclasses
 import json
 import math
 import re
@@ -17,8 +18,10 @@ import lanekeep  # noqa: F401 - MUJOCO_GL before mujoco
 from lanekeep.detectors.base import LaneEstimate, poly_eval
 from lanekeep.detectors.registry import known_detectors, make_detector
 from lanekeep.detectors.tusimple import estimate_lanes, h_samples_for, record, score_frame
+from lanekeep.scenario.schema import load_scenario
 from lanekeep.scoring.truth import lane_truth
 from lanekeep.sensing.cameras import CameraRig
+from lanekeep.world.build import build
 
 OFFSETS_M = (-0.8, -0.4, 0.0, 0.4, 0.8)
 HEADINGS_DEG = (-3.0, 0.0, 3.0)
@@ -92,12 +95,25 @@ def test_sliding_window_tracks_from_its_previous_fit(rendered):
     assert detector._previous == [None, None]
 
 
-def test_sliding_window_on_the_rear_camera_reports_the_lane_behind(straight_world):
-    frames, cameras = _render(straight_world, 60.0, cameras=("rear",))
+@pytest.fixture(scope="module")
+def straight_world_without_traffic():
+    """clear_straight without its drawn traffic: what the rear camera sees of the lane, not of
+    a truck. (Since the traffic's stream folds in the scenario's name, 2026-11-28, a truck in
+    the next lane hides the far centre line behind the car at 60 m: the median offset error
+    went from 2.4 to 10.6 cm. Occlusion is tested where it is the point: tests/sensing.)"""
+    scenario = load_scenario("clear_straight")
+    scenario = dataclasses.replace(scenario, traffic=dataclasses.replace(
+        scenario.traffic, vehicles_per_km=0.0))
+    return build(scenario)
+
+
+def test_sliding_window_on_the_rear_camera_reports_the_lane_behind(
+        straight_world_without_traffic):
+    world = straight_world_without_traffic
+    frames, cameras = _render(world, 60.0, cameras=("rear",))
     detector = make_detector("sliding_window", cameras["rear"])
     offset_err, boundary_err, invalid = _errors(
-        straight_world, frames[::2], detector, camera="rear", x_boundary=-8.0,
-        fit_range=(-16.0, 0.0))
+        world, frames[::2], detector, camera="rear", x_boundary=-8.0, fit_range=(-16.0, 0.0))
     assert not invalid
     assert detector.detect(frames[0][2]["rear"]).x_m < -2.0  # behind the car
     assert np.median(offset_err) <= 0.10 and offset_err.max() <= 0.25

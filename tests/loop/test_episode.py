@@ -98,13 +98,17 @@ def _tables(reports) -> str:
 # track, i.e. the paired 95% interval of fused - track lies below the RMSE's margin; or better
 # than it, or equivalent.
 NOT_WORSE = ("better", "equivalent", "non-inferior")
-SEEDS_AFTER_NOMINAL = 5  # drawn drives: the file's seed + 1 .. + 5, as `bench --seeds 5`
+# Drawn drives: the file's seed + 1 .. + 8, as `bench --seeds 8`. Sized from a run at five:
+# there the fused - lanenet:track interval was [-0.59, +0.13] cm against a 0.11 cm margin
+# (inconclusive; sd of the differences 0.29 cm); at eight the same sd gives a half-width of
+# 0.24 cm, which resolves the -0.26 cm measured (2026-11-28).
+SEEDS_AFTER_NOMINAL = 8
 
 
 @pytest.fixture(scope="module")
 def case3_over_seeds():
     """Case 3 (a turn with shade and bumps: the trackers, the roll, the MMAE all at work) on
-    five drawn drives, 10 s each at the shipped camera size."""
+    eight drawn drives, 10 s each at the shipped camera size."""
     nominal = load_scenario("case3_mild_turn_shade_bumps").seed
     return [_run("case3_mild_turn_shade_bumps", seconds=10.0, seed=nominal + k)
             for k in range(1, SEEDS_AFTER_NOMINAL + 1)]
@@ -113,13 +117,13 @@ def case3_over_seeds():
 @pytest.mark.slow
 def test_fused_is_non_inferior_to_every_models_own_track_over_seeds(case3_over_seeds):
     """The default loop's fused output against each front model's own Kalman track, paired
-    over five seeds within one case, on the steps where both had an estimate: non-inferior
+    over eight seeds within one case, on the steps where both had an estimate: non-inferior
     within the RMSE's margin (max(0.1 cm, 5%)), not merely "no difference found". Before
     (to 2026-11-28) this paired five cases at one seed each and passed on anything short of
     "worse", which a 10 cm regression in one case did (docs/statistics.md#margins)."""
     for track in ("hough:track", "sliding_window:track", "lanenet:track"):
         p = fused_vs_track(case3_over_seeds, track)
-        assert p["n"] == 5 and p["verdict"] in NOT_WORSE, \
+        assert p["n"] == SEEDS_AFTER_NOMINAL and p["verdict"] in NOT_WORSE, \
             f"{track}: {p}\n{_tables(case3_over_seeds)}"
     assert all(r.lane_departures == 0 for r in case3_over_seeds), _tables(case3_over_seeds)
 
