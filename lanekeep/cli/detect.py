@@ -215,14 +215,7 @@ def _detect_sequence(args: argparse.Namespace, config, camera_file) -> int:
     problems += found
     if source is not None:
         problems += _sequence_problems(args, source, camera_file)
-    weights_problem = _weights_problem(args, config)
-    problems += [weights_problem] if weights_problem else []
-    if not problems and args.overlay:
-        problem = _make_output_dir(args.overlay)
-        problems += [problem] if problem else []
-    if problems:
-        for problem in problems:
-            _error("detect", problem)
+    if _refused(args, config, problems):
         return EXIT_BAD_INPUT
     try:  # one camera and one detector for every frame
         detect = sequence_detector(source.frames(), args.detector, config, camera_file,
@@ -265,6 +258,19 @@ def _detect_sequence(args: argparse.Namespace, config, camera_file) -> int:
     return EXIT_OK
 
 
+def _refused(args: argparse.Namespace, config, problems: list[str]) -> bool:
+    """The input problems found, the weights file's added, each printed as one error line;
+    True when there is any. Without one, the overlay folder is made (nothing before)."""
+    weights_problem = _weights_problem(args, config)
+    problems = [*problems, *([weights_problem] if weights_problem else [])]
+    if not problems and args.overlay:
+        problem = _make_output_dir(args.overlay)
+        problems += [problem] if problem else []
+    for problem in problems:
+        _error("detect", problem)
+    return bool(problems)
+
+
 def cmd_detect(args: argparse.Namespace) -> int:
     from lanekeep.detectors.config import load_config
     from lanekeep.evaluation.real_frames import frame_detector
@@ -286,14 +292,7 @@ def cmd_detect(args: argparse.Namespace) -> int:
     # All inputs first: a bad one stops the command before any detection or output.
     args.images, problems = expand_folders(args.images)
     problems += _input_problems(args, camera_file)
-    weights_problem = _weights_problem(args, config)
-    problems += [weights_problem] if weights_problem else []
-    if not problems and args.overlay:
-        problem = _make_output_dir(args.overlay)
-        problems += [problem] if problem else []
-    if problems:
-        for problem in problems:
-            _error("detect", problem)
+    if _refused(args, config, problems):
         return EXIT_BAD_INPUT
     for path in args.images:
         try:

@@ -134,7 +134,7 @@ def fused_vs_track(reports: Sequence[EpisodeReport], track: str) -> dict[str, An
     own valid steps (older reports), with the common steps' mean share."""
     fused, other, shares = [], [], []
     for r in reports:
-        common = (getattr(r, "fused_vs_track", None) or {}).get(track)
+        common = r.fused_vs_track.get(track)
         if common is not None:
             fused.append(common.rmse_a_cm)
             other.append(common.rmse_b_cm)
