@@ -1,0 +1,56 @@
+"""One atomic writer: a file is complete or absent, never half-written.
+
+Every file the package writes for a reader to find later (JSON reports, JUnit XML, parquet
+tables, camera files, cached sets, overlays, dataset shards) goes through here: the bytes go to
+a hidden temporary file in the same folder (a rename across folders could cross file systems,
+and only a rename within one is atomic), which `os.replace` then puts in place. A failure
+removes the temporary file and leaves any file already at `path` as it was. New files get mode
+0666 & ~umask, as `open` gives them.
+"""
+
+from __future__ import annotations
+
+import os
+import secrets
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+
+
+def temp_beside(path: str | Path) -> Path:
+    """A new, empty file next to `path` (created exclusively, mode 0666 & ~umask) whose name
+    keeps `path`'s suffix, for writers that choose a format by it (OpenCV, NumPy)."""
+    path = Path(path)
+    while True:
+        tmp = path.parent / f".{path.stem}.{secrets.token_hex(4)}.tmp{path.suffix}"
+        try:
+            os.close(os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666))
+            return tmp
+        except FileExistsError:
+            continue
+
+
+@contextmanager
+def atomic_path(path: str | Path) -> Iterator[Path]:
+    """A temporary path beside `path` to write to; on leaving the block without an exception
+    it replaces `path`, with one it is removed (and `path` is untouched)."""
+    path = Path(path)
+    tmp = temp_beside(path)
+    try:
+        yield tmp
+        os.replace(tmp, path)
+    finally:
+        tmp.unlink(missing_ok=True)
+
+
+def atomic_write(path: str | Path, data: bytes | str, sync: bool = True) -> Path:
+    """Write `data` (str: as UTF-8) to `path` atomically, flushed to the disk first when
+    `sync` (a report that survives a crash right after). Returns the path."""
+    payload = data.encode("utf-8") if isinstance(data, str) else data
+    path = Path(path)
+    with atomic_path(path) as tmp, open(tmp, "wb") as f:
+        f.write(payload)
+        f.flush()
+        if sync:
+            os.fsync(f.fileno())
+    return path
