@@ -12,13 +12,13 @@ from __future__ import annotations
 
 import argparse
 import multiprocessing as mp
-import os
 import sys
 import time
 from pathlib import Path
 
 import numpy as np
 
+from lanekeep.core.files import atomic_path
 from lanekeep.evaluation.dataset import DatasetRecipe, make_shard, shard_path, write_recipe
 
 
@@ -28,9 +28,8 @@ def _one(job: tuple[DatasetRecipe, str, int, str]) -> tuple[str, int, float]:
     path = shard_path(Path(root), split, index)
     arrays = make_shard(recipe, split, index)
     path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_suffix(".tmp.npz")
-    np.savez_compressed(tmp, **arrays)
-    os.replace(tmp, path)  # a shard is complete or absent
+    with atomic_path(path) as tmp:  # a shard is complete or absent
+        np.savez_compressed(tmp, **arrays)
     return split, index, time.perf_counter() - t0
 
 

@@ -17,12 +17,14 @@ from contextlib import contextmanager
 from pathlib import Path
 
 
-def temp_beside(path: str | Path) -> Path:
+def temp_beside(path: str | Path, suffix: str | None = None) -> Path:
     """A new, empty file next to `path` (created exclusively, mode 0666 & ~umask) whose name
-    keeps `path`'s suffix, for writers that choose a format by it (OpenCV, NumPy)."""
+    ends in `suffix` (default: `path`'s), for writers that choose a format by it (OpenCV,
+    NumPy)."""
     path = Path(path)
+    suffix = path.suffix if suffix is None else suffix
     while True:
-        tmp = path.parent / f".{path.stem}.{secrets.token_hex(4)}.tmp{path.suffix}"
+        tmp = path.parent / f".{path.stem}.{secrets.token_hex(4)}.tmp{suffix}"
         try:
             os.close(os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666))
             return tmp
@@ -30,17 +32,35 @@ def temp_beside(path: str | Path) -> Path:
             continue
 
 
+class PendingFile:
+    """A temporary file beside `path` that becomes `path` on `commit()`, or goes on
+    `discard()`: for a writer that fills a file over time (a video, frame by frame)."""
+
+    def __init__(self, path: str | Path, suffix: str | None = None) -> None:
+        self.path = Path(path)
+        self.tmp = temp_beside(self.path, suffix)
+
+    def commit(self) -> None:
+        try:
+            os.replace(self.tmp, self.path)
+        finally:
+            self.tmp.unlink(missing_ok=True)
+
+    def discard(self) -> None:
+        self.tmp.unlink(missing_ok=True)
+
+
 @contextmanager
 def atomic_path(path: str | Path) -> Iterator[Path]:
     """A temporary path beside `path` to write to; on leaving the block without an exception
     it replaces `path`, with one it is removed (and `path` is untouched)."""
-    path = Path(path)
-    tmp = temp_beside(path)
+    pending = PendingFile(path)
     try:
-        yield tmp
-        os.replace(tmp, path)
-    finally:
-        tmp.unlink(missing_ok=True)
+        yield pending.tmp
+    except BaseException:
+        pending.discard()
+        raise
+    pending.commit()
 
 
 def atomic_write(path: str | Path, data: bytes | str, sync: bool = True) -> Path:

@@ -36,12 +36,12 @@ from __future__ import annotations
 
 import hashlib
 import json
-import os
 from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 
 import numpy as np
 
+from lanekeep.core.files import atomic_path
 from lanekeep.evaluation.dataset import FORMAT as DATASET_FORMAT
 from lanekeep.evaluation.dataset import DatasetRecipe, camera_from_vector, render_world
 from lanekeep.evaluation.dataset_world import ROAD_LENGTH_M, random_scenario
@@ -284,13 +284,8 @@ def load_set(condition: str, recipe: EvalRecipe, cache: str | Path | None
             pass  # a damaged cache file is rendered again and replaced
     arrays = build_set(condition, recipe)
     path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    try:
-        with open(tmp, "wb") as f:
-            np.savez_compressed(f, **arrays)
-        os.replace(tmp, path)
-    finally:
-        tmp.unlink(missing_ok=True)
+    with atomic_path(path) as tmp, open(tmp, "wb") as f:
+        np.savez_compressed(f, **arrays)
     return arrays, key
 
 

@@ -20,9 +20,7 @@ FFmpeg backend (fractional rates such as 29.97 kept); read back by the same whee
 from __future__ import annotations
 
 import math
-import os
 import re
-import secrets
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path, PurePath
@@ -30,6 +28,7 @@ from pathlib import Path, PurePath
 import cv2
 import numpy as np
 
+from lanekeep.core.files import PendingFile
 from lanekeep.realcam.image_io import JPEG_SOI, PNG_SIGNATURE, ImageError, call_quietly, read_image
 
 MIN_IMAGE_PX = 64  # below this, in either direction, there is no lane to detect
@@ -251,13 +250,16 @@ class VideoOut:
     def __init__(self, path: str | Path, fps: float, size: tuple[int, int]) -> None:
         self.path = Path(path)
         self.size = size
-        # the writer chooses the container by the suffix: the temporary name keeps it
-        self._tmp = self.path.parent / f".{self.path.stem}.{secrets.token_hex(4)}.tmp{VIDEO_SUFFIX}"
-        self._writer, _ = call_quietly(cv2.VideoWriter, str(self._tmp),
+        cannot = OSError(f"OpenCV cannot write a {VIDEO_FOURCC} video at {self.path}")
+        try:  # the writer chooses the container by the suffix: the temporary name keeps it
+            self._file = PendingFile(self.path, VIDEO_SUFFIX)
+        except OSError:
+            raise cannot from None  # a folder where the writer could not have written either
+        self._writer, _ = call_quietly(cv2.VideoWriter, str(self._file.tmp),
                                        cv2.VideoWriter_fourcc(*VIDEO_FOURCC), float(fps), size)
         if not self._writer.isOpened():
             self.abort()
-            raise OSError(f"OpenCV cannot write a {VIDEO_FOURCC} video at {self.path}")
+            raise cannot
         self.frames = 0
 
     def write(self, bgr: np.ndarray) -> None:
@@ -269,16 +271,15 @@ class VideoOut:
 
     def close(self) -> None:
         self._writer.release()
-        try:
-            if self.frames == 0 or not self._tmp.is_file() or self._tmp.stat().st_size == 0:
-                raise OSError(f"OpenCV wrote no video at {self.path}")
-            os.replace(self._tmp, self.path)
-        finally:
-            self._tmp.unlink(missing_ok=True)
+        tmp = self._file.tmp
+        if self.frames == 0 or not tmp.is_file() or tmp.stat().st_size == 0:
+            self._file.discard()
+            raise OSError(f"OpenCV wrote no video at {self.path}")
+        self._file.commit()
 
     def abort(self) -> None:
         self._writer.release()
-        self._tmp.unlink(missing_ok=True)
+        self._file.discard()
 
     def __enter__(self) -> VideoOut:
         return self

@@ -25,11 +25,11 @@ import dataclasses
 import hashlib
 import json
 import math
-import os
 import typing
 from pathlib import Path
 from typing import Any
 
+from lanekeep.core.files import atomic_write
 from lanekeep.core.reproducibility import settings_now
 from lanekeep.scoring.metrics import CommonSteps, EpisodeReport, SourceReport
 
@@ -58,22 +58,12 @@ def dumps(obj: Any) -> str:
 
 
 def write_json(path: str | Path, obj: Any) -> Path:
-    """Write `obj` as strict JSON to `path` atomically (temporary file, then `os.replace`);
-    the folder is created if missing. Returns the path."""
+    """Write `obj` as strict JSON to `path` atomically (lanekeep/core/files.py); the folder
+    is created if missing. Returns the path."""
     path = Path(path)
     text = dumps(obj)  # serialise first: a failure here leaves no file at all
     path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    try:
-        with open(tmp, "x", encoding="utf-8") as f:  # "x": the umask's permissions, as open
-            f.write(text)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
-    return path
+    return atomic_write(path, text)
 
 
 def lanekeep_version() -> str:

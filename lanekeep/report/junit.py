@@ -15,12 +15,12 @@ tests/report/test_junit.py validates against an XSD of it.
 
 from __future__ import annotations
 
-import os
 import socket
 import xml.etree.ElementTree as ET
 from datetime import UTC, datetime
 from pathlib import Path
 
+from lanekeep.core.files import atomic_path
 from lanekeep.scoring.criteria import failure_message
 from lanekeep.scoring.metrics import EpisodeReport
 
@@ -73,11 +73,6 @@ def write_junit(path: str | Path, reports: dict[str, EpisodeReport | None], wall
     path = Path(path)
     tree = junit_tree(reports, wall_s)
     path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    try:
+    with atomic_path(path) as tmp:
         tree.write(tmp, encoding="utf-8", xml_declaration=True)
-        os.replace(tmp, path)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
     return path

@@ -21,6 +21,7 @@ from pathlib import Path
 from typing import Any
 
 from lanekeep.core.config_io import ConfigError
+from lanekeep.core.files import atomic_path
 from lanekeep.report.json_io import lanekeep_version, report_from_dict, strict
 from lanekeep.sweep.falsify_objective import margin_of
 from lanekeep.sweep.falsify_spec import FalsifySpec
@@ -115,7 +116,6 @@ class FalsifyStore:
                                       *(k for r in rows for k in r)]))
         table = pa.table({c: pa.array([r.get(c) for r in rows]) for c in columns})
         path = self.out / RESULTS
-        tmp = path.with_name(f".{RESULTS}.{os.getpid()}.tmp")
-        pq.write_table(table, tmp)
-        os.replace(tmp, path)
+        with atomic_path(path) as tmp:
+            pq.write_table(table, tmp)
         return path

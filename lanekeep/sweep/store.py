@@ -23,6 +23,7 @@ from pathlib import Path
 from typing import Any
 
 from lanekeep.core.config_io import ConfigError
+from lanekeep.core.files import atomic_path
 from lanekeep.report.json_io import lanekeep_version, strict, write_json
 from lanekeep.scoring.statistics import spread as seed_spread
 from lanekeep.sweep.run import FINISHED, CellResult
@@ -123,9 +124,8 @@ class SweepStore:
              *(k for r in rows for k in r)]))
         table = pa.table({c: pa.array([r.get(c) for r in rows]) for c in columns})
         results = self.out / RESULTS
-        tmp = results.with_name(f".{RESULTS}.{os.getpid()}.tmp")
-        pq.write_table(table, tmp)
-        os.replace(tmp, results)
+        with atomic_path(results) as tmp:
+            pq.write_table(table, tmp)
         return results, write_json(self.out / SUMMARY, self.summary(rows))
 
     def summary(self, rows: list[dict]) -> dict:
