@@ -1,6 +1,5 @@
-"""Controllers: the interface every controller meets (`Controller`, built from a
-`ControlContext`; the registry by name is lanekeep/control/registry.py), the paper's steering PID
-(eq. 9) with a gain schedule, and a speed PI.
+"""The paper's steering PID (eq. 9) with a gain schedule, and a speed PI. The interface a
+controller meets is lanekeep/control/base.py; the registry by name lanekeep/control/registry.py.
 
 The PID and the PI run at the control period and saturate to [-1, 1] with conditional-integration
 anti-windup (the integrator only accumulates while the output is not saturated in the same
@@ -11,46 +10,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Protocol, runtime_checkable
-
-from lanekeep.core.signals import VehicleSignals
-
-if TYPE_CHECKING:
-    from lanekeep.estimators.lane_estimator import EstimatorOutput
-    from lanekeep.scenario.schema import Scenario
-    from lanekeep.world.vehicle import CarGeometry
-
-
-@dataclass(frozen=True)
-class ControlContext:
-    """What a controller is built from: the scenario's control settings and the car's design
-    figures (a spec sheet, not its state)."""
-
-    dt_s: float  # control period
-    target_speed_mps: float
-    wheelbase_m: float
-    max_steer_rad: float  # road-wheel angle at steer = +-1
-    control_lookahead_m: float  # where the PID reads the lane ([estimation])
-    mode: str = "default"  # [estimation] mode: "paper" runs the paper's own PID
-
-    @classmethod
-    def of(cls, scenario: Scenario, geometry: CarGeometry) -> ControlContext:
-        return cls(scenario.control_period_s, scenario.target_speed_mps, geometry.wheelbase_m,
-                   geometry.max_steer_rad, scenario.estimation.control_lookahead_m,
-                   scenario.estimation.mode)
-
-
-@runtime_checkable
-class Controller(Protocol):
-    """Maps one step's estimate and sensor signals to (steer, throttle), each in [-1, 1]:
-    steer + = left (1 = full lock), throttle - = brake. May keep state between steps."""
-
-    def control(self, estimate: EstimatorOutput, signals: VehicleSignals
-                ) -> tuple[float, float]: ...
-
-    def reset(self) -> None:
-        """Forget state carried between steps (a new episode)."""
-        ...
 
 
 @dataclass(frozen=True)

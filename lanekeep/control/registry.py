@@ -12,7 +12,8 @@ before the first step.
 Built in: "pid" (the paper's eq. 9 steering PID with our improvements, or the paper's own in
 `mode = "paper"`; the default) and "stanley" (lanekeep/control/stanley.py). Any other name may be an
 import path `package.module:Class` or an entry point of the group `lanekeep.control.registry`
-(lanekeep/core/plugins.py); it is called as `Class(context)` with the `ControlContext` below.
+(lanekeep/core/plugins.py); it is called as `Class(context)` with the `ControlContext` of
+lanekeep/control/base.py.
 """
 
 from __future__ import annotations
@@ -22,13 +23,8 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from lanekeep.control.pid import (
-    ControlContext,
-    Controller,
-    PaperGains,
-    SpeedController,
-    SteeringPID,
-)
+from lanekeep.control.base import ControlContext, Controller
+from lanekeep.control.pid import PaperGains, SpeedController, SteeringPID
 from lanekeep.control.stanley import StanleyController
 from lanekeep.core import plugins
 from lanekeep.core.config_io import ConfigError

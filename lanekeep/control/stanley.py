@@ -19,7 +19,8 @@ import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
-from lanekeep.control.pid import ControlContext, SpeedController
+from lanekeep.control.base import ControlContext
+from lanekeep.control.pid import SpeedController
 from lanekeep.core.signals import VehicleSignals
 
 if TYPE_CHECKING:
