@@ -43,22 +43,32 @@ class TrackerConfig:
     """Noise, gate and coasting settings of a `LaneTracker`.
 
     Process noise is continuous white noise on the second time derivative of each coefficient
-    (constant-velocity model). The defaults assume ego-motion prediction is on, so Q only has to
-    cover what speed and yaw rate do not explain (sideslip, sensor bias, curvature changes); with
-    ego-motion off use `constant_velocity_only()`, whose Q also covers the car's own weaving.
-    Measurement standard deviations are a detector's coefficient noise (a fit over ~30 m: 5 cm
-    at the car, 0.3 m at 30 m from the heading term).
+    (constant-velocity model). The defaults are the closed loop's (what an `Episode` runs;
+    estimators/closed_loop_tracker.toml adds only the measured R): they assume ego-motion
+    prediction is on, so Q only has to cover what speed and yaw rate do not explain (sideslip,
+    sensor bias, curvature changes); with ego-motion off use `constant_velocity_only()`, whose
+    Q also covers the car's own weaving. Measurement standard deviations are a detector's
+    coefficient noise (a fit over ~30 m: 5 cm at the car, 0.3 m at 30 m from the heading term).
     """
 
     c0_accel_psd_m2ps3: float = 0.003
-    c1_accel_psd_ps3: float = 3e-5
-    c2_accel_psd_pm2ps3: float = 1e-6
+    # Q of c1 and c2: ego-motion explains most of the lane's motion in the car frame; what it
+    # cannot is the road's own curvature change (a clothoid into a 40 m radius turns c2 by
+    # 0.0125 /m within 1.3 s at 15 m/s, a rate of ~0.01 /m/s) and the sideslip change that
+    # comes with it (c1 ~0.03 /s): sized so the filter follows those within 2-3 steps instead
+    # of gating them.
+    c1_accel_psd_ps3: float = 1e-3
+    c2_accel_psd_pm2ps3: float = 3e-4
     c0_measurement_std_m: float = 0.05
     c1_measurement_std: float = 0.01
     c2_measurement_std_pm: float = 2.5e-4
     offset_measurement_std_m: float = 0.10  # 1-D mode: one offset, no fit to average over
     initial_coefficient_std: tuple[float, float, float] = (2.0, 0.2, 0.01)
-    initial_rate_std: tuple[float, float, float] = (1.0, 0.1, 1e-3)
+    # With the ego-motion predicted, a lane's coefficients hardly drift on their own: a new
+    # track's rates start near 0 (0.1 m/s, 0.02 /s), not free. A free c0 rate (1 m/s) takes the
+    # first innovation after a (re)start, one fit's noise over one step, for a drift and coasts
+    # the track off the road.
+    initial_rate_std: tuple[float, float, float] = (0.1, 0.02, 1e-3)
     gate_probability: float = 0.99
     max_coast_steps: int = 10  # 1 s at the 0.1 s control period
     # Whether a coasting track (gated or missed) keeps extrapolating its rates. With the
@@ -66,8 +76,10 @@ class TrackerConfig:
     # through a coast they turn one noisy fit's curvature into a hairpin the car then follows.
     # False: a coasting track moves with the ego-motion only (its rate means return to their
     # prior, 0, and their spread is kept in P). Without ego-motion the rates are the car's own
-    # weaving and must be extrapolated.
-    coast_with_rates: bool = True
+    # weaving and must be extrapolated (`constant_velocity_only()`). In snow one accepted bad
+    # fit gave the c2 rate 0.024 /s (2.5x the sharpest clothoid we ship), and the car, steered
+    # by a track that coasted with it, followed a 40 m hairpin off a 300 m curve.
+    coast_with_rates: bool = False
     ego_motion: bool = True
     ego_fit_range_m: float = 30.0  # look-ahead range refitted in the ego-motion transform
     ego_fit_points: int = 16
@@ -119,6 +131,8 @@ class TrackerConfig:
             "c0_accel_psd_m2ps3": 0.1,
             "c1_accel_psd_ps3": 1e-3,
             "c2_accel_psd_pm2ps3": 1e-6,
+            "initial_rate_std": (1.0, 0.1, 1e-3),  # the car's weaving moves the lane freely
+            "coast_with_rates": True,
         }
         fields.update(overrides)
         return cls(**fields)  # type: ignore[arg-type]

@@ -122,7 +122,7 @@ def test_the_tracker_tuning_file_is_read_strictly():
     with pytest.raises(ConfigError, match="by_detector.lanenet"):
         closed_loop_tracker(text.replace("\nlanenet = [", "\nlanenet = [[1.0], ", 1))
     with pytest.raises(ConfigError, match="tracker.c1_accel_psd"):
-        closed_loop_tracker(text.replace("c1_accel_psd_ps3 =", "c1_accel_psd =", 1))
+        closed_loop_tracker(text.replace("[tracker]\n", "[tracker]\nc1_accel_psd = 1e-3\n", 1))
     with pytest.raises(ConfigError, match="r_scale"):
         closed_loop_tracker(text.replace("r_scale = 4.0", ""))
     with pytest.raises(ConfigError, match="gate_probability"):
