@@ -23,13 +23,10 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
-import secrets
 import sys
-import tempfile
 from pathlib import Path
 
-from lanekeep.cli.outputs import folder_problem
+from lanekeep.core.files import atomic_path, folder_problem
 from lanekeep.evaluation.real_frames import (  # noqa: F401 - SLOT_COLOURS: public here too
     SEQUENCE_HORIZON_FRAMES,
     SLOT_COLOURS,
@@ -46,271 +43,51 @@ def _error(command: str, message: str) -> int:
     return EXIT_BAD_INPUT
 
 
-def _make_output_dir(folder: str) -> str | None:
-    """Create `folder` and prove it takes a file; the problem, or None."""
-    try:
-        Path(folder).mkdir(parents=True, exist_ok=True)
-        with tempfile.NamedTemporaryFile(dir=folder, prefix=".lanekeep-probe-"):
-            pass
-    except OSError as err:
-        return f"{folder}: cannot write there: {err.strerror or err}"
-    return None
-
-
-def _temp_beside(path: Path) -> tuple[int, Path]:
-    """A new file next to `path` (same folder, so os.replace is atomic), mode 0666 & ~umask."""
-    while True:
-        tmp = path.parent / f".{path.name}.{secrets.token_hex(4)}.tmp"
-        try:
-            return os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666), tmp
-        except FileExistsError:
-            continue
-
-
-def _write_atomically(path: Path, data: bytes) -> None:
-    """Write `data` to `path` via a temporary file in the same folder and os.replace."""
-    fd, tmp = _temp_beside(path)
-    try:
-        with os.fdopen(fd, "wb") as f:
-            f.write(data)
-        os.replace(tmp, path)
-    finally:
-        tmp.unlink(missing_ok=True)
-
-
-def _overlay_path(folder: str, image: str) -> Path:
-    return Path(folder) / (Path(image).stem + ".png")
-
-
-def _frame_overlay_path(folder: str, index: int, image: str, n_frames: int) -> Path:
-    """A sequence's frame overlay: its index first (names sort in the sequence's order), then
-    its image's stem, e.g. 000007_1_10.png."""
-    width = max(6, len(str(n_frames - 1)))
-    return Path(folder) / f"{index:0{width}d}_{Path(image).stem}.png"
-
-
-def _video_overlay_path(folder: str, video: str) -> Path:
-    from lanekeep.realcam.frames import VIDEO_SUFFIX
-
-    return Path(folder) / (Path(video).stem + VIDEO_SUFFIX)
-
-
-def _overlay_failed(path: Path, err: OSError) -> int:
-    print(f"lanekeep detect: error: {path}: cannot write the overlay: "
-          f"{getattr(err, 'strerror', None) or err}", file=sys.stderr)
-    return EXIT_FAILURE
-
-
-def _write_png(path: Path, bgr) -> int | None:
-    """The overlay image as a PNG at `path` (atomically); an exit code when it failed."""
-    import cv2
-
-    ok, encoded = cv2.imencode(".png", bgr)
-    try:
-        if not ok:
-            raise OSError("OpenCV cannot encode the overlay")
-        _write_atomically(path, encoded.tobytes())
-    except OSError as err:
-        return _overlay_failed(path, err)
-    return None
-
-
-def _input_problems(args: argparse.Namespace, camera_file) -> list[str]:
-    """Every problem with the inputs and outputs of `detect`, found before anything runs."""
-    from lanekeep.realcam.frames import is_video, size_problem
-    from lanekeep.realcam.image_io import read_image
-
-    problems = []
-    if args.overlay:
-        problem = folder_problem(Path(args.overlay))
-        if problem:
-            problems.append(problem)
-    for path in args.images:
-        if Path(path).is_file() and is_video(path):
-            problems.append(f"{path}: a video; give --sequence to run the detector through its "
-                            f"frames (lanekeep detect --sequence {path})")
-            continue
-        try:
-            h, w = read_image(path).shape[:2]
-        except ValueError as err:
-            if getattr(args, "debug", False):  # `lanekeep --debug`: the exception, traceback
-                raise
-            problems.append(str(err))
-            continue
-        too_small = size_problem(path, w, h)
-        if too_small:
-            problems.append(too_small)
-        elif camera_file is not None and (w, h) != (camera_file.width, camera_file.height):
-            problems.append(
-                f"{path}: image is {w}x{h} but camera file {args.camera} is calibrated for "
-                f"{camera_file.width}x{camera_file.height} (calibrate at this size, or give "
-                f"images of that size)")
-    if args.overlay and not problems:
-        # Two inputs with one stem would overwrite each other's overlay; an input inside the
-        # overlay folder could be overwritten by its own.
-        seen: dict[Path, str] = {}
-        for path in args.images:
-            target = _overlay_path(args.overlay, path).resolve()
-            source = Path(path).resolve()
-            if target == source:
-                problems.append(f"{path}: its overlay {_overlay_path(args.overlay, path)} "
-                                f"would overwrite the image itself")
-            elif seen.setdefault(target, str(source)) != str(source):
-                problems.append(f"{path}: its overlay {_overlay_path(args.overlay, path)} "
-                                f"would overwrite that of {seen[target]}")
-    return problems
-
-
-def _weights_problem(args: argparse.Namespace, config) -> str | None:
-    """Why the weights file the detector would load (--weights, else its own) is unusable."""
-    from lanekeep.detectors.registry import check_detectors_weights
-
-    try:
-        check_detectors_weights([args.detector], config, args.weights)
-    except ValueError as err:  # WeightsError: "PATH: why"
-        if getattr(args, "debug", False):
-            raise
-        return str(err)
-    return None
-
-
-def _sequence_problems(args: argparse.Namespace, source, camera_file) -> list[str]:
-    """What stops a checked sequence: its size against the camera file, overlays that would
-    overwrite an input."""
-    from lanekeep.realcam.frames import VideoFrames
-
-    video = isinstance(source, VideoFrames)
-    first = source.path if video else source.paths[0]
-    w, h = source.size
-    if camera_file is not None and (w, h) != (camera_file.width, camera_file.height):
-        return [f"{first}: frames are {w}x{h} but camera file {args.camera} is calibrated for "
-                f"{camera_file.width}x{camera_file.height} (calibrate at this size, or give "
-                f"frames of that size)"]
-    if not args.overlay:
-        return []
-    if video:
-        target = _video_overlay_path(args.overlay, source.path)
-        if target.resolve() == Path(source.path).resolve():
-            return [f"{source.path}: its overlay {target} would overwrite the video itself"]
-        return []
-    inputs = {Path(path).resolve() for path in source.paths}
-    for k, path in enumerate(source.paths):
-        target = _frame_overlay_path(args.overlay, k, path, len(source.paths))
-        if target.resolve() in inputs:
-            return [f"{path}: its overlay {target} would overwrite an image of the sequence"]
-    return []
-
-
-def _detect_sequence(args: argparse.Namespace, config, camera_file) -> int:
-    """`detect --sequence`: one detector through the frames or the video, one line a frame."""
-    from lanekeep.evaluation.real_frames import sequence_detector
-    from lanekeep.realcam.frames import VideoFrames, VideoOut, open_sequence
-    from lanekeep.realcam.image_io import ImageError
-
-    problems = []
-    if args.overlay:
-        problem = folder_problem(Path(args.overlay))
-        problems += [problem] if problem else []
-    source, found = open_sequence(args.images)
-    problems += found
-    if source is not None:
-        problems += _sequence_problems(args, source, camera_file)
-    if _refused(args, config, problems):
-        return EXIT_BAD_INPUT
-    try:  # one camera and one detector for every frame
-        detect = sequence_detector(source.frames(), args.detector, config, camera_file,
-                                   args.weights)
-    except ValueError as err:  # a frame or the weights file changed since it was checked
-        if getattr(args, "debug", False):
-            raise
-        return _error("detect", str(err))
-    video = isinstance(source, VideoFrames)
-    n_frames = None if video else len(source.paths)
-    target = _video_overlay_path(args.overlay, source.path) if args.overlay and video else None
-    out = None
-    if target is not None:
-        try:
-            out = VideoOut(target, source.fps, source.size)
-        except OSError as err:
-            return _overlay_failed(target, err)
-    try:
-        for frame in source.frames():
-            result = detect(frame.image)
-            print(json.dumps(result.line(frame.label, args.format)), flush=True)
-            if out is not None:
-                out.write(result.overlay(frame.image))
-            elif args.overlay:
-                png = _frame_overlay_path(args.overlay, frame.index, frame.label, n_frames)
-                failed = _write_png(png, result.overlay(frame.image))
-                if failed:
-                    return failed
-    except BaseException as err:
-        if out is not None:  # no half-written video left behind
-            out.abort()
-        if isinstance(err, ImageError):  # a frame changed since it was checked
-            return _error("detect", str(err))
-        raise
-    if out is not None:
-        try:
-            out.close()
-        except OSError as err:
-            return _overlay_failed(target, err)
-    return EXIT_OK
-
-
-def _refused(args: argparse.Namespace, config, problems: list[str]) -> bool:
-    """The input problems found, the weights file's added, each printed as one error line;
-    True when there is any. Without one, the overlay folder is made (nothing before)."""
-    weights_problem = _weights_problem(args, config)
-    problems = [*problems, *([weights_problem] if weights_problem else [])]
-    if not problems and args.overlay:
-        problem = _make_output_dir(args.overlay)
-        problems += [problem] if problem else []
-    for problem in problems:
-        _error("detect", problem)
-    return bool(problems)
+def _print_line(line: dict) -> None:
+    print(json.dumps(line), flush=True)
 
 
 def cmd_detect(args: argparse.Namespace) -> int:
     from lanekeep.detectors.config import load_config
-    from lanekeep.evaluation.real_frames import frame_detector
+    from lanekeep.evaluation import detect_frames as df
     from lanekeep.realcam.camera_file import read_camera_file
     from lanekeep.realcam.frames import expand_folders
-    from lanekeep.realcam.image_io import read_image
 
+    debug = getattr(args, "debug", False)  # `lanekeep --debug`: the exception, traceback
     try:
         config = load_config(args.config)
         camera_file = read_camera_file(args.camera) if args.camera else None
     except (OSError, ValueError) as err:
-        if getattr(args, "debug", False):
+        if debug:
             raise
         if isinstance(err, OSError) and err.filename:
             return _error("detect", f"{err.filename}: cannot read it: {err.strerror or err}")
         return _error("detect", str(err))
-    if args.sequence:
-        return _detect_sequence(args, config, camera_file)
+    request = df.DetectRequest(args.detector, config, camera_file, args.camera, args.weights,
+                               args.format, args.overlay, strict=debug)
     # All inputs first: a bad one stops the command before any detection or output.
-    args.images, problems = expand_folders(args.images)
-    problems += _input_problems(args, camera_file)
-    if _refused(args, config, problems):
+    if args.sequence:
+        source, problems = df.sequence_problems(request, args.images)
+    else:
+        args.images, problems = expand_folders(args.images)
+        problems += df.photo_problems(request, args.images)
+    problems = df.refusals(request, problems)
+    for problem in problems:
+        _error("detect", problem)
+    if problems:
         return EXIT_BAD_INPUT
-    for path in args.images:
-        try:
-            image = read_image(path)  # checked above; changed since, it is still an error
-        except ValueError as err:
-            return _error("detect", str(err))
-        try:  # a new camera and detector per photo: a learned one's memory would mislead
-            detect = frame_detector([image], args.detector, config, camera_file, args.weights)
-        except ValueError as err:  # the weights file changed since it was checked
-            if getattr(args, "debug", False):
-                raise
-            return _error("detect", str(err))
-        result = detect(image)
-        print(json.dumps(result.line(str(path), args.format)), flush=True)
-        if args.overlay:
-            failed = _write_png(_overlay_path(args.overlay, path), result.overlay(image))
-            if failed:
-                return failed
+    try:
+        if args.sequence:
+            df.detect_sequence(request, source, _print_line)
+        else:
+            df.detect_photos(request, args.images, _print_line)
+    except df.OverlayError as err:
+        print(f"lanekeep detect: error: {err}", file=sys.stderr)
+        return EXIT_FAILURE
+    except (df.InputChanged, df.DetectorUnavailable) as err:
+        if debug and isinstance(err, df.DetectorUnavailable):
+            raise
+        return _error("detect", str(err))
     return EXIT_OK
 
 
@@ -344,15 +121,10 @@ def cmd_calibrate(args: argparse.Namespace) -> int:
     cam = result.camera
     try:  # a temporary file renamed into place: never a half-written camera file
         out.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = _temp_beside(out)
-        os.close(fd)
-        try:
+        with atomic_path(out) as tmp:
             write_camera_file(tmp, cam, comment=(
                 f"lanekeep calibrate: {len(result.used)} images, pattern {args.pattern}, "
                 f"reprojection RMS {result.rms_px:.3f} px"))
-            os.replace(tmp, out)
-        finally:
-            tmp.unlink(missing_ok=True)
     except OSError as err:
         return _error("calibrate", f"{args.out}: cannot write the camera file: "
                                    f"{err.strerror or err}")

@@ -12,12 +12,12 @@ the tables and every other line go to stderr.
 from __future__ import annotations
 
 import argparse
-import os
 import sys
 from pathlib import Path
 from typing import Any, TextIO
 
 from lanekeep.core.config_io import ConfigError
+from lanekeep.core.files import folder_problem
 
 STDOUT = "-"
 
@@ -48,20 +48,6 @@ def check_outputs(args: argparse.Namespace) -> None:
         problem = folder_problem(target if is_folder else target.parent)
         if problem:
             raise ConfigError("", option, f"{path}: {problem}")
-
-
-def folder_problem(folder: Path) -> str | None:
-    """Why `folder` could not become a folder to write in, found without creating anything."""
-    if folder.exists() and not folder.is_dir():
-        return f"{folder} is not a folder"
-    existing = folder
-    while not existing.exists() and existing != existing.parent:
-        existing = existing.parent
-    if not existing.is_dir():
-        return f"cannot create the folder {folder}: {existing} is not a folder"
-    if not os.access(existing, os.W_OK | os.X_OK):
-        return f"cannot write in {existing}"
-    return None
 
 
 def write_json_output(path: str, document: Any) -> None:

@@ -74,3 +74,17 @@ def atomic_write(path: str | Path, data: bytes | str, sync: bool = True) -> Path
         if sync:
             os.fsync(f.fileno())
     return path
+
+
+def folder_problem(folder: Path) -> str | None:
+    """Why `folder` could not become a folder to write in, found without creating anything."""
+    if folder.exists() and not folder.is_dir():
+        return f"{folder} is not a folder"
+    existing = folder
+    while not existing.exists() and existing != existing.parent:
+        existing = existing.parent
+    if not existing.is_dir():
+        return f"cannot create the folder {folder}: {existing} is not a folder"
+    if not os.access(existing, os.W_OK | os.X_OK):
+        return f"cannot write in {existing}"
+    return None
