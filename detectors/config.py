@@ -14,6 +14,7 @@ from importlib import resources
 from pathlib import Path
 
 from lanekeep.core.config_io import InvalidValue, from_dict
+from lanekeep.geometry.lane_width import LANE_WIDTH_PRIOR_M
 
 
 @dataclass(frozen=True)
@@ -100,7 +101,7 @@ class Preprocess:
 class LaneRules:
     """What counts as an ego-lane boundary, in metres."""
 
-    lane_width_m: float = 3.7
+    lane_width_m: float = LANE_WIDTH_PRIOR_M  # a belief, not the road's (geometry/lane_width.py)
     width_tolerance_m: float = 0.8  # |measured - lane_width| above this: keep only the better side
     min_half_width: float = 0.1  # a boundary's |y| at the near edge, in lane widths
     max_half_width: float = 1.1

@@ -11,6 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from lanekeep.core.config_io import InvalidValue
+from lanekeep.geometry.lane_width import LANE_WIDTH_PRIOR_M
 
 RESIDUAL_MODES = ("distance_aligned", "one_step_delay")
 OUTPUT_MODES = ("select", "fused", "precision")
@@ -69,8 +70,9 @@ class EstimatorSettings:
     prefer_accepted: bool = True
     # One-boundary detections are centred with the lane width the detectors measure when they
     # see both boundaries (a running mean); until then with this prior: the common 3.5-3.75 m
-    # of motorway lanes, not the simulated road's width.
-    lane_width_prior_m: float = 3.7
+    # of motorway lanes (lanekeep/geometry/lane_width.py, the detectors' belief too), not the
+    # simulated road's width.
+    lane_width_prior_m: float = LANE_WIDTH_PRIOR_M
     # Eq. 8's R: the rear reference's offset noise (m) in the MMAE's residual density.
     reference_std_m: float = 0.05
     # A rear reading whose lane is further than this from the width the front detectors
