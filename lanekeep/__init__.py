@@ -5,22 +5,25 @@ imports only from lower layers, packages on one layer never import each other, a
 imports `cli` (tests/project/test_layers.py enforces it):
 
     0  core        config reading, plug-in loading, stop signals, timing, progress, workers,
-                   the vehicle-signal type;                 mjcf (the car's MJCF, data)
-    1  geometry    road (Frenet), road meshes, marking layout, pinhole camera, lens
+                   files, the vehicle-signal and step types;  mjcf (the car's MJCF, data)
+    1  geometry    road (Frenet), road meshes, marking layout, pinhole camera, lens, car specs
     2  detectors   lane detectors (frames -> LaneEstimate);  realcam (real cameras, photos)
     3  estimators  Kalman trackers, MMAE, the closed loop's estimator and its settings
     4  scenario    the scenario schema (frozen dataclasses from TOML), shipped scenarios
     5  world       the MjSpec world: road, paint, props, traffic, lighting, the car
-    6  sensing     cameras and renders, lens and weather effects, vehicle sensors
-    7  scoring     truth (computed once a step), metrics, departures, criteria
-    8  control     the Controller interface, PID (paper 001 eq. 9), Stanley, registry
-    9  report      rerun recording, plots, JSON, JUnit, tables, one palette
-    10 loop        Episode, paper mode, the runner;           evaluation (AP, IoU, datasets)
-    11 sweep       grids of episodes;  envs (dm_env, Gymnasium);  tuning (tools' library)
-    12 cli         thin: parse, call one library function, print, exit code
+    6  sensing     cameras and renders, lens and weather effects, vehicle sensors, Simulator
+    7  control     the Controller interface, PID (paper 001 eq. 9), Stanley, registry
+    8  driver      what the car runs: Driver.step(Observation) -> (Command, Belief)
+    9  scoring     truth (computed once a step), StepScorer, metrics, departures, criteria
+    10 report      rerun recording, plots, JSON, JUnit, tables, one palette
+    11 loop        Episode, the runner;                       evaluation (AP, IoU, datasets)
+    12 sweep       grids of episodes;  envs (dm_env, Gymnasium);  tuning (tools' library)
+    13 cli         thin: parse, call one library function, print, exit code
 
-Detectors and estimators never touch MuJoCo; perception, estimation and control see camera
-frames and vehicle signals only, and only scoring and report read the simulator's truth.
+The car's side (detectors, estimators, control, driver) never imports the world, sensing,
+scoring, the loop, the recorder, MuJoCo or dm_control: perception, estimation and control see
+camera frames and vehicle signals only, by construction, and only scoring and report read the
+simulator's truth.
 No private name crosses a module.
 
 MuJoCo's offscreen renderer needs an OpenGL backend chosen before `mujoco` is imported; on a

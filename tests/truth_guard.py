@@ -135,10 +135,10 @@ class _GuardedEpisode(Episode):
 
 def car_side(episode: Episode) -> dict[str, object]:
     """What perception, estimation and control are: the objects the truth must not reach."""
-    parts = {f"detector {name}": d for name, d in episode.front.items()}
-    parts |= {"reference detector": episode.reference, "estimator": episode.estimator,
-              "controller": episode.controller, "odometry": episode.odometry,
-              "roll filter": episode.roll}
+    parts = {f"detector {name}": d for name, d in episode.driver.front.items()}
+    parts |= {"reference detector": episode.driver.reference, "estimator": episode.driver.estimator,
+              "controller": episode.driver.controller, "odometry": episode.driver.odometry,
+              "roll filter": episode.driver.roll}
     return parts
 
 
@@ -151,10 +151,10 @@ def truth_objects(episode: Episode) -> dict[int, str]:
              "the car": world.car, "the road": world.road, "world.conditions": world.conditions,
              "world.layout": world.layout, "the scenario": scenario,
              "scenario.road": scenario.road, "scenario.conditions": scenario.conditions,
-             "the renderer": episode.rig, "the sensors": episode.sensors,
-             "the metrics": episode.metrics, "the recorder": episode.recorder}
+             "the renderer": episode.simulator.rig, "the sensors": episode.simulator.sensors,
+             "the metrics": episode.scorer.metrics, "the recorder": episode.recorder}
     named |= {f"road.segments[{i}]": s for i, s in enumerate(world.road.segments)}
-    named |= {f"the {camera} effects": fx for camera, fx in episode.effects.items()}
+    named |= {f"the {camera} effects": fx for camera, fx in episode.simulator.effects.items()}
     return {id(obj): name for name, obj in named.items() if obj is not None}
 
 

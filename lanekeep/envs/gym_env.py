@@ -251,9 +251,10 @@ class LaneKeepGymEnv(gym.Env):
                 if layer == "rgb":
                     image = percept.frames[c].copy()
                 elif layer == "depth":
-                    _, image = episode.rig.render_rgb_depth(episode.world.data, c, step_px=1)
+                    rig = episode.simulator.rig
+                    _, image = rig.render_rgb_depth(episode.world.data, c, step_px=1)
                 else:
-                    ids = episode.rig.render_segmentation(episode.world.data, c)
+                    ids = episode.simulator.rig.render_segmentation(episode.world.data, c)
                     image = episode.world.marking_mask(ids).astype(np.uint8)
                 images[_image_key(c, layer)] = image
         return images

@@ -1,128 +1,85 @@
-"""One closed-loop episode: sense, detect, track, select, control, actuate, score, record.
+"""One closed-loop episode: a short loop over the simulator, the driver and the scorer.
 
-Each line of `Episode.step` is one call into one module (DESIGN.md's loop). The front
-detectors each feed a Kalman lane tracker; the rear detector is the MMAE's reference (the
-paper's "observer"); the MMAE selects (or fuses) the front models; the scenario's controller
-(lanekeep/control/registry.py; by default the PID on the chosen lane's offset at the control
-look-ahead, and the speed PI) steers and drives.
+    sense     Simulator.sense() -> Observation(frames, signals)    lanekeep/sensing/simulator.py
+    drive     Driver.step(observation) -> (Command, Belief)          lanekeep/driver/
+    actuate   Simulator.actuate(command): physics, traffic
+    score     StepScorer.score(...) -> StepResult                    lanekeep/scoring/step_scorer.py
+    record    Recorder.log_step(result)                              lanekeep/report/record.py
 
-What the car knows is what a car has: the camera frames and its sensor signals
-(lanekeep/sensing/vehicle_sensors.py: wheel odometry, IMU yaw rate, accelerations, steering
-angle), dead-reckoned into the estimator's ego-motion (estimators/odometry.py). The
-detectors, the estimator and the controller are built from the car's camera models, its
-estimation and control settings and its spec sheet, never from the world. The simulator's
-state (the car's true pose and speed, the MuJoCo state, the road, the scenario's conditions)
-sits behind one gate, `self.truth` (lanekeep/scoring/gate.py), which only scoring (`_score`),
-the recorder, the sensors and the renderer and image effects (`_sense`) are handed;
-tests/loop/test_honest_loop.py proves that perception, estimation and control run without it.
+The driver is built from a `DriverConfig` (the scenario's estimation and control settings, the
+car's spec sheet and its cameras' models), never from the world, and its package cannot import
+the world, sensing, scoring or MuJoCo (tests/project/test_layers.py): what the car knows is
+what a car has. The simulator's truth sits behind one gate, `self.truth`
+(lanekeep/scoring/gate.py), handed to the scorer and the recorder only.
 """
 
 from __future__ import annotations
 
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 
-import numpy as np
-
-from lanekeep.control.registry import ControlContext, Controller, make_controller
 from lanekeep.core.interrupts import stop_point, stop_requested
-from lanekeep.core.signals import VehicleSignals
+from lanekeep.core.steps import Command, Observation
 from lanekeep.core.timing import StageClock
-from lanekeep.core.workers import threads_now
-from lanekeep.detectors.base import Detector, LaneEstimate
-from lanekeep.detectors.registry import builtin_family, front_labels, make_detector
-from lanekeep.estimators.lane_estimator import EstimatorOutput, LaneEstimator
-from lanekeep.estimators.odometry import DeadReckoning
-from lanekeep.estimators.roll import RollFilter, corrected
-from lanekeep.loop.detection import DetectionRunner, group_jobs
-from lanekeep.loop.paper_mode import estimator_settings, front_detector_config, roll_compensation
+from lanekeep.driver.config import DriverConfig
+from lanekeep.driver.driver import Belief, Driver
 from lanekeep.report.record import EpisodeInfo, NullRecorder, Recorder
 from lanekeep.scenario.nuisance import with_nuisance
 from lanekeep.scenario.schema import Scenario
-from lanekeep.scenario.streams import stream_entropy
-from lanekeep.scoring.departures import off_road_reason, wheels_outside_lane
 from lanekeep.scoring.gate import Truth
 from lanekeep.scoring.metrics import EpisodeReport
-from lanekeep.scoring.step_score import REFERENCE, loop_metrics, score_estimates
-from lanekeep.scoring.step_truth import StepTruth, step_truth
-from lanekeep.sensing.cameras import CameraRig, RenderSettings
-from lanekeep.sensing.paint_visibility import visible_paint
-from lanekeep.sensing.snapshot import make_effects
-from lanekeep.sensing.vehicle_sensors import VehicleSensors
-from lanekeep.world.build import SimulationError, World, build
+from lanekeep.scoring.step_result import StepResult
+from lanekeep.scoring.step_scorer import StepScorer
+from lanekeep.sensing.simulator import Simulator
+from lanekeep.world.build import SimulationError, World
 
-TYRES = ("front_left_tyre", "front_right_tyre", "rear_left_tyre", "rear_right_tyre")
+__all__ = ["Episode", "Percept", "StepResult", "driver_config"]
+
 
 @dataclass(frozen=True)
-class StepResult:
-    """Everything one control step produced (what the recorder and the dm_env wrapper see)."""
-
-    index: int
-    time_s: float
-    frames: dict[str, np.ndarray]
-    estimates: dict[str, LaneEstimate]
-    tracked: dict[str, np.ndarray | None]  # centre-line coefficients per front model
-    track_offsets_m: dict[str, float | None]  # each track's offset at the output's look-ahead
-    probabilities: np.ndarray
-    selected: int
-    output_offset_m: float | None
-    output_x_m: float  # the look-ahead of output_offset_m
-    output_centre: np.ndarray | None
-    reference_m: float | None
-    reference_x_m: float  # the look-ahead of reference_m
-    reference_repaired: bool
-    # The MMAE's residuals r_n (eq. 2): the reference minus each model's offset carried to
-    # where the reference looked; NaN where a model was not compared or the MMAE did not run.
-    mmae_residuals_m: np.ndarray
-    steer: float
-    throttle: float
-    # The step's truth, computed once by scoring (lanekeep/scoring/step_truth.py): offsets at
-    # every look-ahead an estimate reports at or the recorder draws, the centre line, the
-    # car's offset after the period. Read by the metrics, the recorder, the plots and tools.
-    truth: StepTruth
-    pose: tuple[float, float, float]  # after the control period
-    sensed_pose: tuple[float, float, float]  # where the frames were taken
-    speed_mps: float  # true speed (scoring, recording)
-    signals: VehicleSignals  # what the car's sensors said at the frames' time
-    events: list[str] = field(default_factory=list)
-    tracker_status: dict[str, str] = field(default_factory=dict)  # UpdateStatus value per model
-    # Marking masks (uint8, 1 = paint) per camera rendered from the state after this step, the
-    # state the next step's frames come from; only when the recorder asks (`wants_masks`).
-    marking_masks_after: dict[str, np.ndarray] | None = None
-    # Why the car is off the road after this period ("" while on it): `run()` ends there.
-    off_road: str = ""
-
-    @property
-    def truth_offset_m(self) -> float:
-        """The car's true lateral offset after the period (at `pose`)."""
-        return self.truth.car_offset_m
-
-    @property
-    def truth_output_m(self) -> float:
-        """The true offset at the output's look-ahead, where the frames were taken."""
-        return self.truth.offset_at(self.output_x_m)
-
-    @property
-    def truth_centre(self) -> np.ndarray:
-        """The true lane centre in the frame of `sensed_pose`."""
-        return self.truth.centre
-
-
-@dataclass
 class Percept:
-    """What the car has at the start of a control period, before it acts: its camera frames,
-    its sensor signals, the detections and the estimator's output. `sensed_pose` (the true pose
-    the frames were taken from) is for scoring only."""
+    """What the car has at the start of a control period, before it acts: its observation and
+    what it made of it. `sensed_pose` (the true pose the frames were taken from) is for
+    scoring only."""
 
     index: int
-    time_s: float
-    frames: dict[str, np.ndarray]
-    signals: VehicleSignals
-    estimates: dict[str, LaneEstimate]
-    estimate: EstimatorOutput
-    events: list[str]
+    observation: Observation
+    belief: Belief
     sensed_pose: tuple[float, float, float]
+
+    @property
+    def time_s(self) -> float:
+        return self.observation.time_s
+
+    @property
+    def frames(self):
+        return self.observation.frames
+
+    @property
+    def signals(self):
+        return self.observation.signals
+
+    @property
+    def estimates(self):
+        return self.belief.estimates
+
+    @property
+    def estimate(self):
+        return self.belief.estimate
+
+    @property
+    def events(self) -> list[str]:
+        return self.belief.events
+
+
+def driver_config(scenario: Scenario, simulator: Simulator) -> DriverConfig:
+    """The driver's settings (the scenario's estimation and control sections) and the car's
+    spec sheet (from the simulator's car and cameras); nothing of the world."""
+    return DriverConfig(estimation=scenario.estimation, controller=scenario.control.controller,
+                        period_s=scenario.control_period_s,
+                        target_speed_mps=scenario.target_speed_mps, car=simulator.car,
+                        cameras=simulator.cameras, distortions=simulator.distortions)
 
 
 class Episode:
@@ -130,72 +87,27 @@ class Episode:
 
     def __init__(self, scenario: Scenario, recorder: Recorder | None = None,
                  render_size: tuple[int, int] | None = None) -> None:
-        # the seed's start and traffic timing (the file's own seed: its nominal drive)
-        scenario = with_nuisance(scenario)
-        world = build(scenario)
-        # The gate to the truth: scoring, the recorder, the sensors and the renderer get it.
-        self.truth = Truth(world, scenario)
-        # What the car's perception, estimation and control are built from (settings only).
-        self.estimation = est = scenario.estimation
-        width, height = render_size or (scenario.camera.width, scenario.camera.height)
-        self.rig = CameraRig(world.model, RenderSettings.of(scenario, width, height))
-        # seed and name: scenarios on one seed draw independent noise (scenario/streams.py)
-        self.rng = np.random.default_rng(stream_entropy(scenario))
-        # One effects pipeline per camera: lens drops and the auto-exposure keep state.
-        self.effects = make_effects(scenario, world, self.rig, self.rng)
+        scenario = with_nuisance(scenario)  # the seed's start and traffic timing
+        self.clock = StageClock()  # wall time per stage (`lanekeep perf`)
+        self.simulator = Simulator(scenario, render_size, self.clock)
+        # The gate to the truth: the scorer and the recorder get it, the driver never.
+        self.truth = Truth(self.simulator.world, scenario)
         self.dt_s = scenario.control_period_s
-        # keyed by label: a plug-in given by import path by its own `name` (core/plugins.py)
-        labels = front_labels(est.front_detectors)
-        # What the loop measured per built-in (paper mode's windows, the trackers' noise) goes
-        # to a plug-in that subclasses one too (detectors/registry.py `builtin_family`).
-        families = {label: builtin_family(name) or name
-                    for label, name in zip(labels, est.front_detectors, strict=True)}
-        self.front: dict[str, Detector] = {
-            label: make_detector(name, self.rig.cameras["front"],
-                                 front_detector_config(families[label], est.mode),
-                                 self.rig.distortion("front"))
-            for label, name in zip(labels, est.front_detectors, strict=True)
-        }
-        self.reference: Detector = make_detector(est.reference_detector,
-                                                   self.rig.cameras[est.reference_camera],
-                                                   distortion=self.rig.distortion(
-                                                       est.reference_camera))
-        self.roll = RollFilter(roll_compensation(est), self.dt_s)
-        self.estimator = LaneEstimator(
-            list(self.front),
-            estimator_settings(est),
-            reference_x_m=float(self.reference.x_ref),
-            families=families,
-        )
-        geometry = world.car.geometry  # the car's spec sheet, not its state
-        # The sensors draw from their own stream of the episode's generator, so that they do
-        # not shift the image effects' draws (and a perfect-sensor run sees the same frames).
-        self.sensors = VehicleSensors(scenario.sensors, self.dt_s, self.rng.spawn(1)[0])
-        # The reference point is the middle of the wheelbase (lanekeep/world/vehicle.py).
-        self.odometry = DeadReckoning(self.dt_s, geometry.wheelbase_m / 2.0)
-        # [control] controller: "pid" (default), "stanley", an entry point or an import path
-        self.controller: Controller = make_controller(scenario.control.controller,
-                                                      ControlContext.of(scenario, geometry))
-        self.controller.reset()
-        self.metrics = loop_metrics(list(self.front))
+        self.driver = Driver(driver_config(scenario, self.simulator), self.clock)
+        self.scorer = StepScorer(self.truth, list(self.driver.front),
+                                 scenario.estimation.offset_lookahead_m, self.driver.centre_of)
         self.recorder: Recorder = recorder or NullRecorder()
-        self.recorder.start(EpisodeInfo(world.road, dict(self.rig.cameras), list(self.front),
-                                        float(self.dt_s),
-                                        (geometry.length_m, geometry.width_m)))
-        for detector in [*self.front.values(), self.reference]:
-            detector.reset()
+        car = self.simulator.car
+        self.recorder.start(EpisodeInfo(self.truth.road, self.simulator.cameras,
+                                        list(self.driver.front), float(self.dt_s),
+                                        (car.length_m, car.width_m)))
         self.index = 0
         self._percept: Percept | None = None  # sensed, not yet acted on
-        self.detector_errors = 0
-        self.clock = StageClock()  # wall time per stage (`lanekeep perf`)
-        self.detection = DetectionRunner(threads_now)
-        self._tyre_geoms = [world.model.geom(n).id for n in TYRES]
         self._wall_start = time.perf_counter()
 
     @property
     def world(self) -> World:
-        """The simulator (truth): for tools outside the loop and the faces' privileged views.
-        The loop itself reads it through `self.truth`."""
+        """The simulator (truth): for tools outside the loop and the faces' privileged views."""
         return self.truth.world
 
     @property
@@ -203,9 +115,13 @@ class Episode:
         """The scenario as run (truth: its road and conditions), read through the gate."""
         return self.truth.scenario
 
+    @property
+    def detector_errors(self) -> int:
+        return self.driver.detector_errors
+
     # -- the loop ------------------------------------------------------------------------------
     def observe(self) -> Percept:
-        """The start of a control period: frames, sensor signals, detections and the estimate.
+        """The start of a control period: the observation and the driver's belief.
 
         An agent outside (the Gymnasium and dm_env faces) calls this, decides, then `act`s on
         it, so it acts on the frames of the same period as the built-in controller does. The
@@ -213,34 +129,28 @@ class Episode:
         """
         if self._percept is None:
             self.clock.start()
-            events: list[str] = []
-            sensed_pose = self._true_pose()  # scoring: where the frames are taken from
-            frames = self._sense()
-            signals = self.sensors.sample(self.truth.car)
-            estimates = self._roll_corrected(self._detect(frames, events), signals)
-            estimate = self._estimate(estimates, signals)  # laps "track" and "mmae"
-            events.extend(estimate.events)
-            self._percept = Percept(index=self.index, time_s=self.truth.time_s(),
-                                    frames=frames, signals=signals, estimates=estimates,
-                                    estimate=estimate, events=events, sensed_pose=sensed_pose)
+            sensed_pose = self.scorer.pose()  # scoring: where the frames are taken from
+            observation = self.simulator.sense()
+            belief = self.driver.perceive(observation)
+            self._percept = Percept(self.index, observation, belief, sensed_pose)
         return self._percept
 
     def act(self, action: tuple[float, float] | None = None) -> StepResult:
-        """The rest of the control period: steer and throttle (the controller's, or `action`
-        = (steer, throttle) from outside) on the latest percept, physics, scoring, recording."""
+        """The rest of the control period: the driver's command (or `action` = (steer,
+        throttle) from outside) on the latest percept, physics, scoring, recording."""
         percept = self.observe()
         self._percept = None
         clock = self.clock
-        estimate, signals = percept.estimate, percept.signals
-        steer, throttle = self._control(estimate, signals) if action is None else action
+        command = (self.driver.command(percept.belief, percept.signals) if action is None
+                   else Command(*action))
         clock.lap("control")
-        self.truth.world.step(steer, throttle, self.dt_s)  # actuate: the simulator
+        self.simulator.actuate(command)
         clock.lap("physics")
-        result = self._score(percept.sensed_pose, percept.frames, percept.estimates, estimate,
-                             signals, steer, throttle, percept.events)
+        result = self.scorer.score(self.index, percept.sensed_pose, percept.observation,
+                                   percept.belief, command)
         clock.lap("score")
         if self.recorder.wants_masks(self.index):
-            result = replace(result, marking_masks_after=self._marking_masks())
+            result = replace(result, marking_masks_after=self.simulator.marking_masks())
         self.recorder.log_step(result)
         clock.lap("record")
         self.index += 1
@@ -250,130 +160,6 @@ class Episode:
         """One control period (`observe`, then `act`). `action` = (steer, throttle) overrides
         the controller."""
         return self.act(action)
-
-    def _sense(self) -> dict[str, np.ndarray]:
-        """The cameras' frames: the renderer and the image effects image the true scene
-        (motion blur follows the true motion)."""
-        data, car = self.truth.data, self.truth.car
-        frames = {}
-        for name in self.rig.CAMERA_NAMES:
-            depth = None
-            if self.rig.settings.depth:
-                rgb, depth = self.rig.render_rgb_depth(data, name)
-            else:
-                rgb = self.rig.render_rgb(data, name)
-            self.clock.lap(f"render_{name}")
-            frames[name] = self.effects[name](rgb, self.rng, speed_mps=car.speed_mps(),
-                                              depth_m=depth)
-            self.clock.lap(f"effects_{name}")
-        return frames
-
-    def _detect(self, frames, events) -> dict[str, LaneEstimate]:
-        """Every detector's estimate of this step's frames (lanekeep/loop/detection.py: on two
-        threads when this process may use two cores); a detector that fails counts as a miss,
-        with an event, in the detectors' order whatever thread ran it."""
-        est = self.estimation
-        named = [(name, detector, frames["front"]) for name, detector in self.front.items()]
-        named.append((REFERENCE, self.reference, frames[est.reference_camera]))
-        parallel = self.detection.parallel_now()
-        jobs = group_jobs(named, parallel)
-        results = self.detection.run(jobs, parallel)
-        by_name = {name: detected for job, job_results in zip(jobs, results, strict=True)
-                   for name, detected in zip(job.names, job_results, strict=True)}
-        out, own_s = {}, {}
-        for name, _, _ in named:
-            detected = by_name[name]
-            if detected.event:
-                self.detector_errors += 1
-                events.append(f"detector {name} {detected.event}")
-            out[name] = detected.estimate
-            own_s["detect_reference" if name == REFERENCE else f"detect_{name}"] = detected.seconds
-        self.clock.share(own_s)  # on two threads: the section's wall time, shared out
-        return out
-
-    def _roll_corrected(self, estimates: dict[str, LaneEstimate], signals: VehicleSignals
-                        ) -> dict[str, LaneEstimate]:
-        """Each camera's lanes with the body roll's offset error taken out (estimators/roll.py),
-        from the lateral accelerometer."""
-        self.roll.update(signals.accel_lat_mps2)
-        camera = {REFERENCE: self.estimation.reference_camera}
-        return {name: corrected(e, self.roll.offset_error_m(camera.get(name, "front")))
-                for name, e in estimates.items()}
-
-    def _estimate(self, estimates: dict[str, LaneEstimate], signals: VehicleSignals
-                  ) -> EstimatorOutput:
-        front = {name: estimates[name] for name in self.front}
-        ego = self.odometry.update(signals.speed_mps, signals.yaw_rate_rps)
-        return self.estimator.update(front, estimates[REFERENCE], ego, lap=self.clock.lap)
-
-    def _control(self, estimate: EstimatorOutput, signals: VehicleSignals
-                 ) -> tuple[float, float]:
-        """The scenario's controller (lanekeep/control/registry.py): estimate and sensors only."""
-        steer, throttle = self.controller.control(estimate, signals)
-        return float(steer), float(throttle)
-
-    def _true_pose(self) -> tuple[float, float, float]:
-        """The car's true pose, for scoring only."""
-        return self.truth.pose()
-
-    def _score(self, sensed_pose, frames, estimates, estimate: EstimatorOutput,
-               signals: VehicleSignals, steer, throttle, events) -> StepResult:
-        """Estimates against the truth of the pose their frames were taken from; the car's own
-        lateral error and lane departures at its pose after the control period.
-
-        Per front model two columns: its raw detection (at the detector's own look-ahead) and
-        its own Kalman track (at the output's look-ahead, like the fused output).
-        """
-        gate = self.truth
-        world, lane = gate.world, gate.lane
-        pose_after = self._true_pose()
-        truth = step_truth(
-            world.road, lane, sensed_pose, pose_after,
-            [e.x_m for e in estimates.values()] + [estimate.offset_x_m, estimate.reference_x_m],
-            self.metrics.ade_points_m,
-            drawn_lookaheads_m=(0.0, self.estimation.offset_lookahead_m))
-        track_offsets = score_estimates(self.metrics, list(self.front), estimates, estimate,
-                                        truth, self.estimator.centre_of)
-        tyres_xy = world.data.geom_xpos[self._tyre_geoms, :2]
-        outside = wheels_outside_lane(world.road, lane, tyres_xy)
-        off_road = off_road_reason(world.road, world.layout, tyres_xy, truth.car_offset_m,
-                                   gate.scenario.criteria.off_road_distance_m,
-                                   float(world.data.time))
-        if off_road:
-            events.append(off_road)
-        if outside:
-            events.append("lane departure: a wheel crossed a lane boundary")
-        self.metrics.add_car(truth.car_offset_m, outside)
-        selection = estimate.selection
-        self.metrics.add_selection(estimate.selected, selection.reference_repaired)
-        return StepResult(
-            index=self.index, time_s=float(world.data.time), frames=frames, estimates=estimates,
-            tracked=estimate.tracked, track_offsets_m=track_offsets,
-            probabilities=np.asarray(selection.probabilities),
-            selected=int(estimate.selected), output_offset_m=estimate.offset_m,
-            output_x_m=estimate.offset_x_m, output_centre=estimate.centre,
-            reference_m=selection.reference_m, reference_x_m=estimate.reference_x_m,
-            reference_repaired=selection.reference_repaired,
-            mmae_residuals_m=np.asarray(selection.residuals_m, dtype=float),
-            steer=steer, throttle=throttle, truth=truth, pose=pose_after,
-            sensed_pose=sensed_pose, speed_mps=world.car.speed_mps(), signals=signals,
-            events=events, tracker_status=dict(estimate.tracker_status), off_road=off_road,
-        )
-
-    def _marking_masks(self) -> dict[str, np.ndarray]:
-        """Per camera, the paint the camera can see now (for the recording): the segmentation
-        render's paint, less what fog or darkness hides (lanekeep/sensing/paint_visibility.py)."""
-        world, masks = self.truth.world, {}
-        data = world.data
-        for name in self.rig.CAMERA_NAMES:
-            paint = world.marking_mask(self.rig.render_segmentation(data, name))
-            bare, depth = self.rig.render_rgb_depth(data, name)
-            fx = self.effects[name]
-            weather = fx.weather
-            masks[name] = visible_paint(
-                paint, bare, weather.range_m(depth), weather.extinction_per_m,
-                float(weather.airlight.mean()), fx.sensor.gain).astype(np.uint8)
-        return masks
 
     # -- whole episodes --------------------------------------------------------------------
     @property
@@ -413,15 +199,12 @@ class Episode:
 
     def report(self, completed: bool = True, stop_reason: str = "",
                status: str | None = None) -> EpisodeReport:
-        scenario = self.truth.scenario
-        return self.metrics.report(scenario.name, scenario.seed, self.dt_s,
-                                   completed=completed,
-                                   wall_s=time.perf_counter() - self._wall_start,
-                                   stop_reason=stop_reason, status=status)
+        return self.scorer.report(self.dt_s, completed, time.perf_counter() - self._wall_start,
+                                  stop_reason, status)
 
     def close(self) -> None:
-        self.detection.close()
-        self.rig.close()
+        self.driver.close()
+        self.simulator.close()
         self.recorder.close()
 
     def __enter__(self) -> Episode:

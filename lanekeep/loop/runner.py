@@ -77,7 +77,7 @@ def run_episode(scenario_name: str, seed: int | None = None, seconds: float | No
     from lanekeep.core.progress import step_bar
 
     with detector_weights(weights), Episode(scenario, recorder=recorder) as episode:
-        trace = EpisodeTrace(list(episode.front))
+        trace = EpisodeTrace(list(episode.driver.front))
         total = episode.total_steps if seconds is None else int(round(seconds / episode.dt_s))
         bar = step_bar(total, scenario.name, enabled=None if progress else False,
                        step_s=episode.dt_s)

@@ -66,7 +66,7 @@ def hash_episode(episode: Episode, seconds: float,
     more about where the two parted."""
     raw: dict[str, str] = {}
     detected: dict[str, str] = {}
-    render_rgb, detect = episode.rig.render_rgb, episode._detect  # noqa: SLF001 - instrumentation
+    render_rgb, detect = episode.simulator.rig.render_rgb, episode.driver.detect  # instrumentation
 
     def hashed_render(data, camera: str) -> np.ndarray:
         rgb = render_rgb(data, camera)
@@ -101,13 +101,13 @@ def hash_episode(episode: Episode, seconds: float,
                                      or first_difference([expected[index]], steps[-1:])):
             raise _Parted
 
-    episode.rig.render_rgb, episode._detect = hashed_render, hashed_detect  # noqa: SLF001
+    episode.simulator.rig.render_rgb, episode.driver.detect = hashed_render, hashed_detect
     try:
         report: EpisodeReport | None = episode.run(seconds, on_step=on_step)
     except _Parted:
         report = None
     finally:
-        episode.rig.render_rgb, episode._detect = render_rgb, detect  # noqa: SLF001
+        episode.simulator.rig.render_rgb, episode.driver.detect = render_rgb, detect
     return HashedRun(steps, report)
 
 

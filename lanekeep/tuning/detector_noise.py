@@ -44,8 +44,8 @@ def coefficient_errors(name: str | Path, fit_range_m: tuple[float, float]
             step = episode.step()
             truth = lane_truth(episode.world.road, *step.sensed_pose, scenario.road.ego_lane,
                                fit_range_m=fit_range_m).center
-            for detector in episode.front:
-                centre = episode.estimator.centre_of(step.estimates[detector])
+            for detector in episode.driver.front:
+                centre = episode.driver.estimator.centre_of(step.estimates[detector])
                 if centre is not None:
                     errors.setdefault(detector, []).append(np.asarray(centre) - truth)
     return errors

@@ -36,7 +36,7 @@ def record(scenario_path: str, out: Path, seconds: float | None, closed_loop: bo
     out.mkdir(parents=True, exist_ok=True)
     with Episode(scenario) as episode:
         steps = episode.total_steps if seconds is None else int(round(seconds / episode.dt_s))
-        cams = episode.rig.cameras
+        cams = episode.simulator.rig.cameras
         x_refs = lookaheads(cams)
         frames = {name: np.lib.format.open_memmap(
             out / f"{name}.npy", mode="w+", dtype=np.uint8,
@@ -65,8 +65,8 @@ def truth_action(episode, pose, index: int) -> tuple[float, float]:
     wander = WANDER_M * np.sin(2.0 * np.pi * index * episode.dt_s / WANDER_PERIOD_S)
     offset = -float(centre[0] + centre[1] * x_ctrl) - wander
     speed = episode.world.car.speed_mps()
-    steer = episode.controller.steering(offset, speed, curvature_1pm=float(2.0 * centre[2]))
-    return steer, episode.controller.speed(speed)
+    steer = episode.driver.controller.steering(offset, speed, curvature_1pm=float(2.0 * centre[2]))
+    return steer, episode.driver.controller.speed(speed)
 
 
 def lookaheads(cameras) -> dict[str, float]:

@@ -41,7 +41,7 @@ def record(scenario_arg: str, out: Path, seed: int | None = None) -> Path:
         scenario = dataclasses.replace(scenario, seed=seed)
     steps: list[dict] = []
     with Episode(scenario) as episode:
-        estimator = episode.estimator
+        estimator = episode.driver.estimator
         update = estimator.update
 
         def recording_update(detections, reference, ego, **timing):
@@ -98,8 +98,8 @@ def setting_values(recordings: list[dict], key: str, text: str) -> list[object]:
 def replay(data: dict, **settings) -> tuple[np.ndarray, np.ndarray]:
     """The output's and each track's offset error (m, NaN where none) per step, with the
     recorded settings changed by `settings`."""
-    from lanekeep.detectors.base import poly_eval
     from lanekeep.estimators.lane_estimator import LaneEstimator
+    from lanekeep.geometry.lane_poly import LanePoly
 
     estimator = LaneEstimator(data["names"], dataclasses.replace(data["settings"], **settings),
                               data["reference_x_m"])
@@ -109,7 +109,7 @@ def replay(data: dict, **settings) -> tuple[np.ndarray, np.ndarray]:
         truth = step["truth_m"]
         output.append(np.nan if out.offset_m is None else out.offset_m - truth)
         tracks.append([np.nan if out.tracked[n] is None
-                       else -float(poly_eval(out.tracked[n], out.offset_x_m)) - truth
+                       else float(LanePoly.of(out.tracked[n]).offset_m(out.offset_x_m)) - truth
                        for n in data["names"]])
     return np.asarray(output), np.asarray(tracks)
 

@@ -25,7 +25,7 @@ def trace(scenario_arg: str, output: str | None) -> tuple[list[str], dict[str, n
     probability, MMAE residual and boundary errors, the output's and the reference's errors
     (NaN where a source had nothing)."""
     os.environ.setdefault("MUJOCO_GL", "egl")
-    from lanekeep.detectors.base import poly_eval
+    from lanekeep.geometry.lane_poly import LanePoly
     from lanekeep.loop.episode import Episode
     from lanekeep.scenario.schema import load_scenario
     from lanekeep.scoring.step_score import track_source
@@ -43,7 +43,7 @@ def trace(scenario_arg: str, output: str | None) -> tuple[list[str], dict[str, n
 
     with Episode(scenario) as episode:
         road = episode.world.road
-        names = list(episode.front)
+        names = list(episode.driver.front)
 
         def on_step(result, _total) -> None:
             add("time", result.time_s)
@@ -67,7 +67,7 @@ def trace(scenario_arg: str, output: str | None) -> tuple[list[str], dict[str, n
                 for side in SIDES:
                     coeffs = getattr(estimate, side) if estimate.valid else None
                     add(f"{name}:{side}", None if coeffs is None
-                        else poly_eval(coeffs, x_out) - true_sides[side])
+                        else LanePoly.of(coeffs).y(x_out) - true_sides[side])
             centre = result.output_centre
             add("fused", None if result.output_offset_m is None
                 else result.output_offset_m - result.truth_output_m)

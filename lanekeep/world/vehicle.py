@@ -11,10 +11,11 @@ the wheelbase (the body "car"'s origin), x forward, y left, z up.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
 import mujoco
 import numpy as np
+
+from lanekeep.geometry.car import CarGeometry
 
 STEER_ACTUATORS = ("steer_front_left", "steer_front_right")
 DRIVE_ACTUATORS = ("drive_rear_left", "drive_rear_right")
@@ -26,18 +27,6 @@ BRAKE_ACTUATORS = (
 )
 FRONT_STEER_JOINTS = ("front_left_steer", "front_right_steer")
 SPIN_JOINTS = ("front_left_spin", "front_right_spin", "rear_left_spin", "rear_right_spin")
-
-
-@dataclass(frozen=True)
-class CarGeometry:
-    """Dimensions that the kinematics need; they must match mjcf/car.xml."""
-
-    wheelbase_m: float = 2.8
-    track_m: float = 1.62
-    wheel_radius_m: float = 0.36
-    max_steer_rad: float = math.radians(35.0)  # bicycle-equivalent road-wheel angle at |steer| = 1
-    length_m: float = 4.7
-    width_m: float = 1.9
 
 
 def ackermann_angles(bicycle_angle_rad: float, geometry: CarGeometry) -> tuple[float, float]:

@@ -278,7 +278,7 @@ def test_the_episode_builds_lanenet_from_the_scoped_weights(weights):
     scenario = dataclasses.replace(scenario, estimation=dataclasses.replace(
         scenario.estimation, front_detectors=("hough", "lanenet")))
     with detector_weights(weights), Episode(scenario, render_size=(320, 180)) as episode:
-        assert episode.front["lanenet"].weights_path == weights
+        assert episode.driver.front["lanenet"].weights_path == weights
         result = episode.step()
     assert "lanenet" in result.estimates
 

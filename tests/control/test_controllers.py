@@ -225,7 +225,7 @@ def test_stanley_reads_only_the_estimate_and_the_sensors():
 
     scenario = dataclasses.replace(_small("clear_curve", controller="stanley"), duration_s=2.0)
     with Episode(scenario, render_size=(320, 180)) as episode:
-        assert isinstance(episode.controller, StanleyController)
+        assert isinstance(episode.driver.controller, StanleyController)
         guard_truth(episode)
         report = episode.run()
     assert report.completed and report.steps == 20

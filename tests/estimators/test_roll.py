@@ -7,16 +7,18 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from lanekeep.detectors.base import LaneEstimate, poly_eval
+from lanekeep.detectors.base import LaneEstimate
+from lanekeep.driver.paper_mode import roll_compensation
 from lanekeep.estimators.roll import RollCompensation, RollFilter, corrected
-from lanekeep.loop.paper_mode import roll_compensation, with_mode
+from lanekeep.geometry.lane_poly import LanePoly
+from lanekeep.loop.paper_mode import with_mode
 from lanekeep.scenario.schema import InvalidValue, load_scenario
 
 
 def _estimate(offset_m: float) -> LaneEstimate:
     left, right = np.array([1.85 - offset_m, 0.01, 1e-3]), np.array([-1.85 - offset_m, 0.01, 1e-3])
     x = 4.0
-    centre_at_x = (poly_eval(left, x) + poly_eval(right, x)) / 2
+    centre_at_x = (LanePoly.of(left).y(x) + LanePoly.of(right).y(x)) / 2
     return LaneEstimate(True, offset_m=-centre_at_x, x_m=x, left=left, right=right,
                         confidence=0.9)
 
@@ -25,7 +27,7 @@ def test_the_offset_and_the_lane_move_together():
     e = _estimate(0.2)
     fixed = corrected(e, 0.03)
     assert fixed.offset_m == pytest.approx(e.offset_m - 0.03, abs=1e-12)
-    assert fixed.offset_m == pytest.approx(-poly_eval(fixed.center, fixed.x_m), abs=1e-12)
+    assert fixed.offset_m == pytest.approx(LanePoly.of(fixed.center).offset_m(fixed.x_m), abs=1e-12)
     np.testing.assert_allclose(fixed.left[1:], e.left[1:])  # heading and curvature kept
     invalid = LaneEstimate.invalid("nothing")
     assert corrected(invalid, 0.03) is invalid

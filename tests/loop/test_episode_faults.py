@@ -45,7 +45,7 @@ class _Faulty:
 @pytest.mark.parametrize("failure", ["raise", "nan", "wrong_type"])
 def test_a_faulty_detector_is_a_miss_with_an_event_and_the_episode_goes_on(failure):
     with _episode() as episode:
-        episode.front["hough"] = _Faulty(episode.front["hough"], failure, {3, 4})
+        episode.driver.front["hough"] = _Faulty(episode.driver.front["hough"], failure, {3, 4})
         results = [episode.step() for _ in range(episode.total_steps)]
         report = episode.report()
     assert len(results) == 10 and report.completed

@@ -43,7 +43,7 @@ def test_the_paper_loop_runs_to_its_end_without_reading_truth():
     """`--mode paper`: its two models, its selection, its PID, all without the gate."""
     scenario = _short("case4_half_shade_straight", 2.0, mode="paper")
     with Episode(scenario, render_size=(320, 180)) as episode:
-        assert episode.estimation.mode == "paper"
+        assert episode.driver.config.estimation.mode == "paper"
         guard_truth(episode)
         report = episode.run()
     assert report.completed and report.steps == 20
@@ -56,13 +56,13 @@ def test_the_guard_catches_an_estimator_that_reads_the_true_pose(monkeypatch):
             Episode(_short("clear_curve", 1.0), render_size=(320, 180)) as episode:
         car = episode.truth.car  # handed to the estimator: what the old loop did for alignment
         guard_truth(episode)
-        update = episode.estimator.update
+        update = episode.driver.estimator.update
 
         def leaky_update(detections, reference, ego, lap):
             car.pose()
             return update(detections, reference, ego, lap=lap)
 
-        monkeypatch.setattr(episode.estimator, "update", leaky_update)
+        monkeypatch.setattr(episode.driver.estimator, "update", leaky_update)
         episode.step()
     # read while the estimator ran, and, when the episode closed, found held by it
     assert "Car.pose read while estimator" in str(caught.value)

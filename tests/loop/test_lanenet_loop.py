@@ -34,5 +34,5 @@ def test_three_front_models_and_the_learned_reference_keep_the_lane():
     assert report.sources["reference"].valid_share > 0.9
     assert report.sources["reference"].rmse_cm < 10.0
     # The learned model carried its state: it holds the GRU memory after the last step.
-    lanenet = episode.front["lanenet"]
+    lanenet = episode.driver.front["lanenet"]
     assert lanenet._state is not None and np.isfinite(lanenet.model.alpha.item())

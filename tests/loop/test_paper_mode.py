@@ -14,8 +14,9 @@ from shared_runs import shared
 
 from lanekeep.control.pid import PaperGains
 from lanekeep.detectors.config import load_config
+from lanekeep.driver.paper_mode import PAPER_WINDOWS, front_detector_config
 from lanekeep.loop.episode import Episode
-from lanekeep.loop.paper_mode import PAPER_WINDOWS, front_detector_config, with_mode
+from lanekeep.loop.paper_mode import with_mode
 from lanekeep.scenario.schema import load_scenario
 from lanekeep.scoring import statistics as stats
 
@@ -51,7 +52,7 @@ def _paper_run(name: str, seed: int | None = None):
     trace = PaperTrace()
     with Episode(scenario) as episode:
         road, conditions = episode.world.road, episode.world.conditions
-        models = list(episode.front)
+        models = list(episode.driver.front)
 
         def on_step(step, total):
             x, y, yaw = step.sensed_pose

@@ -12,7 +12,7 @@ import pytest
 
 from lanekeep.core.workers import THREADS_ENV
 from lanekeep.detectors.base import LaneEstimate
-from lanekeep.loop.detection import DetectionRunner, DetectJob, group_jobs, run_job
+from lanekeep.driver.detection import DetectionRunner, DetectJob, group_jobs, run_job
 from lanekeep.loop.episode import Episode
 from lanekeep.scenario.schema import load_scenario
 
@@ -109,7 +109,7 @@ def _run(name: str, threads: int, monkeypatch) -> tuple[dict, list]:
     monkeypatch.setenv(THREADS_ENV, str(threads))
     scenario = replace(load_scenario(name), duration_s=1.5)
     with Episode(scenario, render_size=(640, 360)) as episode:
-        assert episode.detection.parallel_now() == (threads >= 2)
+        assert episode.driver.detection.parallel_now() == (threads >= 2)
         steps = [episode.step() for _ in range(episode.total_steps)]
         report = episode.report().to_dict()
     estimates = [{name: (e.valid, e.offset_m, e.x_m, e.confidence, e.reason,

@@ -61,11 +61,11 @@ class LeakyEstimator(_Leaky):
 
 def _install(episode: Episode, part: str, leaky: Callable[[object], _Leaky]) -> None:
     if part == "controller":
-        episode.controller = leaky(episode.controller)
+        episode.driver.controller = leaky(episode.driver.controller)
     elif part == "detector":
-        episode.front["hough"] = leaky(episode.front["hough"])
+        episode.driver.front["hough"] = leaky(episode.driver.front["hough"])
     else:
-        episode.estimator = leaky(episode.estimator)
+        episode.driver.estimator = leaky(episode.driver.estimator)
 
 
 _LEAKY = {"controller": LeakyController, "detector": LeakyDetector,
@@ -113,8 +113,8 @@ def test_a_plug_in_that_finds_the_truth_is_caught_reading_it(hole):
 
 def test_a_plug_in_handed_the_truth_is_refused_before_the_run():
     with _episode() as episode:
-        parts = {"controller": episode.controller, "detector": episode.front["hough"],
-                 "estimator": episode.estimator}
+        parts = {"controller": episode.driver.controller, "detector": episode.driver.front["hough"],
+                 "estimator": episode.driver.estimator}
         for hole, (part, target, read, _) in HOLES.items():
             obj = target(episode.truth)
             _install(episode, part, lambda inner, part=part, obj=obj, read=read:

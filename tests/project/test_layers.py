@@ -1,6 +1,8 @@
 """The package's layer rules (lanekeep/__init__.py states them): each subpackage imports only
-from lower layers, detectors and estimators never touch MuJoCo, nothing imports the CLI, no
-private name crosses a module, and the import graph has no cycle. Function-level imports count.
+from lower layers; what the car runs (detectors, estimators, control, the driver) never imports
+the world, sensing, scoring, the loop, the recorder, MuJoCo or dm_control, so that honesty holds
+by construction; nothing imports the CLI, no private name crosses a module, and the import
+graph has no cycle. Function-level and type-checking imports count.
 """
 
 from __future__ import annotations
@@ -23,14 +25,19 @@ LAYERS = {
     "scenario": 4,
     "world": 5,
     "sensing": 6,
-    "scoring": 7,
-    "control": 8,
-    "report": 9,
-    "loop": 10, "evaluation": 10,
-    "sweep": 11, "envs": 11, "tuning": 11,
-    "cli": 12,
+    "control": 7,
+    "driver": 8,
+    "scoring": 9,
+    "report": 10,
+    "loop": 11, "evaluation": 11,
+    "sweep": 12, "envs": 12, "tuning": 12,
+    "cli": 13,
 }
-NO_MUJOCO = ("detectors", "estimators")  # perception and estimation see frames, not a model
+# The car's side: it is built from settings and a spec sheet and sees frames and its sensors'
+# signals; none of its code may name the simulator, its truth, or what scores or records it.
+CAR_SIDE = ("detectors", "estimators", "control", "driver")
+TRUTH_SIDE = ("world", "sensing", "scoring", "loop", "report", "evaluation", "envs", "sweep",
+              "tuning", "cli")
 MUJOCO_MODULES = ("mujoco", "dm_control")
 
 
@@ -140,12 +147,33 @@ def test_nothing_imports_the_cli():
     assert importers == set()
 
 
-def test_detectors_and_estimators_never_touch_mujoco():
-    for name, path in modules().items():
-        if layer_of(name) in NO_MUJOCO:
-            touched = [(m, line) for m, _, line in imports_of(path)
-                       if m.split(".")[0] in MUJOCO_MODULES]
-            assert touched == [], f"{path.relative_to(ROOT)} imports {touched}"
+def car_side_violations(known: dict[str, Path]) -> list[str]:
+    """Imports by the car's side of the simulator, the truth or MuJoCo (any import, typing
+    ones included: a type names what the code may be handed)."""
+    bad = []
+    for name, path in known.items():
+        if layer_of(name) not in CAR_SIDE:
+            continue
+        for module, _, line in imports_of(path):
+            root = module.split(".")[0]
+            if root in MUJOCO_MODULES or (root == "lanekeep" and layer_of(module) in TRUTH_SIDE):
+                where = path.relative_to(ROOT) if path.is_relative_to(ROOT) else path
+                bad.append(f"{where}:{line} imports {module}")
+    return bad
+
+
+def test_the_car_side_never_imports_the_simulator_or_the_truth():
+    assert car_side_violations(modules()) == []
+
+
+def test_the_car_side_rule_catches_a_driver_that_imports_the_world(tmp_path):
+    """A deliberate import of lanekeep.world by the driver (or of mujoco by a detector)."""
+    leaky = tmp_path / "leaky_driver.py"
+    leaky.write_text("from lanekeep.world.build import World\nimport mujoco\n")
+    found = car_side_violations({"lanekeep.driver.leaky_driver": leaky,
+                                 "lanekeep.detectors.leaky": leaky})
+    assert len(found) == 4 and all("leaky" in f for f in found)
+    assert any("lanekeep.world.build" in f for f in found)
 
 
 def test_no_private_name_crosses_a_module():

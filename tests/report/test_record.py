@@ -282,7 +282,7 @@ def test_recorded_episode_reads_back_and_lines_up_with_its_segmentation(tmp_path
     for cam in ("front", "rear"):
         assert steps_of(data, f"/cameras/{cam}/image", "EncodedImage:blob") == recorded
     assert steps_of(data, "/plots/offset/truth", "Scalars:scalars") == list(range(20))
-    for name in (*episode.front, "reference"):
+    for name in (*episode.driver.front, "reference"):
         assert f"/plots/offset/{name}" in data
     # One ground truth: the plotted errors are the ones the report scores.
     errors_cm = [v[0] for _, v in data["/plots/error/fused"]["Scalars:scalars"]]

@@ -64,8 +64,9 @@ def _streams(scenario) -> tuple[np.ndarray, tuple[float, float]]:
     """The episode generator's next draws (effects, particles, camera noise) and the sensors'
     per-episode draws (their own stream, spawned from it)."""
     with Episode(scenario, render_size=RENDER) as episode:
-        sensors = (episode.sensors.speed_scale, episode.sensors.initial_gyro_bias_rps)
-        return episode.rng.random(4), sensors
+        car_sensors = episode.simulator.sensors
+        sensors = (car_sensors.speed_scale, car_sensors.initial_gyro_bias_rps)
+        return episode.simulator.rng.random(4), sensors
 
 
 def test_two_scenarios_on_one_seed_draw_other_noise_and_one_repeats():

@@ -40,7 +40,7 @@ def test_the_30_mps_sharp_turn_leaves_the_road_and_stops_scoring():
     with Episode(scenario, render_size=SIZE) as episode:
         report = episode.run(on_step=lambda result, total: results.append(result))
         road = episode.world.road
-        tyres = episode.world.data.geom_xpos[episode._tyre_geoms, :2]
+        tyres = episode.world.data.geom_xpos[episode.scorer.tyre_geoms, :2]
         _, r = road.local_coordinates(tyres)
     assert report.status == "off_road" and not report.completed
     assert report.stop_reason.startswith("off road: all four wheels off the paved surface")

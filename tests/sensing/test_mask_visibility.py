@@ -74,8 +74,8 @@ def test_episode_masks_use_the_visibility():
 
     scenario = load_scenario("fog")
     with Episode(scenario, render_size=(W, H)) as episode:
-        masks = episode._marking_masks()
-        seg = episode.rig.render_segmentation(episode.world.data, "front")
+        masks = episode.simulator.marking_masks()
+        seg = episode.simulator.rig.render_segmentation(episode.world.data, "front")
         paint = episode.world.marking_mask(seg)
     assert masks["front"].dtype == np.uint8
     assert not (masks["front"].astype(bool) & ~paint).any()

@@ -81,7 +81,7 @@ def soak(seconds: float, size: tuple[int, int] | None, window_s: float,
                 bad_steps += 1
                 first_bad = first_bad or [f"step {i}: {', '.join(bad)}"]
             if (i + 1) % steps_per_window == 0 or i + 1 == total:
-                departures = episode.metrics.report(scenario.name, scenario.seed,
+                departures = episode.scorer.metrics.report(scenario.name, scenario.seed,
                                                     episode.dt_s).lane_departures
                 ms = 1000.0 * np.asarray(times)
                 windows.append(Window((i + 1) * episode.dt_s, rss_mb(),
