@@ -18,6 +18,7 @@ import numpy as np
 
 from lanekeep.core.busy import all_cores_busy
 from lanekeep.geometry.lens import Lens, is_distorted
+from lanekeep.scenario.schema import CameraConfig
 from lanekeep.sensing.gl_backend import RendererUnavailable
 from lanekeep.sensing.weather import needs_depth
 from lanekeep.world.camera_mount import camera_from_model
@@ -31,15 +32,17 @@ from lanekeep.world.groups import (
 
 @dataclass(frozen=True)
 class RenderSettings:
-    """What the renderer draws; shadows are opt-in because they double the cost on a CPU."""
+    """What the renderer draws. The image size, shadows and hood default to the scenario's
+    `[camera]` defaults (lanekeep/scenario/schema.py `CameraConfig`, their one definition):
+    a rig built without a scenario renders what a default scenario's does."""
 
-    width: int = 1280
-    height: int = 720
-    shadows: bool = False
+    width: int = CameraConfig.width
+    height: int = CameraConfig.height
+    shadows: bool = CameraConfig.shadows
     # MuJoCo fog. Scenes without fog put it beyond the far plane (world_conditions), where it
     # changes no pixel; turning it off there saves ~5% of a render (41.5 vs 39.4 ms a pair).
     fog: bool = True
-    show_hood: bool = False  # the front camera sees the ego car's hood (GROUP_HOOD)
+    show_hood: bool = CameraConfig.show_hood  # the front camera sees the car's hood (GROUP_HOOD)
     # Read the depth buffer of each colour render (for depth-aware weather; about 3 ms a
     # frame). Episodes turn it on for fog and rain and then do the fog in image space
     # (lanekeep/sensing/weather.py), with MuJoCo's linear fog off.

@@ -15,6 +15,7 @@ import numpy as np
 
 from lanekeep.geometry.camera_model import CameraModel
 from lanekeep.mjcf import SCENE_XML
+from lanekeep.scenario.schema import CameraConfig
 from lanekeep.sensing.cameras import CameraRig, RenderSettings
 
 
@@ -99,8 +100,8 @@ def _look_at_quat(normal_toward: np.ndarray, roll: float) -> np.ndarray:
 def render_chessboards(
     n_views: int = 12,
     camera: str = "front",
-    width: int = 1280,
-    height: int = 720,
+    width: int = CameraConfig.width,
+    height: int = CameraConfig.height,
     seed: int = 0,
     board: Board | None = None,
 ) -> tuple[list[np.ndarray], CameraModel]:

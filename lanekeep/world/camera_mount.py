@@ -26,6 +26,7 @@ import mujoco
 import numpy as np
 
 from lanekeep.geometry.camera_model import CameraModel
+from lanekeep.scenario.schema import CameraConfig
 
 ONBOARD_CAMERAS = ("front", "rear")
 
@@ -111,8 +112,8 @@ def apply_camera_mount(model: mujoco.MjModel, camera) -> None:
         model.cam_fovy[cid] = math.degrees(2.0 * math.atan(camera.fov_scale * math.tan(half)))
 
 
-def camera_from_model(model: mujoco.MjModel, name: str, width: int = 1280,
-                      height: int = 720) -> CameraModel:
+def camera_from_model(model: mujoco.MjModel, name: str, width: int = CameraConfig.width,
+                      height: int = CameraConfig.height) -> CameraModel:
     """The camera `name` of a compiled model (car at rest): pose and fovy read from it."""
     cam = model.camera(name)
     quat = np.asarray(model.cam_quat[cam.id], dtype=float)
@@ -135,6 +136,7 @@ def camera_from_model(model: mujoco.MjModel, name: str, width: int = 1280,
     )
 
 
-def front_and_rear(model: mujoco.MjModel, width: int = 1280, height: int = 720) -> dict:
+def front_and_rear(model: mujoco.MjModel, width: int = CameraConfig.width,
+                   height: int = CameraConfig.height) -> dict:
     """Camera models of both onboard cameras at a given image size."""
     return {n: camera_from_model(model, n, width, height) for n in ("front", "rear")}
