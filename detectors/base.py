@@ -2,7 +2,8 @@
 
 A detector maps one camera frame to a `LaneEstimate` in the vehicle ground frame (x forward,
 y left, metres, origin on the ground under the middle of the wheelbase). Boundaries are
-2nd-order polynomials y(x) = c0 + c1 x + c2 x^2, coefficients low order first. A detector that
+2nd-order polynomials y(x) = c0 + c1 x + c2 x^2, coefficients low order first, read through
+`lanekeep.geometry.lane_poly.LanePoly` (`LanePoly.of(estimate.left).y(x)`). A detector that
 finds nothing returns `LaneEstimate.invalid(...)`: never NaN, never an exception for a frame
 that is merely hard (black, sky, noise).
 """
@@ -16,12 +17,6 @@ from typing import Protocol, runtime_checkable
 import numpy as np
 
 from lanekeep.detectors.config import GroundWindow
-
-
-def poly_eval(coeffs: np.ndarray, x: np.ndarray | float) -> np.ndarray | float:
-    """y(x) for coefficients [c0, c1, c2] (low order first)."""
-    c = np.asarray(coeffs, dtype=float)
-    return c[0] + c[1] * x + c[2] * np.square(x)
 
 
 @dataclass(frozen=True)

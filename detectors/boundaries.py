@@ -7,10 +7,11 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from lanekeep.detectors.base import LaneEstimate, poly_eval
+from lanekeep.detectors.base import LaneEstimate
 from lanekeep.detectors.birds_eye import BirdsEye
 from lanekeep.detectors.config import LaneRules
 from lanekeep.geometry.camera_model import CameraModel
+from lanekeep.geometry.lane_poly import LanePoly
 
 
 @dataclass(frozen=True)
@@ -21,6 +22,10 @@ class Boundary:
     n_points: int
     x_span_m: float
     points_xy: np.ndarray  # (N, 2) vehicle-frame points the fit used
+
+    @property
+    def lane(self) -> LanePoly:
+        return LanePoly.of(self.coeffs)
 
 
 def fit_boundary(xy: np.ndarray, rules: LaneRules, camera_x_m: float = 0.0) -> Boundary | None:
@@ -44,7 +49,7 @@ def fit_boundary(xy: np.ndarray, rules: LaneRules, camera_x_m: float = 0.0) -> B
         c = np.polyfit(x, y, degree, w=weights)[::-1]
         coeffs = np.zeros(3)
         coeffs[: degree + 1] = c
-        inliers = np.abs(y - (coeffs[0] + coeffs[1] * x + coeffs[2] * x * x)) <= rules.inlier_m
+        inliers = np.abs(y - LanePoly.of(coeffs).y(x)) <= rules.inlier_m
         if rules.inlier_m <= 0 or inliers.all() or inliers.sum() < 0.5 * len(xy):
             break
         xy = xy[inliers]
@@ -87,8 +92,7 @@ def plausible(b: Boundary | None, x_ref: float, rules: LaneRules,
     """
     if b is None:
         return False
-    slope = b.coeffs[1] + 2.0 * b.coeffs[2] * x_ref
-    if abs(slope) > math.tan(math.radians(rules.max_heading_deg)):
+    if abs(b.lane.slope(x_ref)) > math.tan(math.radians(rules.max_heading_deg)):
         return False
     if other is not None or b.x_span_m >= rules.quadratic_span_m:
         return True
@@ -110,12 +114,12 @@ def assemble(
     left, right = (b if plausible(b, x_ref, rules, other) else None
                    for b, other in ((left, right), (right, left)))
     if left is not None and right is not None:
-        measured = float(poly_eval(left.coeffs, x_ref) - poly_eval(right.coeffs, x_ref))
+        measured = float(left.lane.y(x_ref) - right.lane.y(x_ref))
         lanes = round(measured / width)
         if lanes >= 2 and abs(measured - lanes * width) <= rules.width_tolerance_m * lanes:
             # Two (or more) lanes apart: both are real lines and the ego lane's line between
             # them is in a dash gap. The car's own lane lies against the nearer one.
-            if abs(poly_eval(left.coeffs, x_ref)) <= abs(poly_eval(right.coeffs, x_ref)):
+            if abs(left.lane.y(x_ref)) <= abs(right.lane.y(x_ref)):
                 right = None
             else:
                 left = None
@@ -130,12 +134,12 @@ def assemble(
     if left is None and right is None:
         return LaneEstimate.invalid("no lane boundary found", x_m=x_ref)
     if left is not None and right is not None:
-        centre = (poly_eval(left.coeffs, x_ref) + poly_eval(right.coeffs, x_ref)) / 2.0
+        centre = (left.lane.y(x_ref) + right.lane.y(x_ref)) / 2.0
     elif left is not None:
-        centre = poly_eval(left.coeffs, x_ref) - width / 2.0
+        centre = left.lane.y(x_ref) - width / 2.0
         confidence *= 0.6
     else:
-        centre = poly_eval(right.coeffs, x_ref) + width / 2.0
+        centre = right.lane.y(x_ref) + width / 2.0
         confidence *= 0.6
     offset = -float(centre)
     if not math.isfinite(offset) or abs(offset) > width:

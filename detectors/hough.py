@@ -18,10 +18,10 @@ import math
 import cv2
 import numpy as np
 
-from lanekeep.detectors.base import poly_eval
 from lanekeep.detectors.boundaries import Boundary, fit_boundary, parallel
 from lanekeep.detectors.classical import ClassicalDetector
 from lanekeep.detectors.image_stage import RegionOfInterest
+from lanekeep.geometry.lane_poly import LanePoly
 
 
 class HoughDetector(ClassicalDetector):
@@ -162,7 +162,8 @@ class HoughDetector(ClassicalDetector):
                     continue
                 reach = max(0.0, far - reached[k])
                 tol = cfg.grow_tolerance_m + 0.03 * reach
-                res = max(abs(y1 - poly_eval(coeffs, x1)), abs(y2 - poly_eval(coeffs, x2)))
+                lane = LanePoly.of(coeffs)
+                res = max(abs(y1 - lane.y(x1)), abs(y2 - lane.y(x2)))
                 if res < tol and res < best:
                     best, best_side = res, k
             if best_side >= 0:

@@ -27,6 +27,7 @@ import numpy as np
 from lanekeep.detectors.base import LaneEstimate
 from lanekeep.detectors.lanenet_targets import OTHER, SLOTS, CellGrid
 from lanekeep.geometry.camera_model import CameraModel
+from lanekeep.geometry.lane_poly import LanePoly
 
 CURVATURE_PRIOR_PER_M = 0.002
 UNSEEN_WEIGHT = 0.3  # 1 = paint ignored
@@ -176,17 +177,13 @@ class Boundary:
                 else:
                     x_lo, x_hi = cam_x + 1.5 * (x_lo - cam_x), max(x_hi, cam_x)
             g = np.linspace(x_lo, x_hi, 400)
-            uv, ok = camera.project_ground(np.stack([g, _poly(self.coeffs, g)], -1))
+            uv, ok = camera.project_ground(np.stack([g, LanePoly.of(self.coeffs).y(g)], -1))
             uv = uv[ok]
             uv = uv[np.argsort(uv[:, 1])]
             if len(uv) < 2:
                 return np.full(rows.shape, np.nan)
             x = np.interp(rows, uv[:, 1], uv[:, 0], left=np.nan, right=np.nan)
         return np.where((rows >= lo) & (rows <= hi), x, np.nan)
-
-
-def _poly(c: np.ndarray, x: np.ndarray) -> np.ndarray:
-    return c[0] + c[1] * x + c[2] * x * x
 
 
 def proposals(objectness: np.ndarray, x_offset: np.ndarray, slot_logits: np.ndarray,
@@ -435,12 +432,13 @@ def ego_estimate(boundaries: list[Boundary], camera: CameraModel | None, x_ref: 
     spans = [(b.points_xy[:, 0].min(), b.points_xy[:, 0].max()) for b in (left, right)]
     lo, hi = max(s[0] for s in spans), min(s[1] for s in spans)
     checks = [x_ref] if pair is not None or lo > hi else [x_ref, lo, hi]
+    lane_left, lane_right = LanePoly.of(c_left), LanePoly.of(c_right)
     for x in checks:
-        width = float(_poly(c_left, x) - _poly(c_right, x))
+        width = float(lane_left.y(x) - lane_right.y(x))
         if abs(width - lane_width_m) > width_tolerance_m:
             return LaneEstimate.invalid(f"ego pair {width:.2f} m apart at x = {x:.1f} m, "
                                         "not a lane", x_m=x_ref)
-    y_left, y_right = float(_poly(c_left, x_ref)), float(_poly(c_right, x_ref))
+    y_left, y_right = float(lane_left.y(x_ref)), float(lane_right.y(x_ref))
     return LaneEstimate(
         valid=True,
         offset_m=-(y_left + y_right) / 2.0,

@@ -23,7 +23,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from lanekeep.detectors.base import LaneEstimate, poly_eval
+from lanekeep.detectors.base import LaneEstimate
+from lanekeep.geometry.lane_poly import LanePoly
 
 
 @dataclass(frozen=True)
@@ -53,9 +54,9 @@ class Plausibility:
 
 def curvature_radius_m(coeffs, xs: np.ndarray) -> np.ndarray:
     """|radius| of y(x) at each x: (1 + y'^2)^1.5 / |y''| (inf where straight)."""
-    c = np.asarray(coeffs, dtype=float)
-    slope = c[1] + 2.0 * c[2] * xs
-    bend = abs(2.0 * c[2])
+    lane = LanePoly.of(coeffs)
+    slope = lane.slope(xs)
+    bend = abs(2.0 * lane.c2)
     return np.full_like(xs, np.inf) if bend == 0 else (1.0 + slope ** 2) ** 1.5 / bend
 
 
@@ -77,7 +78,7 @@ def check(estimate: LaneEstimate, x_range_m: tuple[float, float],
             hard.append(f"{side} boundary bends to a {radius:.0f} m radius "
                         f"(< {limits.min_radius_m:g} m)")
     if estimate.left is not None and estimate.right is not None:
-        width = poly_eval(estimate.left, xs) - poly_eval(estimate.right, xs)
+        width = LanePoly.of(estimate.left).y(xs) - LanePoly.of(estimate.right).y(xs)
         if np.any(width <= 0.0):
             x_cross = float(xs[np.argmax(width <= 0.0)])
             hard.append(f"boundaries cross at x = {x_cross:.1f} m")

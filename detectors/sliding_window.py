@@ -17,10 +17,11 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from lanekeep.detectors.base import LaneEstimate, poly_eval
+from lanekeep.detectors.base import LaneEstimate
 from lanekeep.detectors.boundaries import Boundary, fit_boundary, parallel
 from lanekeep.detectors.classical import ClassicalDetector
 from lanekeep.detectors.image_stage import RegionOfInterest
+from lanekeep.geometry.lane_poly import LanePoly
 
 _KERNEL_3X3 = np.ones((3, 3), np.uint8)  # the ridge's dilation
 
@@ -165,7 +166,7 @@ class SlidingWindowDetector(ClassicalDetector):
         for k, side in enumerate((1.0, -1.0)):
             prev = self._previous[k]
             if prev is not None:
-                band = np.abs(gy - poly_eval(prev, gx)) <= cfg.search_margin_m
+                band = np.abs(gy - LanePoly.of(prev).y(gx)) <= cfg.search_margin_m
                 if band.sum() >= cfg.min_fit_pixels:
                     fits[k] = fit_boundary(np.stack([gx[band], gy[band]], 1), rules, x_cam)
                     if fits[k] is not None:
@@ -177,7 +178,7 @@ class SlidingWindowDetector(ClassicalDetector):
             idx = self._slide(starts[k], ys, xs)
             if len(idx) >= cfg.min_fit_pixels:
                 fit = fit_boundary(np.stack([gx[idx], gy[idx]], 1), rules, x_cam)
-                ok = fit is not None and side * poly_eval(fit.coeffs, self.view.window.x_near_m) > 0
+                ok = fit is not None and side * fit.lane.y(self.view.window.x_near_m) > 0
                 fits[k] = fit if ok else None
         return parallel(fits[0], fits[1], rules, x_cam)
 

@@ -20,8 +20,9 @@ from typing import Protocol
 
 import numpy as np
 
-from lanekeep.detectors.base import LaneEstimate, poly_eval
+from lanekeep.detectors.base import LaneEstimate
 from lanekeep.geometry.camera_model import CameraModel
+from lanekeep.geometry.lane_poly import LanePoly
 
 PIXEL_THRESHOLD = 20.0
 ABSENT = -2
@@ -49,7 +50,7 @@ def boundary_xs(
             if not lo <= x <= hi:
                 u = None
                 break
-            uv, front = camera.project_ground(np.array([x, float(poly_eval(coeffs, x))]))
+            uv, front = camera.project_ground(np.array([x, float(LanePoly.of(coeffs).y(x))]))
             if not front:
                 u = None
                 break

@@ -16,9 +16,7 @@ from collections import deque
 
 import numpy as np
 
-
-def _poly_y(coeffs: np.ndarray, x: float) -> float:
-    return float(coeffs[0] + coeffs[1] * x + coeffs[2] * x * x)
+from lanekeep.geometry.lane_poly import LanePoly
 
 
 class OdometryAlignedHistory:
@@ -40,7 +38,7 @@ class OdometryAlignedHistory:
         for points, centre, var in zip(self._points, centres, variances_m2, strict=True):
             if centre is None or var is None or not math.isfinite(var):
                 continue
-            ly = _poly_y(centre, look_ahead_m)
+            ly = float(LanePoly.of(centre).y(look_ahead_m))
             points.append((x + c * look_ahead_m - s * ly, y + s * look_ahead_m + c * ly, var))
 
     def offsets_at(self, pose: tuple[float, float, float], x_m: float

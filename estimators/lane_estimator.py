@@ -25,13 +25,14 @@ from importlib import resources
 import numpy as np
 
 from lanekeep.core.config_io import ConfigError, from_dict
-from lanekeep.detectors.base import LaneEstimate, poly_eval
+from lanekeep.detectors.base import LaneEstimate
 from lanekeep.estimators.alignment import OdometryAlignedHistory
 from lanekeep.estimators.consensus import corroborated
 from lanekeep.estimators.kalman import LaneTracker, TrackerConfig, UpdateStatus
 from lanekeep.estimators.mmae import MMAE, MMAEConfig, MMAEOutput
 from lanekeep.estimators.odometry import EgoMotion
 from lanekeep.estimators.settings import EstimatorSettings
+from lanekeep.geometry.lane_poly import LanePoly
 
 ACCEPTED = (UpdateStatus.UPDATED.value, UpdateStatus.INITIALIZED.value,
             UpdateStatus.RESTARTED.value)
@@ -278,7 +279,7 @@ class LaneEstimator:
         """The width between a detection's two boundaries at x, None without both."""
         if not detection.valid or detection.left is None or detection.right is None:
             return None
-        return float(poly_eval(detection.left, x_m) - poly_eval(detection.right, x_m))
+        return float(LanePoly.of(detection.left).y(x_m) - LanePoly.of(detection.right).y(x_m))
 
     def _offset_of(self, detection: LaneEstimate, x_m: float) -> float | None:
         """A detection's offset at x: its own where it reports it, else from its centre line."""
@@ -287,7 +288,7 @@ class LaneEstimator:
         if abs(x_m - detection.x_m) < 1e-9:
             return float(detection.offset_m)
         centre = self.centre_of(detection)
-        return None if centre is None else -float(poly_eval(centre, x_m))
+        return None if centre is None else float(LanePoly.of(centre).offset_m(x_m))
 
     def _output(self, centres, tracked, status, selection
                 ) -> tuple[int, np.ndarray | None]:
@@ -336,7 +337,7 @@ class LaneEstimator:
             centre = tracked[name] if tracked[name] is not None else centre
         if centre is None:
             return None, x_m
-        return -float(poly_eval(centre, x_m)), x_m
+        return float(LanePoly.of(centre).offset_m(x_m)), x_m
 
     def _precision_fused(self, lanes: dict[str, np.ndarray | None],
                          probabilities: np.ndarray) -> np.ndarray | None:

@@ -14,10 +14,11 @@ import dataclasses
 
 import numpy as np
 
-from lanekeep.detectors.base import LaneEstimate, poly_eval
+from lanekeep.detectors.base import LaneEstimate
 from lanekeep.detectors.config import GroundWindow
 from lanekeep.detectors.registry import register_detector
 from lanekeep.geometry.camera_model import CameraModel
+from lanekeep.geometry.lane_poly import LanePoly
 from lanekeep.loop.episode import Episode
 from lanekeep.scenario.schema import load_scenario
 
@@ -62,7 +63,7 @@ class BrightPaintDetector:
             coeffs = np.polyfit(x[mask], y[mask], degree)[::-1]  # low order first
             sides[side] = np.pad(coeffs, (0, 3 - len(coeffs)))
         centre = (sides["left"] + sides["right"]) / 2.0
-        return LaneEstimate(valid=True, offset_m=-float(poly_eval(centre, self.x_ref)),
+        return LaneEstimate(valid=True, offset_m=float(LanePoly.of(centre).offset_m(self.x_ref)),
                             x_m=self.x_ref, left=sides["left"], right=sides["right"],
                             confidence=1.0)
 

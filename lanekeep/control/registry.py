@@ -29,6 +29,7 @@ from lanekeep.control.stanley import StanleyController
 from lanekeep.core import plugins
 from lanekeep.core.config_io import ConfigError
 from lanekeep.core.signals import VehicleSignals
+from lanekeep.geometry.lane_poly import LanePoly
 
 if TYPE_CHECKING:
     from lanekeep.estimators.lane_estimator import EstimatorOutput
@@ -41,8 +42,7 @@ def lane_curvature(centre: np.ndarray, x_m: float) -> float:
     """Curvature of the lane polynomial at x: 2 c2 / (1 + y'^2)^1.5. A quadratic fitted to a
     tight arc over 4-20 m inflates c2 (it absorbs the arc's x^4 term), and 2 c2 alone would
     over-steer a 40 m radius turn by ~25%."""
-    slope = centre[1] + 2.0 * centre[2] * x_m
-    return float(2.0 * centre[2] / (1.0 + slope * slope) ** 1.5)
+    return float(LanePoly.of(centre).curvature_1pm(x_m))
 
 
 class PidController:

@@ -22,6 +22,7 @@ from typing import TYPE_CHECKING
 from lanekeep.control.base import ControlContext
 from lanekeep.control.pid import SpeedController
 from lanekeep.core.signals import VehicleSignals
+from lanekeep.geometry.lane_poly import LanePoly
 
 if TYPE_CHECKING:
     from lanekeep.estimators.lane_estimator import EstimatorOutput
@@ -58,10 +59,10 @@ class StanleyController:
     def steering_angle(self, centre, speed_mps: float) -> float:
         """delta (rad, + = left) for lane centre coefficients `centre` at speed `speed_mps`."""
         x_front = self.context.wheelbase_m / 2.0
-        c0, c1, c2 = (float(c) for c in centre[:3])
-        heading_error = math.atan(c1 + 2.0 * c2 * x_front)  # path heading - car heading
+        lane = LanePoly.of(centre)
+        heading_error = lane.heading_rad(x_front)  # path heading - car heading
         # perpendicular distance from the front axle to the centre line, + = line to the left
-        cross_track = (c0 + c1 * x_front + c2 * x_front ** 2) * math.cos(heading_error)
+        cross_track = float(lane.y(x_front)) * math.cos(heading_error)
         v = max(speed_mps, 0.0) if math.isfinite(speed_mps) else 0.0
         g = self.gains
         return heading_error + math.atan(g.k_per_s * cross_track / (g.softening_mps + v))

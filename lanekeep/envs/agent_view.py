@@ -22,7 +22,7 @@ import weakref
 
 import numpy as np
 
-from lanekeep.detectors.base import poly_eval
+from lanekeep.geometry.lane_poly import LanePoly
 from lanekeep.loop.episode import Episode, Percept, StepResult
 from lanekeep.scoring.step_score import FUSED
 
@@ -51,11 +51,10 @@ def _lane(centre: np.ndarray | None, offset_m: float | None, x_m: float) -> dict
     """One lane at look-ahead x: zeros with valid = 0 when there is none (never NaN)."""
     if centre is None or offset_m is None:
         return dict.fromkeys(LANE_KEYS, 0.0)
-    slope = float(centre[1] + 2.0 * centre[2] * x_m)
+    lane = LanePoly.of(centre)
     return {"valid": 1.0, "offset_m": bounded("offset_m", float(offset_m)),
-            "heading_rad": math.atan(slope),
-            "curvature_1pm": bounded("curvature_1pm",
-                                     float(2.0 * centre[2] / (1.0 + slope * slope) ** 1.5))}
+            "heading_rad": lane.heading_rad(x_m),
+            "curvature_1pm": bounded("curvature_1pm", float(lane.curvature_1pm(x_m)))}
 
 
 def view(percept: Percept, models: list[str]) -> dict:
@@ -71,7 +70,8 @@ def view(percept: Percept, models: list[str]) -> dict:
     lanes = {}
     for name in models:
         track = estimate.tracked[name]
-        lanes[name] = _lane(track, None if track is None else -float(poly_eval(track, x)), x)
+        offset = None if track is None else float(LanePoly.of(track).offset_m(x))
+        lanes[name] = _lane(track, offset, x)
     lanes[FUSED] = _lane(estimate.centre, estimate.offset_m, x)
     ref = estimate.selection.reference_m
     signals = percept.signals

@@ -52,11 +52,12 @@ import cv2
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
-from lanekeep.detectors.base import LaneEstimate, poly_eval
+from lanekeep.detectors.base import LaneEstimate
 from lanekeep.detectors.lanenet_model import LaneNetConfig
 from lanekeep.detectors.lanenet_targets import CellGrid, boundary_crossings
 from lanekeep.evaluation.dataset import LABEL_HEIGHT, LABEL_ROWS, LABEL_WIDTH
 from lanekeep.geometry.camera_model import CameraModel
+from lanekeep.geometry.lane_poly import LanePoly
 from lanekeep.scoring.metrics import ADE_POINTS_M
 
 BOX_IOU = 0.5  # a proposal is a true positive at this box IoU
@@ -171,7 +172,7 @@ def x_at_rows(coeffs: np.ndarray, camera: CameraModel, rows: np.ndarray,
               x_range: tuple[float, float]) -> np.ndarray:
     """Image x of the ground curve y(x) = coeffs at each row, over x_range (NaN elsewhere)."""
     g = np.linspace(min(x_range), max(x_range), 400)
-    uv, ok = camera.project_ground(np.stack([g, poly_eval(coeffs, g)], -1))
+    uv, ok = camera.project_ground(np.stack([g, LanePoly.of(coeffs).y(g)], -1))
     uv = uv[ok]
     uv = uv[np.argsort(uv[:, 1])]
     if len(uv) < 2:
@@ -224,7 +225,7 @@ def ego_errors(estimate: LaneEstimate, ground_y: np.ndarray, slots: np.ndarray,
     for k, (row, coeffs) in enumerate(zip(_ego_rows(slots, rear),
                                           (estimate.left, estimate.right), strict=True)):
         if row is not None and coeffs is not None:
-            err[k] = np.abs(poly_eval(coeffs, x) - ground_y[row])
+            err[k] = np.abs(LanePoly.of(coeffs).y(x) - ground_y[row])
     return err
 
 

@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 
-from lanekeep.detectors.base import poly_eval
+from lanekeep.geometry.lane_poly import LanePoly
 
 LANE_RANGE_M = (3.0, 30.0)  # |x| of the lane polylines drawn from each camera
 MAX_POINTS_PER_SIDE = 400
@@ -32,7 +32,7 @@ def camera_x_range(camera) -> tuple[float, float]:
 
 def poly_points(coeffs, x_range: tuple[float, float], n: int = 28) -> np.ndarray:
     xs = np.linspace(*x_range, n)
-    return np.column_stack([xs, poly_eval(coeffs, xs)])
+    return np.column_stack([xs, LanePoly.of(coeffs).y(xs)])
 
 
 def clip_segment(p: np.ndarray, q: np.ndarray, w: float, h: float):

@@ -42,7 +42,7 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
-from lanekeep.detectors.base import poly_eval
+from lanekeep.geometry.lane_poly import LanePoly
 
 # Look-ahead points (m) of ADE / FDE: the front detectors' window, 4-20 m, every 2 m.
 ADE_POINTS_M = (4.0, 6.0, 8.0, 10.0, 12.0, 14.0, 16.0, 18.0, 20.0)
@@ -322,7 +322,7 @@ class Metrics:
                              f"got shape {truth_y.shape}")
         if centre is None:
             return
-        error = np.abs(poly_eval(centre, self.ade_points_m) - truth_y)
+        error = np.abs(LanePoly.of(centre).y(self.ade_points_m) - truth_y)
         acc = self._sources[name]
         acc.lanes += 1
         acc.lateral_sum_m += float(error.mean())

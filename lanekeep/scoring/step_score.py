@@ -9,8 +9,9 @@ from collections.abc import Callable, Mapping
 
 import numpy as np
 
-from lanekeep.detectors.base import LaneEstimate, poly_eval
+from lanekeep.detectors.base import LaneEstimate
 from lanekeep.estimators.lane_estimator import EstimatorOutput
+from lanekeep.geometry.lane_poly import LanePoly
 from lanekeep.scoring.metrics import Metrics
 from lanekeep.scoring.step_truth import StepTruth
 
@@ -50,7 +51,7 @@ def score_estimates(metrics: Metrics, models: list[str], estimates: Mapping[str,
         metrics.add_offset(name, e.offset_m if e.valid else None, truth.offset_at(e.x_m))
         metrics.add_lane(name, centre_of(e), truth.centre_at_ade_m)
         track = estimate.tracked[name]
-        track_offsets[name] = None if track is None else -float(poly_eval(track, x_out))
+        track_offsets[name] = None if track is None else float(LanePoly.of(track).offset_m(x_out))
         metrics.add_offset(track_source(name), track_offsets[name], truth.offset_at(x_out))
         metrics.add_lane(track_source(name), track, truth.centre_at_ade_m)
     ref = estimates[REFERENCE]

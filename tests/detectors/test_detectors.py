@@ -15,9 +15,10 @@ import numpy as np
 import pytest
 
 import lanekeep  # noqa: F401 - MUJOCO_GL before mujoco
-from lanekeep.detectors.base import LaneEstimate, poly_eval
+from lanekeep.detectors.base import LaneEstimate
 from lanekeep.detectors.registry import known_detectors, make_detector
 from lanekeep.detectors.tusimple import estimate_lanes, h_samples_for, record, score_frame
+from lanekeep.geometry.lane_poly import LanePoly
 from lanekeep.scenario.schema import load_scenario
 from lanekeep.scoring.truth import lane_truth
 from lanekeep.sensing.cameras import CameraRig
@@ -66,7 +67,8 @@ def _errors(world, frames, detector, camera="front", x_boundary=10.0, fit_range=
         offset_err.append(abs(est.offset_m - truth.offset_m))
         for mine, true in ((est.left, truth.left), (est.right, truth.right)):
             if mine is not None:
-                boundary_err.append(abs(poly_eval(mine, x_boundary) - poly_eval(true, x_boundary)))
+                mine_y, true_y = LanePoly.of(mine).y(x_boundary), LanePoly.of(true).y(x_boundary)
+                boundary_err.append(abs(mine_y - true_y))
     return np.array(offset_err), np.array(boundary_err), invalid
 
 

@@ -5,8 +5,8 @@ deterministically, from one frame or a sequence."""
 import numpy as np
 import pytest
 
-from lanekeep.detectors.base import poly_eval
 from lanekeep.detectors.lanenet import LaneNetDetector, LaneNetSettings
+from lanekeep.geometry.lane_poly import LanePoly
 from lanekeep.scenario.schema import load_scenario
 from lanekeep.scoring.truth import lane_centre_at
 from lanekeep.sensing.cameras import CameraRig, RenderSettings
@@ -34,7 +34,8 @@ def test_shipped_weights_find_the_ego_lane_within_10_cm_at_10_m(clear_frames):
         detector = LaneNetDetector(camera)
         estimate = detector.detect(frame)
         assert estimate.valid, estimate.reason
-        centre = 0.5 * float(poly_eval(estimate.left, 10.0) + poly_eval(estimate.right, 10.0))
+        left, right = LanePoly.of(estimate.left), LanePoly.of(estimate.right)
+        centre = 0.5 * float(left.y(10.0) + right.y(10.0))
         assert abs(centre - truth) < 0.10, (centre, truth)
 
 

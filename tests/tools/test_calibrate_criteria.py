@@ -18,7 +18,8 @@ import numpy as np
 import pytest
 from scipy.stats import t
 
-from lanekeep.detectors.base import LaneEstimate, poly_eval
+from lanekeep.detectors.base import LaneEstimate
+from lanekeep.geometry.lane_poly import LanePoly
 from lanekeep.report.seed_summary import summarise
 from lanekeep.scenario.schema import load_scenario
 from lanekeep.scoring.metrics import EpisodeReport, SourceReport
@@ -253,14 +254,14 @@ def test_the_sabotage_moves_the_lane_and_the_offset_together(monkeypatch):
     left, right = np.array([1.85, 0.01, 0.001]), np.array([-1.85, 0.01, 0.001])
     x = 8.0
     centre = (left + right) / 2
-    honest = LaneEstimate(valid=True, offset_m=-float(poly_eval(centre, x)), x_m=x, left=left,
-                          right=right, confidence=0.8)
+    honest = LaneEstimate(valid=True, offset_m=float(LanePoly.of(centre).offset_m(x)), x_m=x,
+                          left=left, right=right, confidence=0.8)
     moved = biased(honest)
     assert BIAS_M == 0.05
     assert moved.left[0] == pytest.approx(1.90) and moved.right[0] == pytest.approx(-1.80)
     assert np.allclose(moved.left[1:], left[1:]) and np.allclose(moved.right[1:], right[1:])
     # the offset still says where the centre line is (at y = -offset_m), now 5 cm left
-    assert -moved.offset_m == pytest.approx(float(poly_eval(moved.center, x)))
+    assert -moved.offset_m == pytest.approx(float(LanePoly.of(moved.center).y(x)))
     assert moved.offset_m == pytest.approx(honest.offset_m - 0.05)
     assert honest.left[0] == 1.85  # the detector's own estimate is not changed
     assert moved.confidence == 0.8 and moved.x_m == x
