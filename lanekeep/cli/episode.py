@@ -32,7 +32,8 @@ from lanekeep.core.config_io import ConfigError
 from lanekeep.core.interrupts import (
     stop_signals_held,
 )
-from lanekeep.loop.checks import check_scenario, check_weights_option
+from lanekeep.loop import bench_plan as bp
+from lanekeep.loop.checks import check_weights_option
 from lanekeep.loop.overrides import PluginOverrides
 from lanekeep.loop.runner import BenchInterrupted, BenchJob, job_steps, run_bench, run_episode
 from lanekeep.report.json_io import report_document
@@ -170,8 +171,8 @@ def seeds_note(args: argparse.Namespace) -> str:
 
 
 def _cmd_bench(args: argparse.Namespace) -> int:
-    from lanekeep.loop.paper_mode import with_mode
-    from lanekeep.scenario.schema import load_scenario, shipped_scenarios
+    from lanekeep.core.progress import set_progress, step_bar
+    from lanekeep.scenario.schema import shipped_scenarios
 
     check_options(args)
     if args.seeds is not None and args.seeds < 1:
@@ -181,38 +182,23 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     margins = bench_margins(args)
     baseline, plan = read_baseline(args)
     names = args.scenarios or (list(plan) if plan else shipped_scenarios())
-    # as each episode will run them: the mode first (its own front models), then the command
-    # line's detectors; fail fast on a bad name
-    scenarios = {name: plugins.apply(with_mode(load_scenario(name), args.mode))
-                 for name in names}
+    scenarios = bp.bench_scenarios(names, args.mode, plugins)
     seeds = {name: list(plan[name]) if plan else bench_seeds(args, scenario)
              for name, scenario in scenarios.items()}
     if baseline is not None:
-        file_margins(scenarios)  # a file's bad margin fails now, not after the episodes
-    for name, scenario in scenarios.items():  # and on a bad scenario, before any worker starts
-        for seed in seeds[name]:  # (shadow casters stand where the seed puts them)
-            check_scenario(scenario if seed is None else
-                           dataclasses.replace(scenario, seed=seed), args.seconds)
+        bp.file_margins(scenarios)  # a file's bad margin fails now, not after the episodes
+    bp.check_bench(scenarios, seeds, args.seconds)
     code = weights_error("bench", args, list(scenarios.values()))
     if code is not None:
         return code
     check_outputs(args)
     if args.record_dir:
         Path(args.record_dir).mkdir(parents=True, exist_ok=True)
-    many = any(len(s) > 1 for s in seeds.values()) if plan else (args.seeds or 1) > 1
-    main_jobs = [BenchJob(name, seed, args.mode, plugins=plugins, seed_in_label=many)
-                 for name in names for seed in seeds[name]]
-    jobs = list(main_jobs)
-    if args.single_model:
-        jobs += [BenchJob(name, seed, args.mode, (model,), plugins, many) for name in names
-                 for model in scenarios[name].estimation.front_detectors
-                 for seed in seeds[name]]
-    from lanekeep.core.progress import set_progress, step_bar
-
-    periods = {scenario.control_period_s for scenario in scenarios.values()}
+    bench = bp.plan_jobs(names, scenarios, seeds, args.mode, plugins, args.single_model)
+    jobs, many = bench.jobs, bench.many
     bar = step_bar(sum(job_steps(jobs, args.seconds)), f"bench ({len(jobs)} episodes)",
                    enabled=False if args.quiet else None,
-                   step_s=periods.pop() if len(periods) == 1 else None)
+                   step_s=bp.control_period_s(scenarios))
     try:
         with bar:
             done_reports, wall = run_bench(
@@ -222,7 +208,8 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     except BenchInterrupted as stop:
         return _bench_interrupted(args, jobs, scenarios, stop)
     reports = {job.episode_label: r for job, r in zip(jobs, done_reports, strict=True)}
-    documents = bench_documents(args, jobs, done_reports, scenarios, plugins)
+    documents = bp.bench_documents(jobs, done_reports, scenarios, plugins, args.weights,
+                                   args.mode, args.single_model)
     if args.json:  # first: a failing table must not lose the episodes
         write_json_output(args.json, documents)
     if args.write_baseline:
@@ -230,7 +217,7 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     if args.junit:
         write_junit_output(args.junit, reports, wall)
     out = human_stream(args)
-    main_labels = [job.episode_label for job in main_jobs]
+    main_labels = bench.main_labels
     if not many:
         for label in main_labels:
             r = reports[label]
@@ -242,8 +229,7 @@ def _cmd_bench(args: argparse.Namespace) -> int:
         print("\n" + drift_table([reports[label] for label in main_labels]), file=out)
         if args.single_model:
             print("\n" + single_model_table(jobs, reports), file=out)
-    main_docs = [documents[name_label] for name_label in dict.fromkeys(
-        job.label for job in main_jobs)]
+    main_docs = bp.main_documents(bench, documents)
     note = (f"on the baseline's seeds ({args.baseline})" if plan else seeds_note(args))
     print("\n" + note if note else "", file=out)
     print(interval_table(main_docs, args.wide), file=out)
@@ -255,9 +241,23 @@ def _cmd_bench(args: argparse.Namespace) -> int:
                                 "episodes (scenario x seed)" if many else "scenarios")
     print("\n".join(lines), file=out)
     if baseline is not None:
-        gate_code = _gate(baseline, documents, main_docs, scenarios, margins, out)
-        code = max(code, gate_code)
+        code = max(code, _gate(baseline, documents, main_docs, scenarios, margins, out))
     return code
+
+
+def _gate(baseline: dict, documents: dict, main_docs: list[dict],
+          scenarios: dict[str, Scenario], margins: dict, out) -> int:
+    """The regression gate against `baseline`, printed; 1 when a scenario got worse beyond
+    its margin, 2 when the two cannot be paired."""
+    from lanekeep.report.regression import gate_text
+
+    try:
+        gate = bp.regression(baseline, documents, main_docs, scenarios, margins)
+    except bp.BaselineMismatch as err:
+        print(f"regression gate: cannot compare with the baseline: {err}", file=out)
+        return 2
+    print("\n" + gate_text(gate), file=out)
+    return 0 if gate.passed else 1
 
 
 def read_baseline(args: argparse.Namespace) -> tuple[dict | None, dict[str, list[int]]]:
@@ -287,68 +287,6 @@ def bench_margins(args: argparse.Namespace) -> dict:
         return parse_margins(args.margin or [])
     except ValueError as err:
         raise ConfigError("", "--margin", str(err)) from None
-
-
-def file_margins(scenarios: dict[str, Scenario]) -> dict:
-    """Each scenario's own `[criteria] margins`, keyed "LABEL:METRIC" as `--margin` keys a
-    scenario's; ConfigError naming the file for a metric that does not exist."""
-    from lanekeep.report.compare import parse_margins
-
-    out = {}
-    for name, scenario in scenarios.items():
-        try:
-            out.update(parse_margins([f"{name}:{t}" for t in scenario.criteria.margins]))
-        except ValueError as err:
-            raise ConfigError(scenario.source or name, "criteria.margins", str(err)) from None
-    return out
-
-
-def _gate(baseline: dict, documents: dict, main_docs: list[dict],
-          scenarios: dict[str, Scenario], margins: dict, out) -> int:
-    """The regression gate against `baseline` (lanekeep/report/regression.py), printed; 1 when
-    a scenario got worse beyond its margin."""
-    import json
-
-    from lanekeep.report.json_io import dumps
-    from lanekeep.report.regression import gate_text, regression_gate
-
-    mains = json.loads(dumps({d["label"]: documents[d["label"]] for d in main_docs}))
-    two_mode = {name: s.criteria.bad_episode_fused_rmse_m for name, s in scenarios.items()
-                if s.criteria.bad_episode_fused_rmse_m is not None}
-    try:
-        gate = regression_gate(baseline, mains, margins={**file_margins(scenarios), **margins},
-                               two_mode=two_mode)
-    except ValueError as err:  # the baseline and this run cannot be paired
-        print(f"regression gate: cannot compare with the baseline: {err}", file=out)
-        return 2
-    print("\n" + gate_text(gate), file=out)
-    return 0 if gate.passed else 1
-
-
-def bench_documents(args: argparse.Namespace, jobs: list[BenchJob], reports: list,
-                    scenarios: dict[str, Scenario], plugins) -> dict[str, dict]:
-    """`bench --json`: one document per label over its seeds (lanekeep/report/seed_summary.py),
-    the scenarios first, then their model-only loops."""
-    from lanekeep.report.seed_summary import summarise
-
-    first_job: dict[str, BenchJob] = {}
-    by_label: dict[str, list] = {}
-    for job, report in zip(jobs, reports, strict=True):
-        first_job.setdefault(job.label, job)
-        by_label.setdefault(job.label, []).append(report)
-    overrides = {**dataclasses.asdict(plugins), "weights": args.weights}
-    documents = {}
-    for label, runs in by_label.items():
-        job = first_job[label]
-        single = None
-        if job.front_detectors is None and args.single_model:
-            single = {"+".join(other.front_detectors): by_label[other_label]
-                      for other_label, other in first_job.items()
-                      if other.front_detectors is not None and other.scenario == job.scenario}
-        documents[label] = summarise(label, runs, scenarios[job.scenario],
-                                     overrides=overrides, mode=args.mode,
-                                     single_model=single)
-    return documents
 
 
 def _bench_interrupted(args: argparse.Namespace, jobs: list[BenchJob],

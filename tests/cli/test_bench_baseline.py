@@ -73,8 +73,8 @@ def test_a_missing_baseline_file_is_one_line(tmp_path, capsys):
 
 
 def test_a_scenarios_own_margins_key_it_and_a_bad_one_is_refused(tmp_path):
-    from lanekeep.cli.episode import file_margins
     from lanekeep.core.config_io import ConfigError
+    from lanekeep.loop.bench_plan import file_margins
     from lanekeep.scenario.schema import load_scenario
 
     base = load_scenario("clear_curve")
