@@ -19,10 +19,10 @@ from __future__ import annotations
 
 import argparse
 import json
-import sys
 from pathlib import Path
 from typing import Any
 
+from lanekeep.cli.outputs import error_line
 from lanekeep.report.compare import (
     KEYS_HELP,
     compare_document,
@@ -102,5 +102,4 @@ def _cmd_compare(args: argparse.Namespace) -> int:
     except ValueError as err:  # IncomparableRuns, an unknown metric, CompareInputError
         if getattr(args, "debug", False):
             raise
-        print(f"lanekeep compare: error: {' '.join(str(err).split())}", file=sys.stderr)
-        return EXIT_BAD_INPUT
+        return error_line("compare", err)

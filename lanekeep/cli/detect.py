@@ -26,6 +26,7 @@ import json
 import sys
 from pathlib import Path
 
+from lanekeep.cli.outputs import error_line
 from lanekeep.core.files import atomic_path, folder_problem
 from lanekeep.evaluation.real_frames import (  # noqa: F401 - SLOT_COLOURS: public here too
     SEQUENCE_HORIZON_FRAMES,
@@ -39,8 +40,8 @@ EXIT_OK, EXIT_FAILURE, EXIT_BAD_INPUT = 0, 1, 2
 
 
 def _error(command: str, message: str) -> int:
-    print(f"lanekeep {command}: error: {message}", file=sys.stderr)
-    return EXIT_BAD_INPUT
+    """detect's and calibrate's lines name files: kept as they are, spaces and all."""
+    return error_line(command, message, one_line=False)
 
 
 def _print_line(line: dict) -> None:
@@ -82,7 +83,7 @@ def cmd_detect(args: argparse.Namespace) -> int:
         else:
             df.detect_photos(request, args.images, _print_line)
     except df.OverlayError as err:
-        print(f"lanekeep detect: error: {err}", file=sys.stderr)
+        _error("detect", str(err))
         return EXIT_FAILURE
     except (df.InputChanged, df.DetectorUnavailable) as err:
         if debug and isinstance(err, df.DetectorUnavailable):

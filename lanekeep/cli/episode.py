@@ -22,6 +22,7 @@ from pathlib import Path
 
 from lanekeep.cli.outputs import (
     check_outputs,
+    error_line,
     human_stream,
     write_json_output,
     write_junit_output,
@@ -100,8 +101,7 @@ def weights_error(command: str, args: argparse.Namespace, scenarios: list[Scenar
     except ValueError as err:
         if getattr(args, "debug", False):
             raise
-        print(f"lanekeep {command}: error: {' '.join(str(err).split())}", file=sys.stderr)
-        return 2
+        return error_line(command, err)
     return None
 
 

@@ -15,6 +15,7 @@ from __future__ import annotations
 import argparse
 import sys
 
+from lanekeep.cli.outputs import error_line
 from lanekeep.evaluation.detector_eval import DEFAULT_DETECTORS, BadInput, evaluate, table
 
 EXIT_OK, EXIT_BAD_INPUT = 0, 2
@@ -30,8 +31,7 @@ def cmd_eval(args: argparse.Namespace) -> int:
     except BadInput as err:
         if getattr(args, "debug", False):
             raise
-        print(f"lanekeep eval: error: {' '.join(str(err).split())}", file=sys.stderr)
-        return EXIT_BAD_INPUT
+        return error_line("eval", err)
     recipe = EvalRecipe.quick() if args.quick else EvalRecipe()
     results = evaluate(plan.conditions, plan.detectors, plan.weights, recipe, args.cache or None,
                        progress=lambda m: print(m, file=sys.stderr, flush=True))

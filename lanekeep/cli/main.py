@@ -16,6 +16,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 import lanekeep  # sets MUJOCO_GL before mujoco is imported; --version
+from lanekeep.cli.outputs import error_line
 from lanekeep.core.config_io import ConfigError
 from lanekeep.core.interrupts import stop_signals_interrupt
 from lanekeep.sensing.gl_backend import require_mujoco
@@ -134,8 +135,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     except (ConfigError, FileNotFoundError, RuntimeError) as err:
         if args.debug:
             raise
-        message = " ".join(str(err).split())  # one line, whatever the message holds
-        print(f"lanekeep: error: {message}", file=sys.stderr)
+        error_line(None, err)  # one line, whatever the message holds
         return EXIT_FAILURE if isinstance(err, RuntimeError) else EXIT_BAD_INPUT
 
 

@@ -20,12 +20,21 @@ from lanekeep.core.config_io import ConfigError
 from lanekeep.core.files import folder_problem
 
 STDOUT = "-"
+EXIT_BAD_INPUT = 2
 
 # (option, attribute, whether it names a folder rather than a file)
 OUTPUT_OPTIONS = (("--json", "json", False), ("--junit", "junit", False),
                   ("--plots", "plots", True), ("--record", "record", False),
                   ("--record-dir", "record_dir", True),
                   ("--write-baseline", "write_baseline", False))
+
+
+def error_line(command: str | None, message: object, one_line: bool = True) -> int:
+    """Print the one error line of a refused command, "lanekeep CMD: error: MESSAGE" on
+    stderr (whatever line breaks the message holds when `one_line`); returns exit code 2."""
+    text = " ".join(str(message).split()) if one_line else str(message)
+    print(f"lanekeep{f' {command}' if command else ''}: error: {text}", file=sys.stderr)
+    return EXIT_BAD_INPUT
 
 
 def human_stream(args: argparse.Namespace) -> TextIO:

@@ -7,10 +7,12 @@ No episode runs: the bench files are written from small fake EpisodeReports summ
 from __future__ import annotations
 
 import json
+from functools import partial
 from pathlib import Path
 
 import numpy as np
 import pytest
+from cli.error_lines import one_error_line  # tests/ is on sys.path
 from scipy.stats import gmean
 
 from lanekeep.cli.main import main
@@ -51,17 +53,7 @@ def runs(tmp_path: Path) -> tuple[str, str]:
     return a, b
 
 
-def _one_error_line(capsys, code: int, *needles: str) -> str:
-    captured = capsys.readouterr()
-    assert code == 2
-    lines = captured.err.strip().splitlines()
-    assert len(lines) == 1, captured.err
-    assert lines[0].startswith("lanekeep compare: error: ")
-    assert "Traceback" not in captured.err
-    for needle in needles:
-        assert needle in lines[0], lines[0]
-    return lines[0]
-
+_one_error_line = partial(one_error_line, start="lanekeep compare: error: ")
 
 def test_compare_prints_the_table_and_exits_0(runs, capsys):
     a, b = runs

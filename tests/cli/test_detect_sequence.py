@@ -10,11 +10,13 @@ from __future__ import annotations
 
 import dataclasses
 import json
+from functools import partial
 
 import cv2
 import numpy as np
 import pytest
 import torch
+from cli.error_lines import one_error_line  # tests/ is on sys.path
 from realcam.road_frames import H, W, read_back, road, write_video  # tests/ is on sys.path
 
 from lanekeep.cli.main import main
@@ -63,17 +65,7 @@ def _lines(out: str) -> list[dict]:
     return [json.loads(line) for line in out.strip().splitlines()]
 
 
-def _one_error_line(capsys, code: int, *words: str) -> str:
-    out, err = capsys.readouterr()
-    assert code == 2, err
-    assert out == ""
-    lines = err.strip().splitlines()
-    assert len(lines) == 1, err
-    assert lines[0].startswith("lanekeep detect: error: ") and "Traceback" not in err
-    for word in words:
-        assert word in lines[0], (word, lines[0])
-    return lines[0]
-
+_one_error_line = partial(one_error_line, start="lanekeep detect: error: ")
 
 # --- Frames ---------------------------------------------------------------------------------
 

@@ -18,6 +18,7 @@ import cv2
 import numpy as np
 import pytest
 import torch
+from cli.error_lines import one_error_line  # tests/ is on sys.path
 
 from lanekeep.cli.main import main
 from lanekeep.detectors.lanenet import LaneNetDetector, WeightsError, save_weights
@@ -74,17 +75,6 @@ def _bad_weights(tmp_path, case: str) -> str:
 
 
 BAD = ["missing", "empty", "garbage", "other architecture", "not lanenet"]
-
-
-def _one_error_line(capsys, code: int, command: str, path: str) -> str:
-    out, err = capsys.readouterr()
-    assert code == 2, err
-    assert out == ""
-    lines = err.strip().splitlines()
-    assert len(lines) == 1, err
-    assert lines[0].startswith(f"lanekeep {command}: error: {path}: "), lines[0]
-    assert "Traceback" not in err
-    return lines[0]
 
 
 # --- The registry ---------------------------------------------------------------------------
@@ -243,7 +233,7 @@ def test_detect_rejects_a_bad_weights_file_before_any_output(tmp_path, capsys, c
     path = _bad_weights(tmp_path, case)
     code = main(["detect", "--detector", "lanenet", "--weights", path, png,
                  "--overlay", str(tmp_path / "ov")])
-    _one_error_line(capsys, code, "detect", path)
+    one_error_line(capsys, code, start=f"lanekeep detect: error: {path}: ")
     assert not (tmp_path / "ov").exists()
 
 
@@ -256,7 +246,7 @@ def test_run_rejects_a_bad_weights_file_before_any_output(tmp_path, capsys, case
     out = tmp_path / "out.json"
     code = main(["run", "clear_straight", "--seconds", "1", "--weights", path,
                  "--json", str(out), "--record", str(tmp_path / "out.rrd")])
-    _one_error_line(capsys, code, "run", path)
+    one_error_line(capsys, code, start=f"lanekeep run: error: {path}: ")
     assert not out.exists() and not (tmp_path / "out.rrd").exists()
 
 
@@ -264,9 +254,9 @@ def test_bench_and_perf_reject_a_bad_weights_file(tmp_path, capsys):
     path = _bad_weights(tmp_path, "garbage")
     code = main(["bench", "clear_straight", "--seconds", "1", "--workers", "1",
                  "--weights", path, "--json", str(tmp_path / "bench.json")])
-    _one_error_line(capsys, code, "bench", path)
+    one_error_line(capsys, code, start=f"lanekeep bench: error: {path}: ")
     code = main(["perf", "--weights", path, "--json", str(tmp_path / "perf.json")])
-    _one_error_line(capsys, code, "perf", path)
+    one_error_line(capsys, code, start=f"lanekeep perf: error: {path}: ")
     assert not list(tmp_path.glob("*.json"))
 
 

@@ -8,11 +8,13 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import json
+from functools import partial
 from types import SimpleNamespace
 
 import cv2
 import numpy as np
 import pytest
+from cli.error_lines import one_error_line  # tests/ is on sys.path
 
 import lanekeep.loop.episode
 from lanekeep.cli.main import build_parser, main
@@ -24,15 +26,7 @@ from lanekeep.scenario.schema import load_scenario, shipped_scenarios
 from lanekeep.sensing.snapshot import paved_offsets
 from lanekeep.world.parts import WorldLayout
 
-
-def _one_error_line(capsys, code: int, *needles: str) -> str:
-    err = capsys.readouterr().err
-    lines = err.strip().splitlines()
-    assert code == 2 and len(lines) == 1, err
-    assert lines[0].startswith("lanekeep") and "error:" in lines[0]
-    assert all(needle in lines[0] for needle in needles), lines[0]
-    return lines[0]
-
+_one_error_line = partial(one_error_line, stdout_empty=False)
 
 def test_run_at_a_size_writes_json_to_stdout_and_everything_else_to_stderr(
         tmp_path, capsys, monkeypatch):
