@@ -5,7 +5,8 @@ tables, camera files, cached sets, overlays, dataset shards) goes through here: 
 a hidden temporary file in the same folder (a rename across folders could cross file systems,
 and only a rename within one is atomic), which `os.replace` then puts in place. A failure
 removes the temporary file and leaves any file already at `path` as it was. New files get mode
-0666 & ~umask, as `open` gives them.
+0666 & ~umask, as `open` gives them. `folder_problem` says, before anything runs, why a folder
+could not take them.
 """
 
 from __future__ import annotations
