@@ -1,8 +1,10 @@
 """`lanekeep detect` (lane detectors on real photos) and `lanekeep calibrate`.
 
-Thin: argument parsing and output; the work is in lanekeep/evaluation/real_frames.py (a detector
-on real frames: its camera, its output line, its overlay), lanekeep/realcam/frames.py (photos,
-sequences, videos) and lanekeep/realcam/calibration.py. Images are read by
+Thin: argument parsing and output; the work is in lanekeep/evaluation/detect_frames.py (the
+checks before anything runs, the photo and sequence runs, the overlays' files),
+lanekeep/evaluation/real_frames.py (a detector on real frames: its camera, its output line, its
+overlay), lanekeep/realcam/frames.py (photos, sequences, videos) and
+lanekeep/realcam/calibration.py. Images are read by
 lanekeep/realcam/image_io.py, which rejects missing, empty, truncated and corrupt files. `detect`
 checks every input (and the overlay folder) before it runs anything: one bad input and nothing
 is detected or written. `detect --sequence` runs one detector through a sequence of frames or a
