@@ -7,8 +7,9 @@ curvature_1pm}, `detected[<model>]`, `reference` {valid, offset_m}, `probabiliti
 and `vehicle` {speed_mps, yaw_rate_rps, accel_long_mps2, accel_lat_mps2, steer_angle_rad}.
 Action: (steer, throttle) in [-1, 1]. Reward: progress minus the lateral-error penalty (truth,
 scoring only). A lane departure or leaving the road terminates; the scenario's duration
-truncates (discount 1). dm-control is not used: its `Physics`/`Task` split would wrap a loop
-that lanekeep.loop.episode already owns.
+truncates (discount 1). `reset(seed)` takes a seed; lanekeep/envs/dm_control_env.py gives the
+same observation, action and reward as a `dm_control.rl.control.Environment` (its Physics and
+Task), for dm_control's tooling.
 """
 
 from __future__ import annotations
@@ -34,6 +35,42 @@ def _flag(name: str) -> specs.BoundedArray:
     return specs.BoundedArray((), np.float64, 0.0, 1.0, name)
 
 
+def observation_spec(models: list[str], render_size: tuple[int, int]) -> dict:
+    """The specs of `observation`: images at `render_size` (width, height) and the named
+    numbers of lanekeep/envs/agent_view.py."""
+    w, h = render_size
+    n = len(models)
+    lane_keys = agent_view.LANE_KEYS[1:]
+    return {
+        "front": specs.Array((h, w, 3), np.uint8, "front"),
+        "rear": specs.Array((h, w, 3), np.uint8, "rear"),
+        "lanes": {name: {"valid": _flag("valid"), **{k: _scalar(k) for k in lane_keys}}
+                  for name in agent_view.lane_names(models)},
+        "detected": {name: _flag(name) for name in models},
+        "reference": {"valid": _flag("valid"), "offset_m": _scalar("offset_m")},
+        "probabilities": specs.BoundedArray((n,), np.float64, 0.0, 1.0, "probabilities"),
+        "selected": specs.BoundedArray((), np.int64, 0, n - 1, "selected"),
+        "vehicle": {k: _scalar(k) for k in agent_view.SIGNAL_KEYS},
+    }
+
+
+def observation(percept: Percept, models: list[str]) -> dict:
+    """One percept as nested dicts of float64 (`selected` int64) and the two images."""
+    v = agent_view.view(percept, models)
+    f64 = np.float64
+    return {
+        "front": percept.frames["front"].copy(),
+        "rear": percept.frames["rear"].copy(),
+        "lanes": {name: {k: f64(x) for k, x in lane.items()}
+                  for name, lane in v["lanes"].items()},
+        "detected": {name: f64(x) for name, x in v["detected"].items()},
+        "reference": {k: f64(x) for k, x in v["reference"].items()},
+        "probabilities": np.clip(np.asarray(v["probabilities"], dtype=f64), 0.0, 1.0),
+        "selected": np.int64(v["selected"]),
+        "vehicle": {k: f64(x) for k, x in v["vehicle"].items()},
+    }
+
+
 class LaneKeepEnv(dm_env.Environment):
     """One scenario; `reset(seed)` runs it with that seed (None: the last seed given, at first
     the scenario's own, its nominal drive)."""
@@ -52,20 +89,7 @@ class LaneKeepEnv(dm_env.Environment):
 
     # -- specs -----------------------------------------------------------------------------
     def observation_spec(self):
-        w, h = self.render_size
-        n = len(self.models)
-        lane_keys = agent_view.LANE_KEYS[1:]
-        return {
-            "front": specs.Array((h, w, 3), np.uint8, "front"),
-            "rear": specs.Array((h, w, 3), np.uint8, "rear"),
-            "lanes": {name: {"valid": _flag("valid"), **{k: _scalar(k) for k in lane_keys}}
-                      for name in agent_view.lane_names(self.models)},
-            "detected": {name: _flag(name) for name in self.models},
-            "reference": {"valid": _flag("valid"), "offset_m": _scalar("offset_m")},
-            "probabilities": specs.BoundedArray((n,), np.float64, 0.0, 1.0, "probabilities"),
-            "selected": specs.BoundedArray((), np.int64, 0, n - 1, "selected"),
-            "vehicle": {k: _scalar(k) for k in agent_view.SIGNAL_KEYS},
-        }
+        return observation_spec(self.models, self.render_size)
 
     def action_spec(self):
         return specs.BoundedArray((2,), np.float64, -1.0, 1.0, "steer_throttle")
@@ -104,19 +128,7 @@ class LaneKeepEnv(dm_env.Environment):
         return dm_env.transition(reward, observation)
 
     def _observation(self, percept: Percept) -> dict:
-        v = agent_view.view(percept, self.models)
-        f64 = np.float64
-        return {
-            "front": percept.frames["front"].copy(),
-            "rear": percept.frames["rear"].copy(),
-            "lanes": {name: {k: f64(x) for k, x in lane.items()}
-                      for name, lane in v["lanes"].items()},
-            "detected": {name: f64(x) for name, x in v["detected"].items()},
-            "reference": {k: f64(x) for k, x in v["reference"].items()},
-            "probabilities": np.clip(np.asarray(v["probabilities"], dtype=f64), 0.0, 1.0),
-            "selected": np.int64(v["selected"]),
-            "vehicle": {k: f64(x) for k, x in v["vehicle"].items()},
-        }
+        return observation(percept, self.models)
 
     def close(self) -> None:
         self._slot.close()

@@ -93,17 +93,28 @@ class Episode:
         # The gate to the truth: the scorer and the recorder get it, the driver never.
         self.truth = Truth(self.simulator.world, scenario)
         self.dt_s = scenario.control_period_s
-        self.driver = Driver(driver_config(scenario, self.simulator), self.clock)
-        self.scorer = StepScorer(self.truth, list(self.driver.front),
-                                 scenario.estimation.offset_lookahead_m, self.driver.centre_of)
+        self._new_driver_and_scorer()
         self.recorder: Recorder = recorder or NullRecorder()
         car = self.simulator.car
         self.recorder.start(EpisodeInfo(self.truth.road, self.simulator.cameras,
                                         list(self.driver.front), float(self.dt_s),
                                         (car.length_m, car.width_m)))
+
+    def _new_driver_and_scorer(self) -> None:
+        scenario = self.truth.scenario
+        self.driver = Driver(driver_config(scenario, self.simulator), self.clock)
+        self.scorer = StepScorer(self.truth, list(self.driver.front),
+                                 scenario.estimation.offset_lookahead_m, self.driver.centre_of)
         self.index = 0
         self._percept: Percept | None = None  # sensed, not yet acted on
         self._wall_start = time.perf_counter()
+
+    def restart(self) -> None:
+        """The same drive again from its start, on the same world (dm_control resets its
+        physics in place): the simulator restarted, a new driver and scorer."""
+        self.driver.close()
+        self.simulator.restart()
+        self._new_driver_and_scorer()
 
     @property
     def world(self) -> World:
@@ -139,13 +150,23 @@ class Episode:
         """The rest of the control period: the driver's command (or `action` = (steer,
         throttle) from outside) on the latest percept, physics, scoring, recording."""
         percept = self.observe()
-        self._percept = None
+        self.forget_percept()
         clock = self.clock
         command = (self.driver.command(percept.belief, percept.signals) if action is None
                    else Command(*action))
         clock.lap("control")
         self.simulator.actuate(command)
         clock.lap("physics")
+        return self.conclude(percept, command)
+
+    def forget_percept(self) -> None:
+        """The percept is being acted on: the next `observe` senses a new period."""
+        self._percept = None
+
+    def conclude(self, percept: Percept, command: Command) -> StepResult:
+        """The end of a control period whose command has been actuated: score, record, count
+        (dm_control's Environment steps the physics itself and calls this after)."""
+        clock = self.clock
         result = self.scorer.score(self.index, percept.sensed_pose, percept.observation,
                                    percept.belief, command)
         clock.lap("score")

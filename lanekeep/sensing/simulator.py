@@ -39,11 +39,24 @@ class Simulator:
         self.clock = clock or StageClock()
         width, height = render_size or (scenario.camera.width, scenario.camera.height)
         self.rig = CameraRig(self.world.model, RenderSettings.of(scenario, width, height))
+        self._draw_streams()
+
+    def _draw_streams(self) -> None:
+        """The episode's generator and what keeps state across its periods (image effects,
+        sensor biases), as at the start of the scenario's drive."""
+        scenario = self.scenario
         # seed and name: scenarios on one seed draw independent noise (scenario/streams.py)
         self.rng = np.random.default_rng(stream_entropy(scenario))
         # One effects pipeline per camera: lens drops and the auto-exposure keep state.
         self.effects = make_effects(scenario, self.world, self.rig, self.rng)
         self.sensors = VehicleSensors(scenario.sensors, self.period_s, self.rng.spawn(1)[0])
+
+    def restart(self) -> None:
+        """The same drive from its start: the car back at its start pose and speed, the other
+        vehicles at time 0, the random streams and the effects' state anew (dm_control's
+        `Task.initialize_episode` on the same physics)."""
+        self.world.reset()  # as `build` leaves it (MuJoCo's reset puts the traffic's mocaps back)
+        self._draw_streams()
 
     # -- the car's spec sheet ------------------------------------------------------------------
     @property

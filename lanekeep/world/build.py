@@ -108,6 +108,11 @@ class World:
             raise SimulationError(
                 f"MuJoCo found the simulation unstable by t = {self.data.time:.2f} s "
                 f"(bad position, velocity or acceleration) and reset it")
+        self.move_scene()
+
+    def move_scene(self) -> None:
+        """The other vehicles and the lamps' pools to their state at the data's time (after
+        the car's physics moved it; dm_control's Task calls it in `after_step`)."""
         update_dynamic(self, self.data.time)
         update_pools(self)
 
@@ -453,12 +458,14 @@ def _check_control_period(scenario: Scenario, timestep: float) -> None:
         ) from None
 
 
-def check_scenario(scenario: Scenario) -> None:
+def check_buildable(scenario: Scenario) -> None:
     """The checks across a scenario's fields that `build` makes, in 30-160 ms instead of its
     1-2 s: the build's own code on the bare car (the road, the conditions and props added to
     the car's MjSpec: speed bumps beyond the road, vehicles in a lane that does not exist,
     shadows the sun cannot cast, a sign beyond the road) and the control period against the
-    physics timestep.
+    physics timestep. The world's part of the one validation path (lanekeep/loop/checks.py
+    `check_scenario`, which run, bench, sweep and falsify call); a caller that renders worlds
+    without driving them (the datasets) calls this part alone.
 
     Raises:
       ScenarioError: naming the scenario's file and key.
