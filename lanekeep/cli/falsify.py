@@ -85,13 +85,14 @@ def _cmd_falsify(args: argparse.Namespace) -> int:
     from contextlib import nullcontext
 
     from lanekeep.sweep.falsify_search import Evaluator, run_search
-    from lanekeep.sweep.falsify_spec import check_world, load_falsify
+    from lanekeep.sweep.falsify_spec import load_falsify
     from lanekeep.sweep.falsify_store import FalsifyStore
     from lanekeep.sweep.run import ray_session, run_local, run_ray
+    from lanekeep.sweep.spec import check_world
 
     _check_options(args)
     spec = load_falsify(args.file)
-    check_world(spec)
+    check_world(spec.sweep, spec.table)  # each end value through the one validation path
     seeds = len(spec.sweep.seeds)
     if args.budget < seeds:
         raise ConfigError("", "--budget", f"must be at least the spec's {seeds} seeds (one "

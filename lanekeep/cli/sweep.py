@@ -37,29 +37,9 @@ def register(sub) -> None:
     p.set_defaults(func=_cmd_sweep)
 
 
-def _check_world(spec) -> None:
-    """The world's cross-field checks (speed bumps on the road, vehicles in lanes, ...) on
-    each parameter value, before any worker starts: a bad value is one line, exit 2."""
-    from lanekeep.loop.checks import check_scenario
-    from lanekeep.sweep.spec import SweepError, cell_scenario
-
-    for i, p in enumerate(spec.parameters):
-        for value in p.values:
-            values = tuple(value if j == i else q.values[0]
-                           for j, q in enumerate(spec.parameters))
-            scenario = cell_scenario(spec.cell_table(values, spec.seeds[0]), spec.source,
-                                     spec.nominal_seed)
-            try:
-                check_scenario(scenario, spec.seconds)
-            except ConfigError as err:
-                raise SweepError(spec.source, f"parameters.{p.key}",
-                                 f"value {value!r} makes an invalid scenario: "
-                                 f"{' '.join(str(err).split())}") from None
-
-
 def _cmd_sweep(args: argparse.Namespace) -> int:
     from lanekeep.sweep.run import FINISHED, ray_missing, run_local, run_ray
-    from lanekeep.sweep.spec import load_sweep
+    from lanekeep.sweep.spec import check_world, load_sweep
     from lanekeep.sweep.store import SweepStore
 
     if args.workers is not None and args.workers < 1:
@@ -67,7 +47,7 @@ def _cmd_sweep(args: argparse.Namespace) -> int:
     if args.ray is not None and (why := ray_missing()):
         raise ConfigError("", "--ray", why.removeprefix("--ray "))
     spec = load_sweep(args.file)
-    _check_world(spec)
+    check_world(spec)  # each value through the one validation path, before any worker
     out = Path(args.out) if args.out else Path("out/sweeps") / spec.name
     store = SweepStore(out, spec)
     cells = spec.cells()

@@ -261,8 +261,8 @@ def random_scenario(seed: int, tag: str | None = None, attempts: int = 20) -> Sc
                 conditions=_conditions(rng, tag, n_lanes, ego),
                 roadside=_roadside(rng),
             )
-            from lanekeep.world.build import check_scenario  # the builder's cross-field checks
-            check_scenario(scenario)
+            from lanekeep.world.build import check_buildable  # the builder's cross-field checks
+            check_buildable(scenario)
             return scenario
         except (ScenarioError, ValueError) as err:
             last = err

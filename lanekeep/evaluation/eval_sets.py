@@ -134,7 +134,7 @@ def _force(condition: str, s: Scenario, rng: np.random.Generator) -> Scenario:
 def condition_scenario(condition: str, index: int) -> Scenario:
     """World `index` of `condition`'s set (redrawn from the next seed if the builder rejects
     the forced condition, e.g. a shadow the drawn sun cannot cast)."""
-    from lanekeep.world.build import check_scenario
+    from lanekeep.world.build import check_buildable
 
     if condition not in CONDITIONS:
         raise ValueError(f"unknown condition {condition!r}; known: {', '.join(CONDITIONS)}")
@@ -145,7 +145,7 @@ def condition_scenario(condition: str, index: int) -> Scenario:
         try:
             scenario = _force(condition, random_scenario(seed, BASE_TAG.get(condition, "clear")),
                               rng)
-            check_scenario(scenario)
+            check_buildable(scenario)
             return scenario
         except (ScenarioError, ValueError, RuntimeError) as err:
             last = err
@@ -287,8 +287,3 @@ def load_set(condition: str, recipe: EvalRecipe, cache: str | Path | None
     with atomic_path(path) as tmp, open(tmp, "wb") as f:
         np.savez_compressed(f, **arrays)
     return arrays, key
-
-
-def frames_in(recipe: EvalRecipe) -> int:
-    """Front frames per condition."""
-    return recipe.worlds * recipe.sequences * recipe.frames

@@ -1,6 +1,11 @@
-"""What building an episode would reject, checked in milliseconds before anything runs or any
-file is written: the scenario's cross-field checks, the detector and controller names it
-names, the weights files its learned detectors load, and a `seconds` of at least one step."""
+"""The one validation path of a scenario: what building its episode would reject, checked in
+milliseconds before anything runs or any file is written. `check_scenario` is what `lanekeep
+run`, `bench`, `perf`, a sweep's and a falsification's every parameter value
+(lanekeep/sweep/spec.py `check_world`) and each sweep cell call; it adds to the checks of
+reading the file (each field's range, lanekeep/scenario/schema.py) the world's cross-field
+checks (lanekeep/world/build.py `check_buildable`), the detector and controller names and a
+`seconds` of at least one step. `check_weights_option` adds the weights files the learned
+detectors load."""
 
 from __future__ import annotations
 
@@ -32,17 +37,17 @@ def check_scenario(scenario: Scenario, seconds: float | None = None) -> None:
     """Everything about a scenario that building its episode would reject, checked in 30-160 ms
     so that a bad scenario fails before anything runs or any file is written (`lanekeep
     bench` checks every scenario before a worker starts): the world's cross-field checks
-    (lanekeep.world.build.check_scenario), the detector and controller names (imported), and that
-    `seconds` makes at least one control step.
+    (lanekeep.world.build.check_buildable), the detector and controller names (imported), and
+    that `seconds` makes at least one control step.
 
     Raises:
       ScenarioError: naming the scenario's file and key.
       ConfigError: `seconds` makes no control step (key "--seconds").
     """
-    from lanekeep.world.build import check_scenario as check_world
+    from lanekeep.world.build import check_buildable
 
     check_plugins(scenario)  # detector and controller names, import paths, entry points
-    check_world(scenario)
+    check_buildable(scenario)
     if seconds is not None and round(seconds / scenario.control_period_s) < 1:
         raise ConfigError("", "--seconds", f"{seconds:g} s is less than one control step "
                                            f"({scenario.control_period_s:g} s)")

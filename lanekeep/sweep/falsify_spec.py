@@ -35,12 +35,11 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from lanekeep.core.config_io import ConfigError
 from lanekeep.scenario.keys import parse_key, scenario_table
 from lanekeep.scenario.schema import scenario_from_dict
 from lanekeep.sweep.falsify_objective import OBJECTIVE_KEYS, objective_of
 from lanekeep.sweep.fields import SweepError
-from lanekeep.sweep.spec import SweepSpec, cell_scenario, parse_sweep
+from lanekeep.sweep.spec import SweepSpec, parse_sweep
 
 RANGE_KEYS = ("low", "high", "integer")
 
@@ -192,22 +191,3 @@ def load_falsify(path: str | Path) -> FalsifySpec:
         raise SweepError(str(path), "", "no such falsify file")
     return parse_falsify(path.read_text(encoding="utf-8"), source=str(path))
 
-
-def check_world(spec: FalsifySpec) -> None:
-    """The world's cross-field checks (lanekeep/loop/checks.py) on each end value before any
-    worker starts: a bad one is one line naming its parameter (exit 2)."""
-    from lanekeep.loop.checks import check_scenario
-
-    sweep = spec.sweep
-    for i, p in enumerate(sweep.parameters):
-        for value in p.values:
-            values = tuple(value if j == i else q.values[0]
-                           for j, q in enumerate(sweep.parameters))
-            scenario = cell_scenario(spec.table(values, sweep.seeds[0]), spec.source,
-                                     sweep.nominal_seed)
-            try:
-                check_scenario(scenario, None)
-            except ConfigError as err:
-                raise SweepError(spec.source, f"parameters.{p.key}",
-                                 f"value {value!r} makes an invalid scenario: "
-                                 f"{' '.join(str(err).split())}") from None

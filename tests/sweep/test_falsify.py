@@ -252,9 +252,10 @@ def test_failing_case_reproduces_with_lanekeep_run(tmp_path, capsys):
 
 def test_the_example_spec_is_valid():
     root = Path(__file__).resolve().parents[2]
-    from lanekeep.sweep.falsify_spec import check_world, load_falsify
+    from lanekeep.sweep.falsify_spec import load_falsify
+    from lanekeep.sweep.spec import check_world
 
     spec = load_falsify(root / "examples" / "falsify" / "sharp_turn_falsify.toml")
-    check_world(spec)
+    check_world(spec.sweep, spec.table)
     assert [d.kind for d in spec.dimensions] == ["float"] * 4 + ["choice"]
     assert [d.base for d in spec.dimensions] == [15.0, 0.025, 0.0, 0, "pid"]

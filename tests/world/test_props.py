@@ -17,7 +17,7 @@ from lanekeep.scenario.traffic import Traffic
 from lanekeep.sensing.cameras import CameraRig, RenderSettings
 from lanekeep.world import appearance
 from lanekeep.world import prop_assets as assets
-from lanekeep.world.build import build, build_spec, check_scenario
+from lanekeep.world.build import build, build_spec, check_buildable
 from lanekeep.world.lighting import sun_direction
 from lanekeep.world.parts import WorldLayout
 from lanekeep.world.props import _add_shadows
@@ -145,7 +145,7 @@ def test_roadside_keys_are_checked():
     with pytest.raises(ScenarioError, match="roadside.poles"):
         parse_scenario(text + "poles = 3\n")
     with pytest.raises(ScenarioError, match="overpasses_m"):
-        check_scenario(parse_scenario(text + "overpasses_m = [150.0]\n"))
+        check_buildable(parse_scenario(text + "overpasses_m = [150.0]\n"))
 
 
 def _edges_above_horizon(scenario) -> float:

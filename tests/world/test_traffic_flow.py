@@ -11,7 +11,7 @@ from lanekeep.core.config_io import ConfigError
 from lanekeep.scenario.keys import with_settings
 from lanekeep.scenario.schema import load_scenario, parse_scenario, shipped_scenarios
 from lanekeep.scenario.traffic import Traffic
-from lanekeep.world.build import build_spec, check_scenario
+from lanekeep.world.build import build_spec, check_buildable
 from lanekeep.world.traffic_flow import traffic_vehicles
 
 FOUR_LANES = """
@@ -85,7 +85,7 @@ def test_bad_traffic_keys_are_named(setting):
 def test_directions_must_name_every_lane():
     sc = with_settings(parse_scenario(FOUR_LANES), (("traffic.directions", ["same"]),))
     with pytest.raises(ConfigError, match="traffic.directions"):
-        check_scenario(sc)
+        check_buildable(sc)
 
 
 def test_every_shipped_scenario_has_roadside_and_traffic_beside_the_ego_lane():
