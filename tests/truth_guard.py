@@ -1,4 +1,6 @@
-"""The truth guard: proves that perception, estimation and control run without the truth.
+"""The truth guard: proves at run time that perception, estimation and control run without the
+truth, where the layer rule (tests/project/test_layers.py) cannot: plug-ins loaded by import
+path.
 
 An episode keeps the simulator's truth behind one gate (`episode.truth`,
 lanekeep/scoring/gate.py) that only scoring, recording, the sensors and the renderer are handed.
@@ -135,10 +137,11 @@ class _GuardedEpisode(Episode):
 
 def car_side(episode: Episode) -> dict[str, object]:
     """What perception, estimation and control are: the objects the truth must not reach."""
-    parts = {f"detector {name}": d for name, d in episode.driver.front.items()}
-    parts |= {"reference detector": episode.driver.reference, "estimator": episode.driver.estimator,
-              "controller": episode.driver.controller, "odometry": episode.driver.odometry,
-              "roll filter": episode.driver.roll}
+    driver = episode.driver
+    parts = {f"detector {name}": d for name, d in driver.front.items()}
+    parts |= {"reference detector": driver.reference, "estimator": driver.estimator,
+              "controller": driver.controller, "odometry": driver.odometry,
+              "roll filter": driver.roll}
     return parts
 
 
