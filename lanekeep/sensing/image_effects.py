@@ -20,6 +20,7 @@ import numpy as np
 from lanekeep.geometry.camera_model import CameraModel
 from lanekeep.scenario.schema import CameraConfig, Conditions
 from lanekeep.sensing.camera_sensor import CameraSensor
+from lanekeep.sensing.paint_visibility import visible_paint
 from lanekeep.sensing.weather import DEPTH_STEP_PX, Weather, needs_depth
 from lanekeep.world.lighting import LIGHTING
 
@@ -76,6 +77,15 @@ class ImageEffects:
                 self.weather.extinction_per_m = 0.0
         out = self.weather(image, depth_m, rng, speed_mps)
         return self.sensor(out, rng)
+
+    def visible_paint(self, paint: np.ndarray, bare_rgb: np.ndarray, depth_m: np.ndarray
+                      ) -> np.ndarray:
+        """Boolean (H, W): the pixels of `paint` (from the segmentation render) that this
+        camera shows as paint, given the bare render and its depth: less what this camera's
+        fog and exposure hide (lanekeep/sensing/paint_visibility.py)."""
+        weather = self.weather
+        return visible_paint(paint, bare_rgb, weather.range_m(depth_m), weather.extinction_per_m,
+                             float(weather.airlight.mean()), self.sensor.gain)
 
 
 def apply(image: np.ndarray, conditions: Conditions, rng: np.random.Generator,

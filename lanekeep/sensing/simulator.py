@@ -22,7 +22,6 @@ from lanekeep.geometry.car import CarGeometry
 from lanekeep.scenario.schema import Scenario
 from lanekeep.scenario.streams import stream_entropy
 from lanekeep.sensing.cameras import CameraRig, RenderSettings
-from lanekeep.sensing.paint_visibility import visible_paint
 from lanekeep.sensing.snapshot import make_effects
 from lanekeep.sensing.vehicle_sensors import VehicleSensors
 from lanekeep.world.build import World, build
@@ -106,10 +105,7 @@ class Simulator:
         for name in self.rig.CAMERA_NAMES:
             paint = world.marking_mask(self.rig.render_segmentation(data, name))
             bare, depth = self.rig.render_rgb_depth(data, name)
-            fx = self.effects[name]
-            masks[name] = visible_paint(
-                paint, bare, fx.weather.range_m(depth), fx.weather.extinction_per_m,
-                float(fx.weather.airlight.mean()), fx.sensor.gain).astype(np.uint8)
+            masks[name] = self.effects[name].visible_paint(paint, bare, depth).astype(np.uint8)
         return masks
 
     def close(self) -> None:
