@@ -45,11 +45,11 @@ __version__ = "0.1.0"
 # The repository keeps detectors/, estimators/ and mjcf/ beside this folder; an install maps
 # them into this namespace (pyproject's package-dir). When this package is the checkout's own
 # folder (`python -m lanekeep.cli` from a clone's root, which puts the clone first on
-# sys.path), its subpackages are looked up beside it too, as the install would place them.
-_checkout = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-if os.path.isfile(os.path.join(_checkout, "pyproject.toml")) and os.path.isfile(
-        os.path.join(_checkout, "detectors", "registry.py")):
-    __path__.append(_checkout)  # noqa: F821 - a package's own __path__
+# sys.path), those three, and only those, are found beside it, as the install would place them
+# (lanekeep/core/checkout.py); the clone's other folders (tools, tests, docs) stay outside.
+from lanekeep.core.checkout import map_checkout_folders as _map_checkout_folders  # noqa: E402
+
+_map_checkout_folders(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
 # gymnasium.make("lanekeep/LaneKeep-v0") after `import lanekeep`, gymnasium not imported here.
 from lanekeep.envs import gym_registration as _gym_registration  # noqa: E402

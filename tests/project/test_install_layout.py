@@ -42,3 +42,29 @@ def test_the_folders_are_subpackages_of_lanekeep_with_their_data():
     assert lanekeep.mjcf.CAR_XML.is_file()
     assert lanekeep.detectors.__name__ == "lanekeep.detectors"
     assert lanekeep.estimators.__name__ == "lanekeep.estimators"
+
+
+def test_a_clone_maps_its_three_folders_and_nothing_else(tmp_path):
+    """From a clone's root without the install (a fresh interpreter with the clone first on
+    sys.path): lanekeep.detectors and friends import from the clone, lanekeep.tools,
+    lanekeep.tests and lanekeep.docs do not exist."""
+    root = PurePosixPath(__file__).parents[2]
+    code = (
+        "import sys, importlib.util; sys.path.insert(0, sys.argv[1])\n"
+        "import lanekeep, lanekeep.detectors.base, lanekeep.estimators.kalman, lanekeep.mjcf\n"
+        "assert lanekeep.detectors.__file__.startswith(sys.argv[1]), lanekeep.detectors.__file__\n"
+        "print([importlib.util.find_spec('lanekeep.' + n) is None"
+        " for n in ('tools', 'tests', 'docs')])\n")
+    out = subprocess.run([sys.executable, "-S", "-c", code, str(root)], capture_output=True,
+                         text=True, env={"MUJOCO_GL": "egl", "PATH": "/usr/bin:/bin",
+                                         "PYTHONPATH": _site_packages()})
+    assert out.returncode == 0, out.stderr[-2000:]
+    assert out.stdout.strip() == "[True, True, True]"
+
+
+def _site_packages() -> str:
+    """The interpreter's third-party packages (numpy, ...) without its site hooks, so the
+    editable install's own finder is not loaded."""
+    import sysconfig
+
+    return sysconfig.get_paths()["purelib"]
