@@ -17,60 +17,24 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, replace
+from dataclasses import replace
 
 from lanekeep.core.interrupts import stop_point, stop_requested
-from lanekeep.core.steps import Command, Observation
+from lanekeep.core.steps import Command
 from lanekeep.core.timing import StageClock
 from lanekeep.driver.config import DriverConfig
-from lanekeep.driver.driver import Belief, Driver
+from lanekeep.driver.driver import Driver
 from lanekeep.report.record import EpisodeInfo, NullRecorder, Recorder
 from lanekeep.scenario.nuisance import with_nuisance
 from lanekeep.scenario.schema import Scenario
 from lanekeep.scoring.gate import Truth
 from lanekeep.scoring.metrics import EpisodeReport
-from lanekeep.scoring.step_result import StepResult
+from lanekeep.scoring.step_result import Percept, StepResult
 from lanekeep.scoring.step_scorer import StepScorer
 from lanekeep.sensing.simulator import Simulator
 from lanekeep.world.build import SimulationError, World
 
 __all__ = ["Episode", "Percept", "StepResult", "driver_config"]
-
-
-@dataclass(frozen=True)
-class Percept:
-    """What the car has at the start of a control period, before it acts: its observation and
-    what it made of it. `sensed_pose` (the true pose the frames were taken from) is for
-    scoring only."""
-
-    index: int
-    observation: Observation
-    belief: Belief
-    sensed_pose: tuple[float, float, float]
-
-    @property
-    def time_s(self) -> float:
-        return self.observation.time_s
-
-    @property
-    def frames(self):
-        return self.observation.frames
-
-    @property
-    def signals(self):
-        return self.observation.signals
-
-    @property
-    def estimates(self):
-        return self.belief.estimates
-
-    @property
-    def estimate(self):
-        return self.belief.estimate
-
-    @property
-    def events(self) -> list[str]:
-        return self.belief.events
 
 
 def driver_config(scenario: Scenario, simulator: Simulator) -> DriverConfig:

@@ -1,7 +1,8 @@
-"""One control period as it happened: what the car saw and believed, what it commanded, and how
-that scored against the truth. The episode's one output per step, typed here (below the
-recorder and the faces, above the driver whose belief it carries) so that the recorder, the
-metrics, the plots, the agent faces and the tools all read the same record."""
+"""One control period as it happened (`StepResult`: what the car saw and believed, what it
+commanded, how that scored against the truth) and its first half (`Percept`: what the car had
+before it acted). Typed here, below the recorder and the faces and above the driver whose
+belief they carry, so that the recorder, the metrics, the plots, the agent faces and the
+tools all read the same records."""
 
 from __future__ import annotations
 
@@ -10,7 +11,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from lanekeep.core.signals import VehicleSignals
+from lanekeep.core.steps import Observation
 from lanekeep.detectors.base import LaneEstimate
+from lanekeep.driver.driver import Belief
 from lanekeep.scoring.step_truth import StepTruth
 
 
@@ -62,3 +65,39 @@ class StepResult:
     def truth_output_m(self) -> float:
         """The true offset at the output's look-ahead, where the frames were taken."""
         return self.truth.offset_at(self.output_x_m)
+
+
+@dataclass(frozen=True)
+class Percept:
+    """What the car has at the start of a control period, before it acts: its observation and
+    what it made of it. `sensed_pose` (the true pose the frames were taken from) is for
+    scoring only."""
+
+    index: int
+    observation: Observation
+    belief: Belief
+    sensed_pose: tuple[float, float, float]
+
+    @property
+    def time_s(self) -> float:
+        return self.observation.time_s
+
+    @property
+    def frames(self):
+        return self.observation.frames
+
+    @property
+    def signals(self):
+        return self.observation.signals
+
+    @property
+    def estimates(self):
+        return self.belief.estimates
+
+    @property
+    def estimate(self):
+        return self.belief.estimate
+
+    @property
+    def events(self) -> list[str]:
+        return self.belief.events
