@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 from cli.error_lines import one_error_line  # tests/ is on sys.path
 
-import lanekeep.loop.episode
+import lanekeep.driver.driver
 from lanekeep.cli.main import build_parser, main
 from lanekeep.report.json_io import report_from_dict
 from lanekeep.report.palette import COLOURS, matplotlib_colour
@@ -34,13 +34,13 @@ def test_run_at_a_size_writes_json_to_stdout_and_everything_else_to_stderr(
     report alone; the tables (compact: within WIDTH columns) and the progress lines (stderr
     is no terminal here: whole lines, no carriage returns) are on stderr."""
     sizes = []
-    real = lanekeep.loop.episode.make_detector
+    real = lanekeep.driver.driver.make_detector
 
     def spy(name, camera, *args, **kwargs):
         sizes.append((camera.width, camera.height))
         return real(name, camera, *args, **kwargs)
 
-    monkeypatch.setattr(lanekeep.loop.episode, "make_detector", spy)
+    monkeypatch.setattr(lanekeep.driver.driver, "make_detector", spy)
     code = main(["run", "clear_straight", "--size", "160x90", "--seconds", "0.3",
                  "--front-detectors", "hough,sliding_window", "--json", "-"])
     assert code in (0, 1)  # a 0.3 s episode may or may not meet the file's criteria
