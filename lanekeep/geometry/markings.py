@@ -20,6 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from lanekeep.core.config_io import InvalidValue
+from lanekeep.core.setting import check_settings, setting
 
 MARKING_KINDS = ("solid", "dashed", "double", "none", "worn", "dots")
 WORN_PATTERNS = ("solid", "dashed", "double", "dots")
@@ -32,30 +33,31 @@ WEAR_STEP_M = 0.05  # resolution of worn paint along the line
 class MarkingStyle:
     """How one lane boundary is painted. Lengths in metres, colour RGB in 0..1."""
 
-    kind: str = "solid"
-    width_m: float = 0.15
-    dash_m: float = 3.0  # dashed: paint length
-    gap_m: float = 9.0  # dashed: gap length
-    double_gap_m: float = 0.12  # double: clear gap between the two lines
-    wear: float = 0.4  # worn: fraction of the line without paint, and how faded the rest is
-    pattern: str = "solid"  # worn: the line that wore (solid, dashed, double)
-    dot_diameter_m: float = 0.10  # dots: Botts' dots are 10 cm ceramic domes ...
-    dot_spacing_m: float = 0.9  # ... in rows `dash_m` long, 0.9 m apart, `gap_m` between rows
-    colour: tuple[float, float, float] = (0.95, 0.95, 0.92)  # yellow paint: 0.9, 0.7, 0.15
+    kind: str = setting("solid", "Paint pattern of the boundary; dots = Botts' dots.",
+                        choices=MARKING_KINDS)
+    width_m: float = setting(0.15, "Width of the line.", allowed="> 0")
+    dash_m: float = setting(3.0, "dashed: paint length; dots: length of a row of dots.",
+                            allowed="> 0")
+    gap_m: float = setting(9.0, "dashed: gap between dashes; dots: gap between rows.",
+                           allowed="> 0")
+    double_gap_m: float = setting(0.12, "double: clear gap between the two lines.", allowed=">= 0")
+    wear: float = setting(0.4, "worn: share of the line without paint, and how faded the rest.",
+                          bounds=(0.0, 1.0))
+    pattern: str = setting("solid", "worn: the pattern that wore.",
+                           choices=WORN_PATTERNS[:3])
+    dot_diameter_m: float = setting(0.10, "dots: diameter of one dot.", allowed="> 0")
+    dot_spacing_m: float = setting(0.9, "dots: spacing of the dots within a row.", allowed="> 0")
+    colour: tuple[float, float, float] = setting(
+        (0.95, 0.95, 0.92), "Paint colour, RGB (yellow paint: [0.9, 0.7, 0.15]).",
+        allowed="3 values in 0..1")
 
     def __post_init__(self):
-        if self.kind not in MARKING_KINDS:
-            raise InvalidValue("kind", f"must be one of {MARKING_KINDS}, got {self.kind!r}")
-        if self.pattern not in WORN_PATTERNS[:3]:
-            raise InvalidValue("pattern", f"must be one of {WORN_PATTERNS[:3]}, "
-                                          f"got {self.pattern!r}")
+        check_settings(self)
         for key in ("width_m", "dash_m", "gap_m", "dot_diameter_m", "dot_spacing_m"):
             if not getattr(self, key) > 0:
                 raise InvalidValue(key, f"must be > 0, got {getattr(self, key)}")
         if not self.double_gap_m >= 0:
             raise InvalidValue("double_gap_m", f"must be >= 0, got {self.double_gap_m}")
-        if not 0.0 <= self.wear <= 1.0:
-            raise InvalidValue("wear", f"must be in [0, 1], got {self.wear}")
         if len(self.colour) != 3 or not all(0.0 <= c <= 1.0 for c in self.colour):
             raise InvalidValue("colour", f"must be 3 values in [0, 1], got {self.colour}")
 

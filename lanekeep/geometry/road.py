@@ -20,6 +20,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from lanekeep.core.config_io import InvalidValue
+from lanekeep.core.setting import check_settings, setting
 from lanekeep.geometry.markings import MarkingPiece, MarkingStyle, default_markings, layout
 
 __all__ = ["MarkingPiece", "MarkingStyle", "Road", "SegmentSpec"]
@@ -41,14 +42,18 @@ _CHUNK = 1_000_000  # query points x coarse samples per argmin block (memory bou
 class SegmentSpec:
     """One piece of the centreline. Curvature in 1/m, + = turning left."""
 
-    kind: str  # "straight" | "arc" | "clothoid"
-    length_m: float
-    curvature_1pm: float = 0.0  # arc: its curvature; clothoid: curvature at its start
-    end_curvature_1pm: float = 0.0  # clothoid only: curvature at its end (linear in s)
+    kind: str = setting(doc="Shape of the piece: clothoid = curvature linear in s.",
+                        choices=SEGMENT_KINDS)
+    length_m: float = setting(doc="Arc length of the piece.",
+                              allowed=f"(0, {MAX_ROAD_M:g}]; all pieces at most {MAX_ROAD_M:g}")
+    curvature_1pm: float = setting(0.0, "arc: its curvature; clothoid: at its start. + = turning "
+                                   "left, - = turning right (radius = 1 / |curvature|).",
+                                   allowed="0 for straight")
+    end_curvature_1pm: float = setting(0.0, "clothoid: curvature at its end; + = left.",
+                                       allowed="0 (or equal to curvature_1pm) unless clothoid")
 
     def __post_init__(self):
-        if self.kind not in SEGMENT_KINDS:
-            raise InvalidValue("kind", f"must be one of {SEGMENT_KINDS}, got {self.kind!r}")
+        check_settings(self)
         if not 0 < self.length_m <= MAX_ROAD_M:
             raise InvalidValue("length_m", f"must be in (0, {MAX_ROAD_M:g}] m, got {self.length_m}")
         if self.kind == "straight" and self.curvature_1pm != 0:

@@ -21,6 +21,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from lanekeep.core.config_io import InvalidValue
+from lanekeep.core.setting import check_settings, choices_text, setting
 
 SIDES = ("left", "right")
 SKYLINES = ("none", "hills", "city")
@@ -30,19 +31,31 @@ SKYLINES = ("none", "hills", "city")
 class Roadside:
     """Props beside and over the road; see the module docstring for the keys."""
 
-    guard_rail_sides: tuple[str, ...] = ()
-    barrier_sides: tuple[str, ...] = ()
-    pole_spacing_m: float = 0.0
-    pole_sides: tuple[str, ...] = ("right",)
-    signs_m: tuple[float, ...] = ()
-    gantries_m: tuple[float, ...] = ()
-    overpasses_m: tuple[float, ...] = ()
-    trees_per_100m: float = 0.0
-    buildings_per_100m: float = 0.0
-    skyline: str = "none"
-    shadow_darkness: float = 0.55  # as conditions.shadows[].darkness (lanekeep/world/shade.py)
+    guard_rail_sides: tuple[str, ...] = setting(
+        (), "W-beam guard rail beyond the gravel.", allowed=f"each of {choices_text(SIDES)}, once")
+    barrier_sides: tuple[str, ...] = setting(
+        (), "Concrete (jersey) barrier beyond the gravel.",
+        allowed=f"each of {choices_text(SIDES)}, once; not where a guard rail is")
+    pole_spacing_m: float = setting(0.0, "Light poles every so many metres; 0 = none.",
+                                    allowed="0 or 10..500")
+    pole_sides: tuple[str, ...] = setting(("right",), "Sides with light poles.",
+                                          allowed=f"each of {choices_text(SIDES)}, once")
+    signs_m: tuple[float, ...] = setting((), "Roadside signs (right side) at these arc lengths.",
+                                         allowed="each >= 0")
+    gantries_m: tuple[float, ...] = setting((), "Overhead sign gantries at these arc lengths.",
+                                            allowed="each >= 0")
+    overpasses_m: tuple[float, ...] = setting((), "Bridges across the road (with their shadow "
+                                              "band).", allowed="each >= 0")
+    trees_per_100m: float = setting(0.0, "Trees per 100 m and side, 4..35 m beyond the gravel.",
+                                    bounds=(0.0, 20.0))
+    buildings_per_100m: float = setting(0.0, "Buildings per 100 m and side, 15..60 m beyond it.",
+                                        bounds=(0.0, 20.0))
+    skyline: str = setting("none", "Far background: hills or buildings.", choices=SKYLINES)
+    shadow_darkness: float = setting(0.55, "How dark the props' shadows are, as "
+                                     "`conditions.shadows[].darkness`.", bounds=(0.0, 1.0))
 
     def __post_init__(self):
+        check_settings(self)
         for key in ("guard_rail_sides", "barrier_sides", "pole_sides"):
             sides = getattr(self, key)
             for i, side in enumerate(sides):
@@ -60,11 +73,3 @@ class Roadside:
             for i, s in enumerate(getattr(self, key)):
                 if not s >= 0.0:
                     raise InvalidValue(f"{key}[{i}]", f"must be >= 0, got {s}")
-        for key in ("trees_per_100m", "buildings_per_100m"):
-            if not 0.0 <= getattr(self, key) <= 20.0:
-                raise InvalidValue(key, f"must be in [0, 20], got {getattr(self, key)}")
-        if self.skyline not in SKYLINES:
-            raise InvalidValue("skyline", f"must be one of {SKYLINES}, got {self.skyline!r}")
-        if not 0.0 <= self.shadow_darkness <= 1.0:
-            raise InvalidValue("shadow_darkness",
-                               f"must be in [0, 1], got {self.shadow_darkness}")

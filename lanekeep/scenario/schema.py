@@ -22,12 +22,13 @@ from importlib import resources
 from pathlib import Path
 
 from lanekeep.core.config_io import ConfigError, InvalidValue, from_dict
+from lanekeep.core.setting import check_settings, setting
 from lanekeep.estimators.settings import (
     EstimatorSettings,
 )
 from lanekeep.geometry.markings import MarkingStyle
 from lanekeep.geometry.road import MAX_LANES, MAX_ROAD_M, Road, SegmentSpec
-from lanekeep.scenario.pavement import PavementStyle
+from lanekeep.scenario.pavement import SURFACES, PavementStyle
 from lanekeep.scenario.roadside import Roadside
 from lanekeep.scenario.sensors import SensorsConfig
 from lanekeep.scenario.traffic import Traffic
@@ -44,27 +45,33 @@ class ScenarioError(ConfigError):
 
 @dataclass(frozen=True)
 class RoadConfig:
-    segments: tuple[SegmentSpec, ...]
-    n_lanes: int = 2
-    lane_width_m: float = 3.7
-    ego_lane: int = 0  # lane the car starts in, 0 = rightmost
-    markings: tuple[MarkingStyle, ...] = ()  # one per boundary, rightmost first; () = default
-    start_heading_deg: float = 0.0
-    # The pavement (lanekeep/world/pavement.py): surface "asphalt" | "concrete"; the rest 0..1.
-    surface: str = "asphalt"
-    asphalt_tone: float = 0.5  # 0 fresh black .. 1 old, sun-bleached grey
-    cracks: float = 0.3
-    patches: float = 0.2
-    tyre_marks: float = 0.4  # darker wheel paths and oil strip in every lane
+    segments: tuple[SegmentSpec, ...] = setting(
+        doc="The centre line, piece by piece from the start.", allowed="at least one")
+    n_lanes: int = setting(2, "Lanes of the carriageway.", bounds=(1, MAX_LANES))
+    lane_width_m: float = setting(3.7, "Width of every lane.", allowed="> 0")
+    ego_lane: int = setting(0, "Lane the car starts in and is scored against; 0 = the rightmost.",
+                            allowed="0..n_lanes - 1")
+    markings: tuple[MarkingStyle, ...] = setting(
+        (), "One paint style per lane boundary, rightmost (boundary 0) first; none given = solid "
+        "edges and dashed lines between lanes.", allowed="none or n_lanes + 1")
+    start_heading_deg: float = setting(0.0, "World heading of the road at its start; + = "
+                                       "anticlockwise seen from above.")
+    # The pavement (lanekeep/world/pavement.py draws it; PavementStyle is its type there).
+    surface: str = setting("asphalt", "Pavement material.", choices=SURFACES)
+    asphalt_tone: float = setting(0.5, "0 fresh black .. 1 old, sun-bleached grey.",
+                                  bounds=(0.0, 1.0))
+    cracks: float = setting(0.3, "Amount of cracks in the pavement.", bounds=(0.0, 1.0))
+    patches: float = setting(0.2, "Amount of repair patches.", bounds=(0.0, 1.0))
+    tyre_marks: float = setting(0.4, "Darker wheel paths and oil strip in every lane.",
+                                bounds=(0.0, 1.0))
 
     def __post_init__(self):
+        check_settings(self)
         if not self.segments:
             raise InvalidValue("segments", "at least one segment is needed")
         if not sum(seg.length_m for seg in self.segments) <= MAX_ROAD_M:
             raise InvalidValue("segments", f"the road may be at most {MAX_ROAD_M:g} m long, "
                                            f"got {sum(seg.length_m for seg in self.segments):g}")
-        if not 1 <= self.n_lanes <= MAX_LANES:
-            raise InvalidValue("n_lanes", f"must be 1..{MAX_LANES}, got {self.n_lanes}")
         if not self.lane_width_m > 0:
             raise InvalidValue("lane_width_m", f"must be > 0, got {self.lane_width_m}")
         if not 0 <= self.ego_lane < self.n_lanes:
@@ -75,7 +82,6 @@ class RoadConfig:
                 f"need n_lanes + 1 = {self.n_lanes + 1} styles (one per boundary), "
                 f"got {len(self.markings)}",
             )
-        _ = self.pavement  # validates the pavement keys
 
     @property
     def pavement(self) -> PavementStyle:
@@ -97,10 +103,14 @@ class StartJitter:
     the car meets each other vehicle (its speed relative to the car's, times a draw in
     +-traffic_s)."""
 
-    offset_m: float = 0.15
-    heading_deg: float = 0.5
-    speed_mps: float = 0.5
-    traffic_s: float = 2.0
+    offset_m: float = setting(0.15, "Half-width of the start's lateral offset draw.",
+                              allowed=">= 0")
+    heading_deg: float = setting(0.5, "Half-width of the start's heading draw.", allowed=">= 0")
+    speed_mps: float = setting(0.5, "Half-width of the speed draw; the start and target speeds "
+                               "move together.", allowed=">= 0")
+    traffic_s: float = setting(2.0, "Half-width of each vehicle's timing draw: when the car meets "
+                               "it (its speed relative to the car's times the draw).",
+                               allowed=">= 0")
 
     def __post_init__(self):
         for key in ("offset_m", "heading_deg", "speed_mps", "traffic_s"):
@@ -111,11 +121,13 @@ class StartJitter:
 
 @dataclass(frozen=True)
 class StartConfig:
-    s_m: float = 10.0  # arc length along the road
-    offset_m: float = 0.0  # lateral offset from the ego lane centre, + = left
-    heading_deg: float = 0.0  # relative to the road heading, + = pointing left
-    speed_mps: float = 0.0
-    jitter: StartJitter = field(default_factory=StartJitter)  # [start.jitter]: not the file's seed
+    s_m: float = setting(10.0, "Where the car starts: arc length along the road.")
+    offset_m: float = setting(0.0, "Lateral offset from the ego lane's centre; + = left.")
+    heading_deg: float = setting(0.0, "Heading relative to the road's; + = pointing left.")
+    speed_mps: float = setting(0.0, "Initial speed.", allowed=">= 0")
+    jitter: StartJitter = setting(factory=StartJitter, doc="What a seed other than the file's own "
+                                  "draws (uniform within +-each half-width; the file's seed is "
+                                  "the nominal drive): lanekeep/scenario/nuisance.py.")
 
     def __post_init__(self):
         if not self.speed_mps >= 0:
@@ -133,73 +145,72 @@ class CameraConfig:
     docs/experiments.md's performance section shows both. Raise it for frames meant for people.
     """
 
-    width: int = 1280
-    height: int = 720
-    shadows: bool = False
-    antialias_samples: int = 0
+    width: int = setting(1280, "Image width of both onboard cameras.", unit="px", allowed="> 0")
+    height: int = setting(720, "Image height of both onboard cameras.", unit="px", allowed="> 0")
+    shadows: bool = setting(False, "MuJoCo's shadow maps for the lights (costly on a CPU).",
+                            allowed="true, false")
+    antialias_samples: int = setting(0, "MuJoCo's offscreen multisampling.", allowed="0, 2, 4, 8")
     # The camera model (lanekeep/sensing/camera_sensor.py), on by default as on a real camera.
-    read_noise_dn: float = 1.0  # sensor read noise (digital numbers, before the gain)
-    auto_exposure: bool = True  # causal gain from the past frames' metering
-    exposure_time_constant_s: float = 0.3  # how fast the exposure follows the scene
-    vignetting: float = 0.2  # corner darkening of the lens, 0 none .. 0.6
+    read_noise_dn: float = setting(1.0, "Sensor read noise before the gain.", bounds=(0.0, 20.0))
+    auto_exposure: bool = setting(True, "Causal gain from the past frames' metering.",
+                                  allowed="true, false")
+    exposure_time_constant_s: float = setting(0.3, "How fast the exposure follows the scene.",
+                                              bounds=(0.01, 10.0))
+    vignetting: float = setting(0.2, "Corner darkening of the lens.", bounds=(0.0, 0.6))
     # Lens + demosaic point spread: Gaussian sigma in pixels of the frame; 0.8 makes a hard
     # edge rise over ~2-3 px as on real photos instead of a 1 px stair step. 0 = off, .. 3.
-    lens_blur_px: float = 0.8
-    bloom: float = 0.4  # glare around near-saturated areas (sky, lamps), 0 = off .. 1
+    lens_blur_px: float = setting(0.8, "Lens + demosaic point spread (Gaussian sigma, pixels); 0 "
+                                  "= off.", bounds=(0.0, 3.0))
+    bloom: float = setting(0.4, "Glare around near-saturated areas (sky, lamps); 0 = off.",
+                           bounds=(0.0, 1.0))
     # JPEG compression of every frame, 0 = off, else 10..100. Off by default: an ADAS camera
     # hands perception uncompressed frames (JPEG is how dashcams and datasets store them; the
     # LaneNet dataset draws 30..95), and at 1280x720 it would cost ~4-5 ms a frame per camera
     # here (`lanekeep perf`, 2026-11-27), most of the richer world's step budget.
-    jpeg_quality: int = 0
-    show_hood: bool = True  # the ego car's hood at the bottom of the front image
+    jpeg_quality: int = setting(0, "JPEG compression of every frame; 0 = off.",
+                                allowed="0 or 10..100")
+    show_hood: bool = setting(True, "The car's hood at the bottom of the front image.",
+                              allowed="true, false")
     # The mounting of both onboard cameras, changed from the car's own (mjcf/car.xml: 1.5 m
     # high, front pitched 10 deg up with a 120 deg horizontal field of view): other cameras, as
     # real rigs and the datasets (lanekeep/evaluation/dataset.py) have. Applied by
     # lanekeep/world/camera_mount.py
     # to the compiled model, so the detectors' camera models (read from it) stay exact.
-    mount_height_m: float = 0.0  # 0 = the preset's (1.5 m; dashcam front 1.4 m); else both
-    pitch_offset_deg: float = 0.0  # added to each camera's pitch, + = looking up
-    roll_deg: float = 0.0  # about each camera's optical axis, + = image turns anticlockwise
-    yaw_offset_deg: float = 0.0  # about the car's vertical axis, + = towards the car's left
-    fov_scale: float = 1.0  # scales tan(field of view / 2): < 1 a longer lens
-    # The front camera's base pose before the keys above: "paper" = the car's (Table 1),
-    # "dashcam" = a real dashcam's (60 deg wide, 1.4 m, horizon near row 300 of 720); the
-    # rear camera keeps the car's pose under either.
-    preset: str = "paper"
-    # OpenCV lens distortion k1, k2, p1, p2, k3 of the front and the rear camera
-    # (lanekeep/geometry/lens.py); all zero = a pinhole. The detectors are given the same
-    # coefficients, as from a camera file.
-    distortion: tuple[float, float, float, float, float] = (0.0, 0.0, 0.0, 0.0, 0.0)
-    rear_distortion: tuple[float, float, float, float, float] = (0.0, 0.0, 0.0, 0.0, 0.0)
+    mount_height_m: float = setting(0.0, "Both cameras' height above the ground; 0 = the preset's "
+                                    "(1.5 m; the dashcam front's 1.4 m).", allowed="0 or 0.5..4")
+    pitch_offset_deg: float = setting(0.0, "Added to each camera's pitch; + = looking up.",
+                                      bounds=(-30.0, 30.0))
+    roll_deg: float = setting(0.0, "About each camera's optical axis; + = image turns "
+                              "anticlockwise.", bounds=(-20.0, 20.0))
+    yaw_offset_deg: float = setting(0.0, "About the car's vertical axis; + = towards the car's "
+                                    "left.", bounds=(-30.0, 30.0))
+    fov_scale: float = setting(1.0, "Scales tan(field of view / 2); < 1 = a longer lens (the "
+                               "car's: 120 deg horizontal).", bounds=(0.3, 1.5))
+    preset: str = setting("paper", "The front camera's pose before the mounting keys: \"paper\" = "
+                          "the car's (1.5 m, 10 deg up, 120 deg horizontal, horizon at row 425 of "
+                          "720); \"dashcam\" = a real dashcam's (1.4 m, 3.1 deg down, 60 deg "
+                          "horizontal, horizon at row 300 of 720). The rear camera keeps the "
+                          "car's pose.", choices=CAMERA_PRESETS)
+    # lanekeep/geometry/lens.py; the detectors are given the same coefficients, as from a
+    # camera file.
+    distortion: tuple[float, float, float, float, float] = setting(
+        (0.0, 0.0, 0.0, 0.0, 0.0), "OpenCV lens distortion k1, k2, p1, p2, k3 of the front "
+        "camera; every image is bent by it and the detectors are given it. All zero = a pinhole; "
+        "k1 < 0 = barrel (wide lenses). The delivered focal length grows by the least factor that "
+        "keeps the image inside the render; coefficients that fold the image are an error.",
+        allowed="5 numbers, each -2..2")
+    rear_distortion: tuple[float, float, float, float, float] = setting(
+        (0.0, 0.0, 0.0, 0.0, 0.0), "The same for the rear camera (150 deg wide: the polynomial "
+        "model folds early there).", allowed="5 numbers, each -2..2")
 
     def __post_init__(self):
+        check_settings(self)
         if not (self.mount_height_m == 0.0 or 0.5 <= self.mount_height_m <= 4.0):
             raise InvalidValue("mount_height_m",
                                f"must be 0 (the car's) or 0.5..4 m, got {self.mount_height_m}")
-        for key, limit in (("pitch_offset_deg", 30.0), ("roll_deg", 20.0),
-                           ("yaw_offset_deg", 30.0)):
-            if not -limit <= getattr(self, key) <= limit:
-                raise InvalidValue(key, f"must be in [-{limit:g}, {limit:g}] deg, "
-                                        f"got {getattr(self, key)}")
-        if self.preset not in CAMERA_PRESETS:
-            raise InvalidValue("preset", f"must be one of {', '.join(CAMERA_PRESETS)}, "
-                                         f"got {self.preset!r}")
-        if not 0.3 <= self.fov_scale <= 1.5:
-            raise InvalidValue("fov_scale", f"must be in [0.3, 1.5], got {self.fov_scale}")
         for key in ("width", "height"):
             if not getattr(self, key) > 0:
                 raise InvalidValue(key, f"must be > 0, got {getattr(self, key)}")
-        if not 0.0 <= self.read_noise_dn <= 20.0:
-            raise InvalidValue("read_noise_dn", f"must be in [0, 20], got {self.read_noise_dn}")
-        if not 0.01 <= self.exposure_time_constant_s <= 10.0:
-            raise InvalidValue("exposure_time_constant_s",
-                               f"must be in [0.01, 10] s, got {self.exposure_time_constant_s}")
-        if not 0.0 <= self.vignetting <= 0.6:
-            raise InvalidValue("vignetting", f"must be in [0, 0.6], got {self.vignetting}")
-        if not 0.0 <= self.lens_blur_px <= 3.0:
-            raise InvalidValue("lens_blur_px", f"must be in [0, 3] px, got {self.lens_blur_px}")
-        if not 0.0 <= self.bloom <= 1.0:
-            raise InvalidValue("bloom", f"must be in [0, 1], got {self.bloom}")
         if not (self.jpeg_quality == 0 or 10 <= self.jpeg_quality <= 100):
             raise InvalidValue("jpeg_quality",
                                f"must be 0 (off) or 10..100, got {self.jpeg_quality}")
@@ -214,12 +225,6 @@ class CameraConfig:
                                f"must be 0, 2, 4 or 8, got {self.antialias_samples}")
 
 
-def _check_unit(obj, keys: tuple[str, ...]) -> None:
-    for key in keys:
-        if not 0.0 <= getattr(obj, key) <= 1.0:
-            raise InvalidValue(key, f"must be in [0, 1], got {getattr(obj, key)}")
-
-
 @dataclass(frozen=True)
 class ShadowZone:
     """Hard shadows cast across the road by buildings or trees standing on one side of it.
@@ -228,26 +233,25 @@ class ShadowZone:
     `reach` of the carriageway's width (1 = to the far edge line) from the `side` they stand on.
     """
 
-    s_start_m: float
-    s_end_m: float
-    kind: str = "buildings"  # "buildings" | "trees"
-    side: str = "left"  # side of the road the casters stand on
-    reach: float = 1.0  # how far across the carriageway the shadows reach, 0..1.5 of its width
-    coverage: float = 0.6  # fraction of the zone's length in shadow; 1 = one continuous shadow
-    darkness: float = 0.55  # optical depth: 0 none, 0.55 a solid caster (lanekeep/world/shade.py)
+    s_start_m: float = setting(doc="Start of the zone along the road.", allowed=">= 0")
+    s_end_m: float = setting(doc="End of the zone along the road.", allowed="> s_start_m")
+    kind: str = setting("buildings", "What casts the shadows.", choices=SHADOW_KINDS)
+    side: str = setting("left", "Side of the road the casters stand on.", choices=SIDES)
+    reach: float = setting(1.0, "How far across the carriageway the shadows reach; 1 = to the far "
+                           "edge line.", allowed="(0, 1.5]")
+    coverage: float = setting(0.6, "Share of the zone's length in shadow.", bounds=(0.05, 1.0))
+    darkness: float = setting(0.55, "How dark the shade is, as the casters' optical depth: 0 "
+                              "none, 0.55 a solid building's shade lit by the open sky (about "
+                              "0.2-0.35 of the sunlit road's light, from the sun's height, the "
+                              "time of day and fog; lanekeep/world/shade.py), more darker still.",
+                              bounds=(0.0, 1.0))
 
     def __post_init__(self):
-        if self.kind not in SHADOW_KINDS:
-            raise InvalidValue("kind", f"must be one of {SHADOW_KINDS}, got {self.kind!r}")
-        if self.side not in SIDES:
-            raise InvalidValue("side", f"must be one of {SIDES}, got {self.side!r}")
+        check_settings(self)
         if not self.s_end_m > self.s_start_m >= 0.0:
             raise InvalidValue("s_end_m", "need 0 <= s_start_m < s_end_m")
         if not 0.0 < self.reach <= 1.5:
             raise InvalidValue("reach", f"must be in (0, 1.5], got {self.reach}")
-        if not 0.05 <= self.coverage <= 1.0:
-            raise InvalidValue("coverage", f"must be in [0.05, 1], got {self.coverage}")
-        _check_unit(self, ("darkness",))
 
 
 @dataclass(frozen=True)
@@ -258,19 +262,19 @@ class VehicleSpec:
     towards decreasing s (oncoming traffic, facing the other way).
     """
 
-    lane: int = 1
-    s_m: float = 30.0  # arc length of its centre at t = 0
-    speed_mps: float = 15.0
-    offset_m: float = 0.0  # from the lane centre, + = left
-    length_m: float = 4.6
-    width_m: float = 1.85
-    height_m: float = 1.5
-    colour: tuple[float, float, float] = (0.6, 0.08, 0.08)
+    lane: int = setting(1, "Its lane; 0 = the rightmost.", allowed="0..n_lanes - 1")
+    s_m: float = setting(30.0, "Arc length of its centre at t = 0.")
+    speed_mps: float = setting(15.0, "Constant speed along s; negative = oncoming (facing the "
+                               "other way).")
+    offset_m: float = setting(0.0, "From its lane's centre; + = left.")
+    length_m: float = setting(4.6, "Body length.", bounds=(0.5, 20.0))
+    width_m: float = setting(1.85, "Body width.", bounds=(0.5, 20.0))
+    height_m: float = setting(1.5, "Body height.", bounds=(0.5, 20.0))
+    colour: tuple[float, float, float] = setting(
+        (0.6, 0.08, 0.08), "Body colour, RGB.", allowed="3 values in 0..1")
 
     def __post_init__(self):
-        for key in ("length_m", "width_m", "height_m"):
-            if not 0.5 <= getattr(self, key) <= 20.0:
-                raise InvalidValue(key, f"must be in [0.5, 20] m, got {getattr(self, key)}")
+        check_settings(self)
         if len(self.colour) != 3 or not all(0.0 <= c <= 1.0 for c in self.colour):
             raise InvalidValue("colour", f"must be 3 values in [0, 1], got {self.colour}")
 
@@ -287,37 +291,34 @@ class Conditions:
     default sun reproduces world.py's clear-day light.
     """
 
-    time_of_day: str = "day"  # "day" | "dawn" | "dusk" | "night"; headlights on unless "day"
-    sun_elevation_deg: float = 66.7  # above the horizon
-    sun_azimuth_deg: float = -144.5  # towards the sun, from the road's start heading, + = left
-    shadows: tuple[ShadowZone, ...] = ()
-    speed_bumps_m: tuple[float, ...] = ()  # arc length of each bump across the road
-    speed_bump_height_m: float = 0.08
-    wet: float = 0.0  # 0 dry .. 1 soaked: darker, glossier asphalt and more puddles
-    fog: float = 0.0  # 0 none .. 1 dense (visibility 400 m .. 25 m)
-    rain: float = 0.0  # 0..1 streaks and lens drops (image effect)
-    snow: float = 0.0  # 0..1 flakes and whitening (image effect), snow on the verges (world)
-    noise: float = 0.0  # 0..1 sensor noise (Gaussian read noise + shot noise)
-    motion_blur: float = 0.0  # 0..1 scale of the speed-proportional motion blur
-    vehicles: tuple[VehicleSpec, ...] = ()
+    time_of_day: str = setting("day", "Light; headlights are on unless day.",
+                               choices=TIMES_OF_DAY)
+    sun_elevation_deg: float = setting(66.7, "Sun above the horizon.", bounds=(2.0, 90.0))
+    sun_azimuth_deg: float = setting(-144.5, "Direction towards the sun from the road's start "
+                                     "heading; + = to the left (anticlockwise).")
+    shadows: tuple[ShadowZone, ...] = setting((), "Zones of hard shadows cast across the road.",
+                                              allowed="any number")
+    speed_bumps_m: tuple[float, ...] = setting((), "Arc length of each speed bump across the "
+                                               "road.", allowed="each >= 0")
+    speed_bump_height_m: float = setting(0.08, "Height of every speed bump.", bounds=(0.02, 0.15))
+    wet: float = setting(0.0, "0 dry .. 1 soaked: darker, glossier asphalt and puddles.",
+                         bounds=(0.0, 1.0))
+    fog: float = setting(0.0, "0 none .. 1 dense (visibility 400 m .. 25 m).", bounds=(0.0, 1.0))
+    rain: float = setting(0.0, "Rain streaks and lens drops (image effect).", bounds=(0.0, 1.0))
+    snow: float = setting(0.0, "Flakes and whitening (image), snow on the verges (world).",
+                          bounds=(0.0, 1.0))
+    noise: float = setting(0.0, "Extra sensor noise of the camera model (read + shot noise).",
+                           bounds=(0.0, 1.0))
+    motion_blur: float = setting(0.0, "Scale of the speed-proportional motion blur.",
+                                 bounds=(0.0, 1.0))
+    vehicles: tuple[VehicleSpec, ...] = setting((), "Other vehicles driving along a lane at "
+                                                "constant speed.", allowed="any number")
 
     def __post_init__(self):
-        if self.time_of_day not in TIMES_OF_DAY:
-            raise InvalidValue(
-                "time_of_day", f"must be one of {TIMES_OF_DAY}, got {self.time_of_day!r}"
-            )
-        if not 2.0 <= self.sun_elevation_deg <= 90.0:
-            raise InvalidValue(
-                "sun_elevation_deg", f"must be in [2, 90], got {self.sun_elevation_deg}"
-            )
-        if not 0.02 <= self.speed_bump_height_m <= 0.15:
-            raise InvalidValue(
-                "speed_bump_height_m", f"must be in [0.02, 0.15], got {self.speed_bump_height_m}"
-            )
+        check_settings(self)
         for i, s in enumerate(self.speed_bumps_m):
             if not s >= 0.0:
                 raise InvalidValue(f"speed_bumps_m[{i}]", f"must be >= 0, got {s}")
-        _check_unit(self, ("wet", "fog", "rain", "snow", "noise", "motion_blur"))
 
     @property
     def headlights(self) -> bool:
@@ -344,45 +345,46 @@ class EstimationConfig(EstimatorSettings):
     same road position.
     """
 
-    # "paper": the paper's own loop (lanekeep/loop/paper_mode.py): one-step-delay residuals, the
+    # "paper": the paper's own loop (lanekeep/driver/paper_mode.py): one-step-delay residuals, the
     # selected model's detection at its nearest row into eq. 9 with Table 2's gain shape and no
     # feed-forward, model #1 long range and model #2 short range. It overrides residual_mode,
     # model_lane, mmae_prior and the front windows; "default" is our loop with its improvements.
-    mode: str = "default"
+    mode: str = setting("default", "default = our loop; paper = the paper's own loop (overrides "
+                        "residual_mode, model_lane and the front windows).",
+                        choices=ESTIMATION_MODES)
     # None: the mode's own (DEFAULT_FRONT_DETECTORS), filled in at construction.
-    front_detectors: tuple[str, ...] | None = None
+    front_detectors: tuple[str, ...] | None = setting(
+        None, "The MMAE's models, front camera, in order. Not set: the mode's own, hough, "
+        "sliding_window and lanenet (default) or the paper's hough and sliding_window (paper).",
+        allowed="registered names, package.module:Class, entry points")
     # The learned detector on the rear camera, as the paper's reference is a learned one
     # (CLRNet); model #2 ("sliding_window") there errs with front model #2 and fails in traffic.
-    reference_detector: str = "lanenet"
-    reference_camera: str = "rear"
-    control_lookahead_m: float = 8.0  # where the PID reads the chosen lane
+    reference_detector: str = setting("lanenet", "The MMAE's reference (the paper's observer).",
+                                      allowed="as front_detectors")
+    reference_camera: str = setting("rear", "Camera the reference detector looks through.",
+                                    choices=CAMERAS)
+    control_lookahead_m: float = setting(8.0, "Where the controller reads the chosen lane.",
+                                         bounds=(0.0, 40.0))
     # Body roll compensation (estimators/roll.py; default mode only): the car's roll per m/s^2
     # of lateral acceleration (a suspension constant; 0 turns it off) and each camera's offset
     # error per radian of roll, both measured by tools/measure_roll_coupling.py on the tuning
     # scenarios.
-    roll_gradient_deg_per_mps2: float = 0.71
-    roll_lever_front_m: float = 2.4
-    roll_lever_rear_m: float = 2.5
+    roll_gradient_deg_per_mps2: float = setting(0.71, "The car's body roll per m/s^2 of lateral "
+                                                "acceleration, with which each camera's lane is "
+                                                "corrected for roll from the lateral "
+                                                "accelerometer (default mode; 0 = off).",
+                                                unit="deg/(m/s^2)", bounds=(0.0, 5.0))
+    roll_lever_front_m: float = setting(2.4, "Front camera's offset error per radian of body "
+                                        "roll.", bounds=(-10.0, 10.0))
+    roll_lever_rear_m: float = setting(2.5, "Rear camera's offset error per radian of body roll.",
+                                       bounds=(-10.0, 10.0))
 
     def __post_init__(self):
-        super().__post_init__()  # the estimator's own checks
-        if self.mode not in ESTIMATION_MODES:
-            raise InvalidValue("mode", f"must be one of {ESTIMATION_MODES}, got {self.mode!r}")
+        super().__post_init__()  # the estimator's checks, and every field's bounds and choices
         if self.front_detectors is None:
             object.__setattr__(self, "front_detectors", DEFAULT_FRONT_DETECTORS[self.mode])
         if not self.front_detectors:
             raise InvalidValue("front_detectors", "at least one front detector is needed")
-        if self.reference_camera not in CAMERAS:
-            raise InvalidValue("reference_camera", f"must be one of {CAMERAS}")
-        if not 0.0 <= self.control_lookahead_m <= 40.0:
-            raise InvalidValue("control_lookahead_m",
-                               f"must be in [0, 40] m, got {self.control_lookahead_m}")
-        if not 0.0 <= self.roll_gradient_deg_per_mps2 <= 5.0:
-            raise InvalidValue("roll_gradient_deg_per_mps2",
-                               f"must be in [0, 5], got {self.roll_gradient_deg_per_mps2}")
-        for key in ("roll_lever_front_m", "roll_lever_rear_m"):
-            if not -10.0 <= getattr(self, key) <= 10.0:
-                raise InvalidValue(key, f"must be in [-10, 10] m, got {getattr(self, key)}")
 
     def estimator_settings(self) -> EstimatorSettings:
         """The estimator's part of this table, as the estimator's own type."""
@@ -398,19 +400,33 @@ class CriteriaConfig:
     """Pass/fail limits of an episode (`[criteria]`, judged by lanekeep/scoring/criteria.py); None =
     not checked. An episode that leaves the road or stops early fails whatever these say."""
 
-    max_lane_departures: int | None = None  # times a wheel crossed an ego-lane boundary
-    max_car_lateral_error_m: float | None = None  # the car's largest |true offset| from centre
-    max_fused_rmse_m: float | None = None  # offset RMSE of the MMAE output ("fused")
+    max_lane_departures: int | None = setting(None, "Pass limit: times a wheel crossed an "
+                                              "ego-lane boundary.",
+                                              allowed=">= 0; unset = not checked")
+    max_car_lateral_error_m: float | None = setting(
+        None, "Pass limit: the car's largest |true offset|.", allowed="> 0; unset = not checked")
+    max_fused_rmse_m: float | None = setting(None, "Pass limit: offset RMSE of the MMAE output.",
+                                             allowed="> 0; unset = not checked")
     # Not a limit: marks a two-mode scenario for the regression gate (lanekeep/report/
     # regression.py): an episode with a fused RMSE above it is a bad episode.
-    bad_episode_fused_rmse_m: float | None = None
+    bad_episode_fused_rmse_m: float | None = setting(
+        None, "Not a pass limit: marks a two-mode scenario (markings hidden on some drives); an "
+        "episode whose fused RMSE exceeds it is a bad episode, and the regression gate (`bench "
+        "--baseline`) compares the rate of bad episodes instead of the RMSE.",
+        allowed="> 0; unset = one mode")
     # Not a limit: this scenario's own margins of practical relevance for the regression gate
     # (`bench --baseline`), "METRIC=ABS[,REL%]" each, e.g. "car_max_cm=2" (cm) for a noisy one;
     # the command line's `--margin` wins.
-    margins: tuple[str, ...] = ()
+    margins: tuple[str, ...] = setting((), "Not a pass limit: this scenario's margins of "
+                                       "practical relevance for the regression gate (`bench "
+                                       '--baseline`), each "METRIC=ABS[,REL%]" as `--margin` '
+                                       "takes them (docs/statistics.md#margins); the command "
+                                       "line's win.", allowed="METRIC=ABS[,REL%] each")
     # Ends the episode as off road once the car's centre is this far (m) from the ego lane's
     # centre; None: only when all four wheels are off the paved surface (always checked).
-    off_road_distance_m: float | None = None
+    off_road_distance_m: float | None = setting(
+        None, "End the episode as off road once the car's centre is this far from the ego lane's "
+        "centre.", allowed="> 0; unset = only when all wheels leave the pavement")
 
     def __post_init__(self):
         if self.max_lane_departures is not None and not self.max_lane_departures >= 0:
@@ -434,7 +450,9 @@ class ControlConfig:
     # "pid" (the paper's eq. 9, default), "stanley", an entry point of the group
     # lanekeep.control.registry, or an import path "package.module:Class"
     # (lanekeep/control/registry.py)
-    controller: str = "pid"
+    controller: str = setting("pid", "Controller turning the estimated lane into steer and "
+                              "throttle.", allowed='"pid", "stanley", package.module:Class, '
+                              "entry points")
 
     def __post_init__(self):
         if not self.controller.strip():
@@ -443,22 +461,40 @@ class ControlConfig:
 
 @dataclass(frozen=True)
 class Scenario:
-    name: str
-    description: str
-    road: RoadConfig
-    seed: int = 0
-    duration_s: float = 20.0
-    control_period_s: float = 0.1
-    target_speed_mps: float = 15.0
-    start: StartConfig = field(default_factory=StartConfig)
-    camera: CameraConfig = field(default_factory=CameraConfig)
-    conditions: Conditions = field(default_factory=Conditions)
-    estimation: EstimationConfig = field(default_factory=EstimationConfig)
-    control: ControlConfig = field(default_factory=ControlConfig)  # the controller, by name
-    sensors: SensorsConfig = field(default_factory=SensorsConfig)
-    roadside: Roadside = field(default_factory=Roadside)  # props: lanekeep/world/props.py
-    traffic: Traffic = field(default_factory=Traffic)  # lanekeep/world/traffic_flow.py
-    criteria: CriteriaConfig = field(default_factory=CriteriaConfig)  # pass/fail limits
+    name: str = setting(doc="Scenario name, shown in reports.")
+    description: str = setting(doc="One line saying what the scenario tests.")
+    road: RoadConfig = setting(doc="The road: its centre line, lanes, paint and pavement.")
+    seed: int = setting(0, "Seed of every random draw: worn paint, props, image effects, sensor "
+                        "noise.", allowed="any integer")
+    duration_s: float = setting(20.0, "Simulated length of the episode.", allowed="> 0")
+    control_period_s: float = setting(0.1, "Period of the loop: one frame per camera, one control "
+                                      "update.", allowed="> 0")
+    target_speed_mps: float = setting(15.0, "Speed the speed controller holds.", allowed=">= 0")
+    start: StartConfig = setting(factory=StartConfig, doc="Where and how fast the car starts.")
+    camera: CameraConfig = setting(
+        factory=CameraConfig,
+        doc="Both onboard cameras: image size, the camera model, the mounting.")
+    conditions: Conditions = setting(
+        factory=Conditions,
+        doc="Light, weather, surface, traffic and image conditions; all off by default.")
+    estimation: EstimationConfig = setting(
+        factory=EstimationConfig,
+        doc="Which detectors run, the MMAE's reference, how the output is formed.")
+    control: ControlConfig = setting(factory=ControlConfig, doc="The controller, by name.")
+    sensors: SensorsConfig = setting(
+        factory=SensorsConfig,
+        doc="Error magnitudes of the car's own sensors (sources: lanekeep/scenario/sensors.py).")
+    roadside: Roadside = setting(  # placed by lanekeep/world/props.py
+        factory=Roadside,
+        doc="Props beside and over the road; all off by default, placed from the seed.")
+    traffic: Traffic = setting(  # drawn by lanekeep/world/traffic_flow.py
+        factory=Traffic,
+        doc="Other vehicles drawn from the seed in the lanes beside the car's, never in its own; "
+            "off by default.")
+    criteria: CriteriaConfig = setting(  # judged by lanekeep/scoring/criteria.py
+        factory=CriteriaConfig,
+        doc="Pass/fail limits of an episode; an episode that leaves the road or stops early fails "
+            "whatever they say.")
     source: str = field(default="", metadata={"toml": False})  # file it was read from
     # The seed its file gives: that seed is the file's nominal drive, any other draws the
     # start and traffic timing (lanekeep/scenario/nuisance.py). None (built in memory): 0.

@@ -9,6 +9,7 @@ import math
 from dataclasses import dataclass
 
 from lanekeep.core.config_io import InvalidValue
+from lanekeep.core.setting import check_settings, setting
 
 G_MPS2 = 9.80665  # standard gravity, to convert µg figures
 MAX_SPEED_SCALE_SIGMA = 0.1  # beyond this a drawn scale factor could come near zero
@@ -49,29 +50,33 @@ class SensorsConfig:
         (about 14-17:1); only used to express the steering-wheel figures at the road wheels.
     """
 
-    perfect: bool = False
-    speed_scale_sigma: float = 0.01
-    speed_noise_mps: float = 0.03
-    speed_resolution_mps: float = 0.01 / 3.6
-    gyro_noise_density_dps_rthz: float = 0.014
-    gyro_bias_sigma_dps: float = 0.3
-    gyro_bias_walk_dps_rts: float = 1e-4
-    accel_noise_density_mps2_rthz: float = 150e-6 * G_MPS2
-    steer_noise_deg: float = 0.1
-    steer_resolution_deg: float = 0.1
-    steering_ratio: float = 15.0
+    perfect: bool = setting(False, "Read the true values exactly (ablations).",
+                            allowed="true, false")
+    speed_scale_sigma: float = setting(0.01, "Wheel-speed scale error, 1-sigma, drawn once per "
+                                       "episode.", bounds=(0.0, MAX_SPEED_SCALE_SIGMA))
+    speed_noise_mps: float = setting(0.03, "Wheel-speed noise per sample, 1-sigma.", allowed=">= 0")
+    speed_resolution_mps: float = setting(0.01 / 3.6, "Wheel-speed quantisation step (0.01 km/h).",
+                                          allowed=">= 0")
+    gyro_noise_density_dps_rthz: float = setting(
+        0.014, "Yaw-rate white noise density; + yaw = left.", allowed=">= 0")
+    gyro_bias_sigma_dps: float = setting(0.3, "Yaw-rate bias, 1-sigma, drawn per episode.",
+                                         allowed=">= 0")
+    gyro_bias_walk_dps_rts: float = setting(1e-4, "Random walk of the yaw-rate bias.",
+                                            allowed=">= 0")
+    accel_noise_density_mps2_rthz: float = setting(
+        150e-6 * G_MPS2, "Accelerometer white noise density (150 ug/sqrt(Hz)).", allowed=">= 0")
+    steer_noise_deg: float = setting(0.1, "Steering-angle noise at the steering wheel; + = left.",
+                                     allowed=">= 0")
+    steer_resolution_deg: float = setting(0.1, "Steering-angle quantisation at the steering "
+                                          "wheel.", allowed=">= 0")
+    steering_ratio: float = setting(15.0, "Steering wheel to road wheel, for the two keys above.",
+                                    bounds=STEERING_RATIO_RANGE)
 
     def __post_init__(self):
+        check_settings(self)
         for f in dataclasses.fields(self):
             if f.name in ("perfect", "steering_ratio"):
                 continue
             value = getattr(self, f.name)
             if not 0.0 <= value < math.inf:
                 raise InvalidValue(f.name, f"must be finite and >= 0, got {value}")
-        if not self.speed_scale_sigma <= MAX_SPEED_SCALE_SIGMA:
-            raise InvalidValue("speed_scale_sigma",
-                               f"must be <= {MAX_SPEED_SCALE_SIGMA}, got {self.speed_scale_sigma}")
-        low, high = STEERING_RATIO_RANGE
-        if not low <= self.steering_ratio <= high:
-            raise InvalidValue("steering_ratio",
-                               f"must be in [{low}, {high}], got {self.steering_ratio}")

@@ -19,6 +19,7 @@ import math
 from dataclasses import dataclass
 
 from lanekeep.core.config_io import InvalidValue
+from lanekeep.core.setting import check_settings, choices_text, setting
 
 DIRECTIONS = ("same", "oncoming")
 MAX_VEHICLES_PER_KM = 60.0  # per lane: 17 m from front to front, bumper to bumper in a jam
@@ -28,17 +29,22 @@ MAX_VEHICLES_PER_KM = 60.0  # per lane: 17 m from front to front, bumper to bump
 class Traffic:
     """Seeded traffic in the lanes beside the car's; see the module docstring for the keys."""
 
-    vehicles_per_km: float = 0.0
-    directions: tuple[str, ...] = ()
-    speed_mps: tuple[float, float] = (12.0, 18.0)
-    van_share: float = 0.2
-    truck_share: float = 0.15
-    clear_m: float = 25.0
+    vehicles_per_km: float = setting(0.0, "Vehicles per km of road in each lane but the car's; 0 "
+                                     "= no traffic.", bounds=(0.0, MAX_VEHICLES_PER_KM))
+    directions: tuple[str, ...] = setting(
+        (), "Per lane, rightmost first: traffic driving the car's way or towards it; empty = all "
+        "the car's way.", allowed=f"each of {choices_text(DIRECTIONS)}; empty or one per lane")
+    speed_mps: tuple[float, float] = setting((12.0, 18.0), "Range each lane's speed is drawn from "
+                                             "(one speed per lane, so vehicles keep their gaps).",
+                                             allowed="[low, high], 0 <= low <= high <= 40")
+    van_share: float = setting(0.2, "Share of vans among the vehicles.", bounds=(0.0, 1.0))
+    truck_share: float = setting(0.15, "Share of trucks among the vehicles.", bounds=(0.0, 1.0),
+                                 allowed="0..1, with vans at most 1")
+    clear_m: float = setting(25.0, "No vehicle within this arc length of the car's start, in any "
+                             "lane.", bounds=(0.0, 200.0))
 
     def __post_init__(self):
-        if not 0.0 <= self.vehicles_per_km <= MAX_VEHICLES_PER_KM:
-            raise InvalidValue("vehicles_per_km", f"must be in [0, {MAX_VEHICLES_PER_KM:g}], "
-                                                  f"got {self.vehicles_per_km}")
+        check_settings(self)
         for i, d in enumerate(self.directions):
             if d not in DIRECTIONS:
                 raise InvalidValue(f"directions[{i}]", f"must be one of {DIRECTIONS}, got {d!r}")
@@ -47,13 +53,8 @@ class Traffic:
             raise InvalidValue("speed_mps",
                                f"must be [low, high] with 0 <= low <= high <= 40, "
                                f"got {list(self.speed_mps)}")
-        for key in ("van_share", "truck_share"):
-            if not 0.0 <= getattr(self, key) <= 1.0:
-                raise InvalidValue(key, f"must be in [0, 1], got {getattr(self, key)}")
         if self.van_share + self.truck_share > 1.0:
             raise InvalidValue("truck_share", "van_share + truck_share must be at most 1")
-        if not 0.0 <= self.clear_m <= 200.0:
-            raise InvalidValue("clear_m", f"must be in [0, 200] m, got {self.clear_m}")
 
     def direction(self, lane: int) -> str:
         """"same" or "oncoming" for a lane (all "same" when `directions` is empty)."""
