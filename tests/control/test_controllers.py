@@ -5,13 +5,13 @@ law and keeps clear_curve in its lane, and `[control] controller` selects them."
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
 import pytest
+from helpers import small_scenario
 
 from lanekeep.control.pid import PaperGains, SpeedController, SteeringPID
 from lanekeep.control.registry import (
@@ -26,7 +26,7 @@ from lanekeep.control.stanley import StanleyController
 from lanekeep.core.config_io import ConfigError
 from lanekeep.core.signals import VehicleSignals
 from lanekeep.loop.episode import Episode
-from lanekeep.scenario.schema import Scenario, ScenarioError, load_scenario, parse_scenario
+from lanekeep.scenario.schema import ScenarioError, load_scenario, parse_scenario
 
 WHEELBASE, MAX_STEER = 2.8, math.radians(35.0)
 
@@ -109,12 +109,6 @@ class InlinePidEpisode(Episode):
         return self._inline(estimate, signals)
 
 
-def _small(name: str, **control) -> Scenario:
-    """A shipped scenario with its [control] table changed."""
-    scenario = load_scenario(name)
-    return dataclasses.replace(scenario, control=dataclasses.replace(scenario.control, **control))
-
-
 def _numbers(report) -> dict:
     d = report.to_dict()
     d.pop("wall_s")
@@ -128,7 +122,8 @@ def test_an_episode_under_the_default_controller_is_the_former_episode():
     reports = []
     for cls, controller in [(InlinePidEpisode, "pid"), (Episode, "pid"),
                             (Episode, "lanekeep.control.registry:PidController")]:
-        with cls(_small("clear_curve", controller=controller), render_size=(320, 180)) as ep:
+        scenario = small_scenario("clear_curve", control={"controller": controller})
+        with cls(scenario, render_size=(320, 180)) as ep:
             reports.append(_numbers(ep.run(seconds=3.0)))
     assert reports[0] == reports[1] == reports[2]
 
@@ -223,7 +218,7 @@ def test_stanley_reads_only_the_estimate_and_the_sensors():
     controller raises TruthLeak."""
     from truth_guard import guard_truth
 
-    scenario = dataclasses.replace(_small("clear_curve", controller="stanley"), duration_s=2.0)
+    scenario = small_scenario("clear_curve", 2.0, control={"controller": "stanley"})
     with Episode(scenario, render_size=(320, 180)) as episode:
         assert isinstance(episode.driver.controller, StanleyController)
         guard_truth(episode)
@@ -235,7 +230,7 @@ def test_stanley_reads_only_the_estimate_and_the_sensors():
 def test_stanley_keeps_clear_curve_in_its_lane():
     """The full 30 s scenario at 1280x720. Measured: 0 departures, car RMS 3.0 cm, max 10.1 cm
     (the PID on the same run: RMS 5.8 cm, max 12.2 cm)."""
-    with Episode(_small("clear_curve", controller="stanley")) as episode:
+    with Episode(small_scenario("clear_curve", control={"controller": "stanley"})) as episode:
         report = episode.run()
     assert report.completed and report.lane_departures == 0
     assert report.car_max_cm < 30.0

@@ -11,6 +11,7 @@ import time
 from pathlib import Path
 
 import pytest
+from helpers import small_scenario_text
 
 from lanekeep.scenario.schema import load_scenario
 
@@ -26,15 +27,14 @@ def small_scenario(tmp_path: Path, name: str) -> Path:
     its 400 m road): an episode is still running when the signal comes, however the machine's
     speed and load place that moment (the first recording bytes land after about 2 s of wall
     time; a 20 s episode took only about 6 s)."""
-    text = Path(load_scenario("clear_straight").source).read_text(encoding="utf-8")
+    text = small_scenario_text("clear_straight", LONG_S, keep_criteria=True)
     for old, new in (('name = "clear_straight"', f'name = "{name}"'),
-                     ("duration_s = 20.0", f"duration_s = {LONG_S}"),
                      ("target_speed_mps = 15.0", "target_speed_mps = 1.5"),
                      ("\nspeed_mps = 15.0", "\nspeed_mps = 1.5")):
         assert old in text, old
         text = text.replace(old, new, 1)
     path = tmp_path / f"{name}.toml"
-    path.write_text(text + "\n[camera]\nwidth = 320\nheight = 180\n", encoding="utf-8")
+    path.write_text(text, encoding="utf-8")
     scenario = load_scenario(path)
     assert scenario.camera.width == 320 and scenario.duration_s == LONG_S
     assert scenario.start.s_m + scenario.target_speed_mps * LONG_S < scenario.road.length_m

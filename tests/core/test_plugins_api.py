@@ -19,13 +19,13 @@ from pathlib import Path
 import cv2
 import numpy as np
 import pytest
+from helpers import small_scenario_text
 
 from lanekeep.cli.main import main
 from lanekeep.control.registry import ControlContext, known_controllers, make_controller
 from lanekeep.core.config_io import ConfigError
 from lanekeep.core.plugins import DETECTORS, plugin_labels
 from lanekeep.detectors.registry import known_detectors, make_detector
-from lanekeep.scenario.schema import load_scenario
 
 MOD = "my_lane_plugins"
 BYO = Path(__file__).parents[1] / "plugins" / "byo.py"
@@ -57,11 +57,8 @@ def installed(tmp_path, plugin_dir) -> Path:
 
 def small_scenario(tmp_path: Path) -> Path:
     """clear_straight at 320x180 without its [criteria] (tuned for 1280x720 frames)."""
-    text = Path(load_scenario("clear_straight").source).read_text()
-    text = text.split("\n[criteria]")[0]
-    assert "\n[camera]" not in text
     path = tmp_path / "small_straight.toml"
-    path.write_text(text + "\n[camera]\nwidth = 320\nheight = 180\n")
+    path.write_text(small_scenario_text("clear_straight"))
     return path
 
 

@@ -3,13 +3,13 @@ the registry makes it by name, its table configures it strictly, and the loop ru
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from importlib import resources
 
 import numpy as np
 import plugins.straight_ahead  # noqa: F401 - registers "straight_ahead" (tests/ is on sys.path)
 import pytest
+from helpers import small_scenario
 
 from lanekeep.core.config_io import ConfigError
 from lanekeep.detectors.base import Detector
@@ -52,11 +52,9 @@ def test_a_wrong_key_in_its_table_names_itself(tmp_path):
 
 def test_the_closed_loop_runs_it_as_a_front_model():
     from lanekeep.loop.episode import Episode
-    from lanekeep.scenario.schema import load_scenario
 
-    scenario = load_scenario("clear_straight")
-    scenario = dataclasses.replace(scenario, estimation=dataclasses.replace(
-        scenario.estimation, front_detectors=("hough", "straight_ahead")))
+    scenario = small_scenario("clear_straight",
+                              estimation={"front_detectors": ("hough", "straight_ahead")})
     with Episode(scenario, render_size=(640, 360)) as episode:
         report = episode.run(seconds=1.0)
     assert "straight_ahead" in report.sources

@@ -5,20 +5,18 @@ report so far, marked incomplete with the reason."""
 from __future__ import annotations
 
 import math
-from dataclasses import replace
 
 import numpy as np
 import pytest
+from helpers import small_scenario
 
 from lanekeep.detectors.base import LaneEstimate
 from lanekeep.loop.episode import Episode
-from lanekeep.scenario.schema import load_scenario
 from lanekeep.world.build import SimulationError
 
 
 def _episode(seconds: float = 1.0) -> Episode:
-    return Episode(replace(load_scenario("clear_straight"), duration_s=seconds),
-                   render_size=(640, 360))
+    return Episode(small_scenario("clear_straight", seconds), render_size=(640, 360))
 
 
 class _Faulty:

@@ -1,23 +1,19 @@
 """LaneNet in the closed loop: a third front model beside the classical two and the rear
 reference, through the N-model MMAE, with its GRU state carried from step to step."""
 
-import dataclasses
 
 import numpy as np
 import pytest
+from helpers import small_scenario
 
 from lanekeep.loop.episode import Episode
-from lanekeep.scenario.schema import load_scenario
 
 
 @pytest.mark.slow
 def test_three_front_models_and_the_learned_reference_keep_the_lane():
-    base = load_scenario("clear_curve")
-    scenario = dataclasses.replace(
-        base, duration_s=6.0,
-        estimation=dataclasses.replace(base.estimation,
-                                       front_detectors=("hough", "sliding_window", "lanenet"),
-                                       reference_detector="lanenet"))
+    scenario = small_scenario("clear_curve", 6.0, estimation={
+        "front_detectors": ("hough", "sliding_window", "lanenet"),
+        "reference_detector": "lanenet"})
     with Episode(scenario, render_size=(640, 360)) as episode:
         steps = [episode.step() for _ in range(episode.total_steps)]
         report = episode.report()

@@ -1,20 +1,19 @@
 """Detections on two threads give what one thread gives: the same estimates, events, error
-counts and report, in the same order (lanekeep/loop/detection.py)."""
+counts and report, in the same order (lanekeep/driver/detection.py)."""
 
 from __future__ import annotations
 
 import threading
 from collections import Counter
-from dataclasses import replace
 
 import numpy as np
 import pytest
+from helpers import small_scenario
 
 from lanekeep.core.workers import THREADS_ENV
 from lanekeep.detectors.base import LaneEstimate
 from lanekeep.driver.detection import DetectionRunner, DetectJob, group_jobs, run_job
 from lanekeep.loop.episode import Episode
-from lanekeep.scenario.schema import load_scenario
 
 
 class _Fake:
@@ -107,7 +106,7 @@ def test_detectors_sharing_a_model_are_one_batched_job():
 
 def _run(name: str, threads: int, monkeypatch) -> tuple[dict, list]:
     monkeypatch.setenv(THREADS_ENV, str(threads))
-    scenario = replace(load_scenario(name), duration_s=1.5)
+    scenario = small_scenario(name, 1.5)
     with Episode(scenario, render_size=(640, 360)) as episode:
         assert episode.driver.detection.parallel_now() == (threads >= 2)
         steps = [episode.step() for _ in range(episode.total_steps)]

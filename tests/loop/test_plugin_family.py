@@ -3,20 +3,17 @@ loop (detectors/registry.py `builtin_family`): the same tracker noise and MMAE p
 paper-mode window, LaneNet's batch with the LaneNet reference, so the same episode to the bit.
 Before, a sham of LaneNet got the pooled tracker noise of an unknown plug-in and another loop."""
 
-import dataclasses
-
 import numpy as np
+from helpers import small_scenario
 
 from lanekeep.loop.episode import Episode
-from lanekeep.scenario.schema import load_scenario
 
 SIZE = (320, 180)
 
 
 def _scenario(front: tuple[str, ...], mode: str = "default", seconds: float = 4.0):
-    base = load_scenario("clear_curve")
-    return dataclasses.replace(base, seed=0, duration_s=seconds, estimation=dataclasses.replace(
-        base.estimation, mode=mode, front_detectors=front))
+    return small_scenario("clear_curve", seconds, seed=0,
+                          estimation={"mode": mode, "front_detectors": front})
 
 
 def _run(front: tuple[str, ...]):

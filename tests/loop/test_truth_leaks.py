@@ -12,14 +12,13 @@ from __future__ import annotations
 
 import gc
 from collections.abc import Callable
-from dataclasses import replace
 
 import numpy as np
 import pytest
+from helpers import small_scenario
 from truth_guard import TruthLeak, guard_truth
 
 from lanekeep.loop.episode import Episode
-from lanekeep.scenario.schema import load_scenario
 
 
 class _Leaky:
@@ -89,11 +88,9 @@ HOLES = {
 def _episode() -> Episode:
     """Case 4 (a shaded straight: it has cast shadows) with the classical models only, small:
     what leaks is the point here, not how well the car drives."""
-    scenario = load_scenario("case4_half_shade_straight")
-    estimation = replace(scenario.estimation, front_detectors=("hough", "sliding_window"),
-                         reference_detector="sliding_window")
-    return Episode(replace(scenario, duration_s=1.0, estimation=estimation),
-                   render_size=(320, 180))
+    scenario = small_scenario("case4_half_shade_straight", 1.0, estimation={
+        "front_detectors": ("hough", "sliding_window"), "reference_detector": "sliding_window"})
+    return Episode(scenario, render_size=(320, 180))
 
 
 def _by_id(target: int) -> object:

@@ -8,11 +8,11 @@ import math
 from pathlib import Path
 
 import pytest
+from helpers import small_scenario_text
 from lxml import etree  # the `test` extra's XSD validator
 
 from lanekeep.cli.main import main
 from lanekeep.report.junit import junit_tree, write_junit
-from lanekeep.scenario.schema import load_scenario
 from lanekeep.scoring.metrics import EpisodeReport, SourceReport, Verdict
 
 SCHEMA = Path(__file__).parents[1] / "data" / "junit.xsd"
@@ -89,9 +89,9 @@ def test_bench_junit_has_one_case_per_scenario_and_exits_1_on_a_failure(tmp_path
     progress (lines: stderr is no terminal here) reaches the bench's total, which the early
     end of the turn shrank."""
     straight, turn = tmp_path / "straight.toml", tmp_path / "turn.toml"
-    straight.write_text(_small(load_scenario("clear_straight").source)
+    straight.write_text(small_scenario_text("clear_straight")
                         + "\n[criteria]\nmax_lane_departures = 0\nmax_car_lateral_error_m = 0.5\n")
-    turn.write_text(_small(load_scenario("sharp_turn").source).replace(
+    turn.write_text(small_scenario_text("sharp_turn").replace(
         "target_speed_mps = 15.0", "target_speed_mps = 30.0"))
     out = tmp_path / "bench.xml"
     code = main(["bench", str(straight), str(turn), "--seconds", "8", "--workers", "1",
@@ -111,12 +111,6 @@ def test_bench_junit_has_one_case_per_scenario_and_exits_1_on_a_failure(tmp_path
     done, total = last.split(" s simulated")[0].split()[-1].split("/")
     assert done == total and float(total) < 16.0  # 2 x 8 s planned; the turn ended early
     assert "(100%), wall " in last
-
-
-def _small(source: str) -> str:
-    """A shipped scenario's text at 320 x 180 without its [criteria] (the test sets its own)."""
-    text = Path(source).read_text().split("\n# Pass/fail")[0]
-    return text.replace("[start]", "[camera]\nwidth = 320\nheight = 180\n\n[start]", 1)
 
 
 def test_the_step_bar_shows_elapsed_and_remaining_and_takes_a_shrinking_total(capsys):

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from helpers import small_scenario_text
 
 from lanekeep.cli.main import main
 
@@ -12,12 +13,8 @@ from lanekeep.cli.main import main
 @pytest.mark.slow
 def test_run_writes_offsets_and_errors_per_source_and_names_the_files(tmp_path, capsys):
     scenario = tmp_path / "small.toml"
-    from pathlib import Path
-
-    shipped = Path(__file__).parents[2] / "lanekeep" / "scenario" / "shipped" / "clear_curve.toml"
-    scenario.write_text(shipped.read_text(encoding="utf-8").replace(
-        "duration_s = 30.0", "duration_s = 3.0") + "\n[camera]\nwidth = 320\nheight = 180\n",
-        encoding="utf-8")
+    scenario.write_text(small_scenario_text("clear_curve", 3.0, keep_criteria=True),
+                        encoding="utf-8")
     out = tmp_path / "plots"
     assert main(["run", str(scenario), "--seconds", "1", "--plots", str(out), "--seed", "3"]) \
         in (0, 1)

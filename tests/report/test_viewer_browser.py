@@ -24,6 +24,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers import small_scenario_text
 
 from lanekeep.cli import view as cli_view
 
@@ -136,11 +137,9 @@ def _panels_drawn(pixels: np.ndarray) -> dict[str, float]:
 def test_web_viewer_draws_every_panel(tmp_path):
     from lanekeep.cli.main import main
 
-    scenario = Path(__file__).parents[2] / "lanekeep" / "scenario" / "shipped" / "clear_curve.toml"
     small = tmp_path / "small.toml"
-    small.write_text(scenario.read_text(encoding="utf-8").replace(
-        "duration_s = 30.0", "duration_s = 3.0") + "\n[camera]\nwidth = 320\nheight = 180\n",
-        encoding="utf-8")
+    small.write_text(small_scenario_text("clear_curve", 3.0, keep_criteria=True),
+                     encoding="utf-8")
     rrd = tmp_path / "short.rrd"
     assert main(["run", str(small), "--seconds", "2", "--record", str(rrd)]) in (0, 1)
     assert rrd.stat().st_size > 0

@@ -9,6 +9,7 @@ import math
 from pathlib import Path
 
 import pytest
+from helpers import small_scenario_text
 
 from lanekeep.cli.main import main
 from lanekeep.loop.runner import BenchJob
@@ -17,8 +18,6 @@ from lanekeep.report.tables import bench_verdict, single_model_table, summary_ta
 from lanekeep.scenario.schema import CriteriaConfig, load_scenario, shipped_scenarios
 from lanekeep.scoring.criteria import evaluate, failure_message, judge
 from lanekeep.scoring.metrics import EpisodeReport, SourceReport
-
-STRAIGHT = Path(load_scenario("clear_straight").source).read_text().split("\n# Pass/fail")[0]
 
 
 def _report(fused_rmse_cm: float = 4.0, departures: int = 0, car_max_cm: float = 20.0,
@@ -141,8 +140,7 @@ def test_a_run_cut_short_is_not_judged_by_the_files_fused_rmse_limit():
 
 def _small_straight(tmp_path: Path, criteria: str) -> Path:
     path = tmp_path / "straight.toml"
-    path.write_text(STRAIGHT.replace("[start]", "[camera]\nwidth = 320\nheight = 180\n\n"
-                                     "[start]", 1) + "\n[criteria]\n" + criteria)
+    path.write_text(small_scenario_text("clear_straight") + "\n[criteria]\n" + criteria)
     return path
 
 

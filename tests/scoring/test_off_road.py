@@ -10,15 +10,15 @@ from __future__ import annotations
 
 import dataclasses
 import json
-from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers import small_scenario_text
 
 from lanekeep.cli.main import main
 from lanekeep.loop.episode import Episode
 from lanekeep.report.json_io import report_from_dict
-from lanekeep.scenario.schema import load_scenario, parse_scenario
+from lanekeep.scenario.schema import parse_scenario
 from lanekeep.scoring.metrics import EpisodeReport
 from lanekeep.world.parts import WorldLayout
 
@@ -28,10 +28,9 @@ SIZE = (320, 180)  # where the car goes does not depend on the image size much; 
 def _fast_turn_text() -> str:
     """sharp_turn at 30 m/s (22.5 m/s^2 on its 40 m radius: past any tyre's grip), small
     frames, without the shipped [criteria] (leaving the road fails whatever they say)."""
-    text = Path(load_scenario("sharp_turn").source).read_text().split("\n# Pass/fail")[0]
+    text = small_scenario_text("sharp_turn")
     assert "target_speed_mps = 15.0" in text
-    text = text.replace("target_speed_mps = 15.0", "target_speed_mps = 30.0")
-    return text.replace("[start]", "[camera]\nwidth = 320\nheight = 180\n\n[start]", 1)
+    return text.replace("target_speed_mps = 15.0", "target_speed_mps = 30.0")
 
 
 def test_the_30_mps_sharp_turn_leaves_the_road_and_stops_scoring():
@@ -72,9 +71,7 @@ def test_run_exits_1_with_status_off_road_in_the_json(tmp_path, capsys):
 def test_off_road_distance_ends_the_episode_before_the_wheels_leave(tmp_path):
     """A start 1.2 m left of the lane centre, with the limit at 1 m (file) and at 2 m
     (the command line's override): the first ends on its first step, the second does not."""
-    text = Path(load_scenario("clear_straight").source).read_text().split("\n# Pass/fail")[0]
-    text = text.replace("[start]", "[camera]\nwidth = 320\nheight = 180\n\n[start]\n"
-                        "offset_m = 1.2", 1)
+    text = small_scenario_text("clear_straight").replace("[start]", "[start]\noffset_m = 1.2", 1)
     path = tmp_path / "offset.toml"
     path.write_text(text + "\n[criteria]\noff_road_distance_m = 1.0\n")
     out = tmp_path / "offset.json"

@@ -8,6 +8,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 import pytest
+from helpers import small_scenario
 
 from lanekeep.scenario.schema import load_scenario
 from lanekeep.sensing.snapshot import render_snapshot
@@ -67,9 +68,8 @@ def test_mid_drive_is_half_the_episode_at_target_speed_clipped_to_the_road():
 def test_tiles_are_the_frames_lanekeep_render_writes(tmp_path):
     """The mid-drive tiles (the second pose rendered) are `render_snapshot --at mid`'s front.png
     and rear.png bit for bit: same pose, same effects stream."""
-    base = load_scenario("clear_straight")  # its camera model draws read noise
-    scenario = dataclasses.replace(base, camera=dataclasses.replace(base.camera, width=96,
-                                                                    height=54))
+    # clear_straight: its camera model draws read noise
+    scenario = small_scenario("clear_straight", camera={"width": 96, "height": 54})
     tiles = dict(zip(cs.VIEWS, cs.scenario_tiles(scenario), strict=True))
     assert tiles["front", "mid"].label.startswith("clear_straight | front mid s=")
     render_snapshot(scenario, tmp_path, at_s=cs.mid_drive_s(scenario))
