@@ -48,6 +48,14 @@ def setting(default: Any = dataclasses.MISSING, doc: str = "", *, unit: str = ""
     return dataclasses.field(default=default, metadata=meta)
 
 
+def same_as(cls: type, name: str) -> Any:
+    """A field defined by dataclass `cls`'s field `name` (its default and metadata), for a
+    key two dataclasses hold: the scenario's flat table and the type that uses it."""
+    f = next(f for f in dataclasses.fields(cls) if f.name == name)
+    return dataclasses.field(default=f.default, default_factory=f.default_factory,
+                             metadata=f.metadata)
+
+
 # Units from a key's suffix (the project names units in keys), longest suffix first.
 SUFFIX_UNITS = (("_dps_rthz", "deg/s/sqrt(Hz)"), ("_dps_rts", "deg/s/sqrt(s)"),
                 ("_mps2_rthz", "m/s^2/sqrt(Hz)"), ("_per_100m", "per 100 m"),

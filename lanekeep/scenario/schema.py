@@ -22,13 +22,13 @@ from importlib import resources
 from pathlib import Path
 
 from lanekeep.core.config_io import ConfigError, InvalidValue, from_dict
-from lanekeep.core.setting import check_settings, setting
+from lanekeep.core.setting import check_settings, same_as, setting
 from lanekeep.estimators.settings import (
     EstimatorSettings,
 )
 from lanekeep.geometry.markings import MarkingStyle
 from lanekeep.geometry.road import MAX_LANES, MAX_ROAD_M, Road, SegmentSpec
-from lanekeep.scenario.pavement import SURFACES, PavementStyle
+from lanekeep.scenario.pavement import PavementStyle
 from lanekeep.scenario.roadside import Roadside
 from lanekeep.scenario.sensors import SensorsConfig
 from lanekeep.scenario.traffic import Traffic
@@ -56,14 +56,12 @@ class RoadConfig:
         "edges and dashed lines between lanes.", allowed="none or n_lanes + 1")
     start_heading_deg: float = setting(0.0, "World heading of the road at its start; + = "
                                        "anticlockwise seen from above.")
-    # The pavement (lanekeep/world/pavement.py draws it; PavementStyle is its type there).
-    surface: str = setting("asphalt", "Pavement material.", choices=SURFACES)
-    asphalt_tone: float = setting(0.5, "0 fresh black .. 1 old, sun-bleached grey.",
-                                  bounds=(0.0, 1.0))
-    cracks: float = setting(0.3, "Amount of cracks in the pavement.", bounds=(0.0, 1.0))
-    patches: float = setting(0.2, "Amount of repair patches.", bounds=(0.0, 1.0))
-    tyre_marks: float = setting(0.4, "Darker wheel paths and oil strip in every lane.",
-                                bounds=(0.0, 1.0))
+    # The pavement, drawn by lanekeep/world/pavement.py: PavementStyle's keys, defined there.
+    surface: str = same_as(PavementStyle, "surface")
+    asphalt_tone: float = same_as(PavementStyle, "asphalt_tone")
+    cracks: float = same_as(PavementStyle, "cracks")
+    patches: float = same_as(PavementStyle, "patches")
+    tyre_marks: float = same_as(PavementStyle, "tyre_marks")
 
     def __post_init__(self):
         check_settings(self)
