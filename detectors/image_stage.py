@@ -205,7 +205,7 @@ class RoiMemo:
     settings (crop row, `Preprocess`, the vehicle cue's per-row geometry), and only while the
     rows it reads still hold the pixels it was made from (a copy is compared, so a frame
     changed in place is computed afresh). Thread-safe: the models may run on two threads at
-    once (lanekeep/loop/detection.py); one that asks while another computes the same region
+    once (lanekeep/driver/detection.py); one that asks while another computes the same region
     waits for it rather than computing it again. `slots` bounds the frames kept.
     """
 

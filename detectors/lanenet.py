@@ -89,7 +89,7 @@ def _one_thread() -> Iterator[None]:
     busy). torch's intra-op thread count belongs to the calling thread (OpenMP's setting is
     per thread; a new thread starts from the last count set anywhere), so this sets and
     restores the count of the thread it runs on: an episode's two detection threads
-    (lanekeep/loop/detection.py) each run their network on one."""
+    (lanekeep/driver/detection.py) each run their network on one."""
     before = torch.get_num_threads()
     if before == 1:
         yield
@@ -329,7 +329,7 @@ class LaneNetDetector:
         state, camera and settings and gets what `detect` gives, bit for bit (a batch item's
         outputs do not depend on the others; tests/detectors/test_lanenet_speed_equivalence.py).
         Should anything raise, every detector is left as it was before the call, so that the
-        caller may run them one at a time instead (lanekeep/loop/detection.py does)."""
+        caller may run them one at a time instead (lanekeep/driver/detection.py does)."""
         saved = [(d._state, d._thumb, d._frame_size, d.last) for d in detectors]
         try:
             decoded = _infer_together(list(detectors), list(frames))

@@ -3,7 +3,7 @@
 A regression that the pass/fail criteria must catch (the shipped scenarios' `[criteria]`,
 calibrated by tools/calibrate_criteria.py): perception that is a little wrong, everywhere, all
 the time, while the loop still drives and never leaves the lane. Each class wraps a built-in
-detector (lanekeep/detectors/registry.py) and adds BIAS_M to what it reports (`biased`), so the
+detector (detectors/registry.py) and adds BIAS_M to what it reports (`biased`), so the
 lane's centre line, and the MMAE output that follows it, is off by 5 cm. On 5 s of
 case4_half_shade_straight the fused RMSE goes from 0.6 cm to 4.4 cm, the car still within 6 cm
 of the centre: the old limit, "twice one measured run" (5 cm there), let it pass; a limit

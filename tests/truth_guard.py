@@ -38,7 +38,7 @@ class TruthLeak(BaseException):  # noqa: N818 - the name says what it catches
     """Perception, estimation or control read (or holds) the simulator's truth.
 
     A BaseException so that no `except Exception` on the way (a failing detector counts as
-    a miss in lanekeep/loop/detection.py) can swallow it."""
+    a miss in lanekeep/driver/detection.py) can swallow it."""
 
 
 class _Phase:

@@ -2,7 +2,7 @@
 
 Mesa's llvmpipe rasterises with a thread per core and waits for the slowest: a busy background
 thread (the recorder's JPEG writer) made a 21 ms render take 56 ms on two cores. An episode's
-detectors on two threads (lanekeep/loop/detection.py) fill the cores the same way. Sections
+detectors on two threads (lanekeep/driver/detection.py) fill the cores the same way. Sections
 that do so run inside `all_cores_busy()`; background work waits for `CORES_FREE` before each
 piece, and so runs in the loop's single-threaded stretches (camera effects, tracking, control,
 physics, scoring). Sections may nest or overlap (a count, not a flag).

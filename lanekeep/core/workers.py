@@ -26,7 +26,7 @@ def worker_threads(workers: int) -> int:
 
 
 # This process's share of the cores, for lanekeep's own threads (an episode runs its detectors
-# on two threads when it may use two cores: lanekeep/loop/detection.py). Unset: every core.
+# on two threads when it may use two cores: lanekeep/driver/detection.py). Unset: every core.
 THREADS_ENV = "LANEKEEP_THREADS"
 
 

@@ -10,10 +10,6 @@ from dataclasses import replace
 from lanekeep.scenario.schema import DEFAULT_FRONT_DETECTORS, Scenario
 
 
-def is_paper(scenario: Scenario) -> bool:
-    return scenario.estimation.mode == "paper"
-
-
 def with_mode(scenario: Scenario, mode: str | None) -> Scenario:
     """The scenario with its estimation mode set (None keeps the file's). Front models that
     are the old mode's defaults become the new mode's (the paper's loop runs its two models);

@@ -15,7 +15,7 @@ JSON keys (stable; times are wall-clock on this machine; strict JSON, null for n
   repeats                      timed loops each with recording off and on (alternating); the
                                figures below are each setting's fastest loop
   detect_threads               threads the step's detectors ran on: 2 where the process may
-                               use two cores or more (lanekeep/loop/detection.py), else 1
+                               use two cores or more (lanekeep/driver/detection.py), else 1
   stage_ms                     mean ms per control step of each stage, recording off:
                                render_<camera>, effects_<camera>, detect_<detector>,
                                detect_reference, track, mmae, control, physics, score, record;

@@ -97,7 +97,7 @@ class EpisodeInfo:
     """What a recorder is told once, before the first step: nothing it could step with."""
 
     road: Any  # lanekeep.geometry.road.Road
-    cameras: dict[str, Any]  # camera name -> lanekeep.sensing.cameras.CameraModel
+    cameras: dict[str, Any]  # camera name -> lanekeep.geometry.camera_model.CameraModel
     models: list[str]  # the front models, in the MMAE's order
     dt_s: float
     car_size_m: tuple[float, float]  # length, width

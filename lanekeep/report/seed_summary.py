@@ -147,13 +147,6 @@ def fused_vs_track(reports: Sequence[EpisodeReport], track: str) -> dict[str, An
     return out
 
 
-def fused_verdicts(docs: Sequence[dict]) -> dict[str, int]:
-    """The count of fused-vs-track verdicts over `docs` (never raw wins), each verdict of
-    statistics.VERDICTS."""
-    return stats.count_verdicts([p["verdict"] for d in docs
-                                 for p in d["paired"]["fused_vs"].values()])
-
-
 def interval_text(mean: float | None, ci: Sequence[float | None] | None, digits: int = 2
                   ) -> str:
     """"0.52 [0.48, 0.57]", or the mean alone where there is no interval, "-" for none."""

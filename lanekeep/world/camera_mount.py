@@ -58,11 +58,6 @@ def _mul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return out
 
 
-def is_default(camera) -> bool:
-    """True when the scenario keeps the car's own mounting (nothing to change)."""
-    return camera.preset == "paper" and not _has_offsets(camera)
-
-
 def _has_offsets(camera) -> bool:
     return not (camera.mount_height_m == 0.0 and camera.pitch_offset_deg == 0.0
                 and camera.roll_deg == 0.0 and camera.yaw_offset_deg == 0.0

@@ -1,16 +1,17 @@
 """What a scenario's conditions add to the MuJoCo world: light, shadows, bumps, wet, fog, traffic.
 
-Called by `world.build_spec` (`add_conditions`) after the road and markings exist; their look,
-the sky, sun and fog are decided from the scenario before the build (world_appearance.py).
-Everything is seeded from the scenario seed, so one scenario always builds the same world. The
-work is split by concern: lanekeep/world/lighting.py (car lights), world_roadside.py
-(shadows and casters, bumps, wet, snow), world_traffic.py (other vehicles).
+Called by `build_spec` (lanekeep/world/build.py, `add_conditions`) after the road and markings
+exist; their look, the sky, sun and fog are decided from the scenario before the build
+(lanekeep/world/appearance.py). Everything is seeded from the scenario seed, so one scenario
+always builds the same world. The work is split by concern: lanekeep/world/lighting.py (car
+lights), lanekeep/world/roadside.py (shadows and casters, bumps, wet, snow),
+lanekeep/world/traffic.py (other vehicles).
 
   - Sun and time of day: the sun's direction comes from `Conditions.sun_*`; dawn, dusk and night
-    dim the sun, the ambient light and the sky (decided before the build, world_appearance.py)
+    dim the sun, the ambient light and the sky (decided before the build, appearance.py)
     and switch on the car's headlights (two white spot lights, lit road ~35 m ahead) and a dim
     red tail light (the rear camera sees ~8 m of road). MuJoCo lights per vertex, so with
-    headlights world.py meshes the asphalt as a 0.5 m grid.
+    headlights build.py meshes the asphalt as a 0.5 m grid (lighting.py's GRID_STEP_M).
   - Cast shadows: shadow maps double the render cost on a CPU, so a building's or tree's shadow
     is its silhouette cast along the sun onto the ground: convex polygons drawn as black
     translucent overlays (group GROUP_SHADOW, hidden from the segmentation render so the marking
@@ -19,7 +20,7 @@ work is split by concern: lanekeep/world/lighting.py (car lights), world_roadsid
     (boxes, trees) stand beside the road and are rendered too.
   - Speed bumps: cylinders across the road sunk into the ground (a circular cap ~0.6 m long and
     `speed_bump_height_m` high) that the tyres collide with; yellow with black stripes.
-  - Wet road: darker, glossier asphalt (a material tint, world_appearance.py) and puddles as
+  - Wet road: darker, glossier asphalt (a material tint, appearance.py) and puddles as
     dark glossy overlays (group GROUP_SHADOW).
   - Fog: MuJoCo's linear fog up to the visibility distance, in the sky's horizon colour.
     Scenes without fog put it beyond the far clip plane, so the render flag can stay on.

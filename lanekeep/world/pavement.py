@@ -2,7 +2,7 @@
 
 One texture is an atlas of one lane beside one shoulder: columns [0, LANE_U) hold a lane from
 its right boundary to its left one, columns [LANE_U, 1) a shoulder from the edge line outwards;
-rows run along the road over `period_m`. world.py maps each lane and each shoulder of the road
+rows run along the road over `period_m`. build.py maps each lane and each shoulder of the road
 onto its part, so wheel paths lie in every lane (not on the shoulders), concrete's longitudinal
 joints fall on the lane lines and its transverse joints every SLAB_M across the whole road.
 The period (9 m) is longer than a dash plus its gap is short, and each lane starts the texture

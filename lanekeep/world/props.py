@@ -8,7 +8,7 @@ material's pieces are merged into one mesh geom (a geom costs render time, trian
 do), all visual only (contype 0) in GROUP_WORLD: the segmentation render shows them as
 non-marking pixels that hide the paint behind them. Everything the sun reaches casts its
 silhouette on the ground as one translucent overlay (GROUP_SHADOW, like the shadow zones in
-world_roadside.py, cut so that no ground point is shaded twice, also where a shadow zone's
+roadside.py, cut so that no ground point is shaded twice, also where a shadow zone's
 shadow lies). At night there is no sun to cast them.
 """
 

@@ -4,7 +4,7 @@ the paint they hide from a camera.
 Each vehicle is a car, van or truck built from primitives (lanekeep/world/vehicle_assets.py: wheels
 on the ground, arches, windows, lights, bumpers) on a mocap body whose origin stays on the
 ground. Camera shadow maps are off by default (they double a CPU render), so like the roadside
-casters (world_roadside.py) a vehicle's shadow is drawn: two dark translucent polygons in group
+casters (roadside.py) a vehicle's shadow is drawn: two dark translucent polygons in group
 GROUP_SHADOW (hidden from the segmentation render, so the marking masks stay exact), children of
 the mocap body so they drive along:
 

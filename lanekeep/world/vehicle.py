@@ -115,10 +115,6 @@ class Car:
             return 0.5 * (left + right)
         return math.atan(2.0 / (1.0 / tans[0] + 1.0 / tans[1]))
 
-    def wheel_speeds_rps(self) -> np.ndarray:
-        """Spin rates of the four wheels (rad/s), FL, FR, RL, RR."""
-        return np.array([self.data.qvel[d] for d in self._spin_dof])
-
     # -- commands ----------------------------------------------------------------------------
     def apply(self, steer: float, throttle: float) -> None:
         """Set actuator controls from steer in [-1, 1] (+ = left) and throttle in [-1, 1].
