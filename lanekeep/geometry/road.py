@@ -32,6 +32,9 @@ TABLE_STEP_M = 0.1  # spacing of the exact position table
 MAX_ROAD_M = 20_000.0
 # a five-lane carriageway: the widest the dataset (lanekeep/evaluation/dataset.py) builds
 MAX_LANES = 5
+# The road's lane width unless a scenario gives one: the truth, which scoring reads. The car's
+# belief about lane widths is lanekeep/geometry/lane_width.py, the same number by design only.
+DEFAULT_LANE_WIDTH_M = 3.7
 COARSE_STEP_M = 0.5  # spacing of the nearest-point search table
 LEAD_SEED_OFFSET = 7919  # worn paint before the start and after the end draws its own runs
 _GL_X, _GL_W = np.polynomial.legendre.leggauss(4)  # Gauss-Legendre nodes/weights on [-1, 1]
@@ -77,7 +80,7 @@ class Road:
         self,
         segments: Sequence[SegmentSpec],
         n_lanes: int = 2,
-        lane_width_m: float = 3.7,
+        lane_width_m: float = DEFAULT_LANE_WIDTH_M,
         markings: Sequence[MarkingStyle] | None = None,
         start_xy: Sequence[float] = (0.0, 0.0),
         start_heading_rad: float = 0.0,

@@ -27,7 +27,7 @@ from lanekeep.estimators.settings import (
     EstimatorSettings,
 )
 from lanekeep.geometry.markings import MarkingStyle
-from lanekeep.geometry.road import MAX_LANES, MAX_ROAD_M, Road, SegmentSpec
+from lanekeep.geometry.road import DEFAULT_LANE_WIDTH_M, MAX_LANES, MAX_ROAD_M, Road, SegmentSpec
 from lanekeep.scenario.pavement import PavementStyle
 from lanekeep.scenario.roadside import Roadside
 from lanekeep.scenario.sensors import SensorsConfig
@@ -48,7 +48,7 @@ class RoadConfig:
     segments: tuple[SegmentSpec, ...] = setting(
         doc="The centre line, piece by piece from the start.", allowed="at least one")
     n_lanes: int = setting(2, "Lanes of the carriageway.", bounds=(1, MAX_LANES))
-    lane_width_m: float = setting(3.7, "Width of every lane.", allowed="> 0")
+    lane_width_m: float = setting(DEFAULT_LANE_WIDTH_M, "Width of every lane.", allowed="> 0")
     ego_lane: int = setting(0, "Lane the car starts in and is scored against; 0 = the rightmost.",
                             allowed="0..n_lanes - 1")
     markings: tuple[MarkingStyle, ...] = setting(
