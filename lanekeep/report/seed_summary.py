@@ -17,7 +17,7 @@ from typing import Any
 
 from lanekeep.report.json_io import report_document, strict, with_metadata
 from lanekeep.scoring import statistics as stats
-from lanekeep.scoring.metrics import EpisodeReport, SourceReport
+from lanekeep.scoring.metrics import EPISODE_METRICS, EpisodeReport, SourceReport
 
 KEYS_HELP = """\
 bench --json: one document per label (a scenario, or "SCENARIO@MODEL" for a model-only loop):
@@ -51,8 +51,7 @@ bench --json: one document per label (a scenario, or "SCENARIO@MODEL" for a mode
   episodes                        each seed's report document (as `run --json` writes it)
 """
 SOURCE_KEYS = tuple(f.name for f in dataclasses.fields(SourceReport))
-EPISODE_KEYS = ("car_rms_cm", "car_max_cm", "lane_departures", "mmae_switches",
-                "reference_repairs", "no_estimate_s")
+EPISODE_KEYS = EPISODE_METRICS
 LOOP_KEYS = ("car_rms_cm", "car_max_cm", "lane_departures")  # MMAE loop vs a model alone
 HIGHER_IS_BETTER = frozenset({"valid_share"})
 

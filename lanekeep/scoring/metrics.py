@@ -103,6 +103,12 @@ class CommonSteps:
     share: float  # `steps` over the episode's scored steps
 
 
+# The car's own outcome of an episode (EpisodeReport fields), beside its sources' metrics: the
+# one list the seed summaries, the sweeps and the comparisons name.
+EPISODE_METRICS = ("car_rms_cm", "car_max_cm", "lane_departures", "mmae_switches",
+                   "reference_repairs", "no_estimate_s")
+
+
 @dataclass(frozen=True)
 class EpisodeReport:
     scenario: str

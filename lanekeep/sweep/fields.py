@@ -10,11 +10,11 @@ from dataclasses import fields
 from typing import Any
 
 from lanekeep.core.config_io import ConfigError
+from lanekeep.scoring import metrics as scoring_metrics
 from lanekeep.scoring.metrics import SourceReport
 
 SOURCE_METRICS = tuple(f.name for f in fields(SourceReport))  # one column per source each
-EPISODE_METRICS = ("car_rms_cm", "car_max_cm", "lane_departures", "mmae_switches",
-                   "no_estimate_s", "reference_repairs", "duration_s", "steps")
+EPISODE_METRICS = (*scoring_metrics.EPISODE_METRICS, "duration_s", "steps")  # and its length
 
 
 class SweepError(ConfigError):
