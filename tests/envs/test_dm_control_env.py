@@ -2,12 +2,12 @@
 `dm_control.rl.control.Environment`, the Physics' named accessors against the car's own, a
 reset that replays the drive, and a step that is `Episode.step`'s period bit for bit."""
 
-from dataclasses import replace
 
 import numpy as np
 from absl.testing import absltest
 from dm_control.rl import control
 from dm_env import test_utils
+from helpers import small_scenario
 
 from lanekeep.envs.dm_control_env import load
 from lanekeep.loop.episode import Episode
@@ -60,7 +60,7 @@ def test_a_reset_replays_the_drive():
 def test_a_step_is_the_episodes_period_with_the_same_action():
     """The dm_control step (before_step, physics, after_step) and `Episode.step(action)` move
     the car to the same poses and pay the same truth-based scores."""
-    scenario = replace(load_scenario("clear_curve"), duration_s=2.0)
+    scenario = small_scenario("clear_curve", 2.0)
     env = load(scenario, render_size=SIZE)
     env.reset()
     env_poses, env_offsets = [], []
