@@ -25,10 +25,10 @@ def _run(front: tuple[str, ...]):
 def test_a_sham_of_lanenet_runs_the_lanenet_loop_to_the_bit():
     built_in, steps_a, a = _run(("hough", "sliding_window", "lanenet"))
     sham, steps_b, b = _run(("hough", "sliding_window", "plugins.sham:Sham"))
-    assert list(sham.front) == ["hough", "sliding_window", "sham"]
-    assert np.array_equal(sham.estimator.tracker_configs["sham"].coefficient_r,
-                          built_in.estimator.tracker_configs["lanenet"].coefficient_r)
-    assert np.array_equal(sham.estimator.mmae._prior, built_in.estimator.mmae._prior)
+    assert list(sham.driver.front) == ["hough", "sliding_window", "sham"]
+    assert np.array_equal(sham.driver.estimator.tracker_configs["sham"].coefficient_r,
+                          built_in.driver.estimator.tracker_configs["lanenet"].coefficient_r)
+    assert np.array_equal(sham.driver.estimator.mmae._prior, built_in.driver.estimator.mmae._prior)
     assert b.sources["fused"].rmse_cm == a.sources["fused"].rmse_cm
     assert b.sources["sham:track"].rmse_cm == a.sources["lanenet:track"].rmse_cm
     assert [s.truth_offset_m for s in steps_b] == [s.truth_offset_m for s in steps_a]
@@ -39,5 +39,5 @@ def test_a_sham_of_hough_gets_hough_s_paper_window():
     front = ("plugins.sham:ShamHough", "sliding_window")
     with Episode(_scenario(("hough", "sliding_window"), "paper"), render_size=SIZE) as built_in, \
             Episode(_scenario(front, "paper"), render_size=SIZE) as sham:
-        assert sham.front["sham_hough"].window == built_in.front["hough"].window
-        assert sham.front["sham_hough"].window.x_far_m == 30.0  # paper_mode.PAPER_WINDOWS
+        assert sham.driver.front["sham_hough"].window == built_in.driver.front["hough"].window
+        assert sham.driver.front["sham_hough"].window.x_far_m == 30.0  # paper_mode.PAPER_WINDOWS
