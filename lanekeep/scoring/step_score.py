@@ -10,12 +10,13 @@ from collections.abc import Callable, Mapping
 import numpy as np
 
 from lanekeep.detectors.base import LaneEstimate
+from lanekeep.driver.driver import REFERENCE
 from lanekeep.estimators.lane_estimator import EstimatorOutput
 from lanekeep.geometry.lane_poly import LanePoly
 from lanekeep.scoring.metrics import Metrics
 from lanekeep.scoring.step_truth import StepTruth
 
-FUSED, REFERENCE = "fused", "reference"
+FUSED = "fused"
 TRACK_SUFFIX = ":track"  # a front model's own Kalman track, scored like the fused output
 
 

@@ -11,8 +11,8 @@ from lanekeep.detectors.config import load_config
 from lanekeep.detectors.hough import HoughDetector
 from lanekeep.detectors.lanenet import LaneNetDetector
 from lanekeep.detectors.registry import builtin_family, make_detector
-from lanekeep.geometry.camera_model import CameraModel
 from lanekeep.driver.detection import _batch_key
+from lanekeep.geometry.camera_model import CameraModel
 
 
 def test_a_subclass_of_a_built_in_is_of_its_family():
