@@ -1,6 +1,6 @@
 """What anti-aliasing does to the detectors, same pose for same pose (open loop).
 
-    MUJOCO_GL=egl .venv/bin/python tools/measure_antialiasing.py --workers 2 --every 2
+    MUJOCO_GL=egl python -m lanekeep.tuning.antialiasing --workers 2 --every 2
 
 A closed-loop bench cannot answer this: a different frame steers the car onto another path,
 and the paths' errors differ by more than the renders do. Here each scenario's episode drives
@@ -10,7 +10,8 @@ variant's frames go through the scenario's image effects (the same random number
 variant) and its own detector instances, and each detection is scored against the truth of
 that pose. Seeds are the scenario's seed + `--seed-offset` (default 1000), so the bench's
 scored episodes are not what this measures. Prints each detector's offset RMSE (cm) and valid
-share per variant and scenario, and the render cost per variant.
+share per variant and scenario, and the render cost per variant. tools/measure_antialiasing.py
+runs the same command line from a clone.
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import math
+import sys
 import time
 from concurrent.futures import ProcessPoolExecutor
 
@@ -34,7 +36,6 @@ def _variant_frame(variant: str, rgb: np.ndarray) -> np.ndarray:
 
 def measure(name: str, seed_offset: int, every: int, seconds: float | None) -> dict:
     """{variant: {detector: (rmse_cm, valid_share)}, 'render_ms': {variant: ms}} of one run."""
-    import lanekeep  # noqa: F401 - EGL before mujoco
     from lanekeep.detectors.registry import make_detector
     from lanekeep.loop.episode import Episode
     from lanekeep.scenario.schema import load_scenario
@@ -106,7 +107,7 @@ def measure(name: str, seed_offset: int, every: int, seconds: float | None) -> d
     return out
 
 
-def main() -> None:
+def main(argv: list[str] | None = None) -> int:
     from lanekeep.scenario.schema import shipped_scenarios
 
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
@@ -115,7 +116,7 @@ def main() -> None:
     parser.add_argument("--every", type=int, default=2, help="measure every N-th step")
     parser.add_argument("--seconds", type=float, default=None)
     parser.add_argument("--workers", type=int, default=1)
-    args = parser.parse_args()
+    args = parser.parse_args(argv)
     names = args.scenarios or shipped_scenarios()
     with ProcessPoolExecutor(args.workers) as pool:
         results = dict(zip(names, pool.map(measure, names, [args.seed_offset] * len(names),
@@ -143,7 +144,8 @@ def main() -> None:
     for v in VARIANTS:
         ms = np.mean([r["render_ms"][v] for r in results.values()])
         print(f"render + filter, {v}: {ms:.1f} ms per 1280x720 frame")
+    return 0
 
 
 if __name__ == "__main__":
-    main()
+    sys.exit(main())

@@ -1,21 +1,32 @@
-"""A contact sheet: every scenario's front and rear camera at the start and at mid-drive, on
-one image, to SEE how the world looks (and how it changed) at a glance.
+"""Contact sheet: every scenario's front and rear camera at the start and at mid-drive.
 
-Each tile is the frame the car's camera delivers, with the scenario's image effects, exactly as
-`lanekeep render SCENARIO --at S` writes front.png / rear.png (lanekeep/sensing/snapshot.py's
-machinery: the same world, render settings and effects drawn from the scenario seed), rendered
-at the scenario's size and shrunk to the tile by area averaging. One row per scenario: front
-start, front mid, rear start, rear mid. The car sits on its ego lane's centre, heading along
-the road; "mid-drive" is start.s_m + duration_s * target_speed_mps / 2 (where the car would be
-half way through its episode at its target speed), clipped to the road. Traffic stands where
-it starts (a snapshot does not run time), so mid-drive tiles show the t = 0 traffic.
+    MUJOCO_GL=egl python -m lanekeep.tuning.contact_sheet --out docs/contact_sheet.jpg \\
+        [NAME_OR_TOML ...] [--tile 320x180] [--quality 80] [--real DIR]
 
-An optional row of real frames (`real_row`) is for an image that stays outside the repository:
-real frames are never committed. tools/contact_sheet.py is the command line.
+On one image, to SEE how the world looks (and how it changed) at a glance. A row per scenario
+(default: every shipped one): front start, front mid, rear start, rear mid. Each tile is the
+frame the car's camera delivers, with the scenario's image effects, exactly as `lanekeep render
+SCENARIO --at S` writes front.png / rear.png (lanekeep/sensing/snapshot.py's machinery: the same
+world, render settings and effects drawn from the scenario seed), rendered at the scenario's
+size, shrunk to the tile by area averaging and labelled with the scenario and view. The car
+sits on its ego lane's centre, heading along the road; "mid-drive" is start.s_m + duration_s *
+target_speed_mps / 2 (where the car would be half way through its episode at its target speed),
+clipped to the road. Traffic stands where it starts (a snapshot does not run time), so
+mid-drive tiles show the t = 0 traffic.
+
+`--real DIR` adds a last row of real frames (DIR and its subfolders, e.g. ../shared/real,
+`real_row`) for comparison; such a sheet holds real photos, so it must be written outside any
+git repository (the sheet in docs/ is made without it): real frames are never committed. Bad
+input: one line on stderr, exit 2. tools/contact_sheet.py runs the same command line from a
+clone.
 """
 
 from __future__ import annotations
 
+import argparse
+import re
+import sys
+import time
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -182,3 +193,55 @@ def make_sheet(scenarios: Sequence, tile: tuple[int, int] = (320, 180),
     if real is not None:
         rows.append(real_row(real))
     return layout(rows, tile)
+
+
+def parse_args(argv: list[str] | None) -> argparse.Namespace:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("scenarios", nargs="*", metavar="NAME_OR_TOML",
+                        help="scenario names or .toml paths (default: every shipped scenario)")
+    parser.add_argument("--out", type=Path, required=True, help="the sheet: .jpg, .jpeg or .png")
+    parser.add_argument("--tile", default="320x180", metavar="WxH",
+                        help="size of each tile in pixels (default 320x180)")
+    parser.add_argument("--quality", type=int, default=80, help="JPEG quality 10..100 (80)")
+    parser.add_argument("--real", type=Path, metavar="DIR",
+                        help="add a row of real frames from DIR (output outside any repository)")
+    return parser.parse_args(argv)
+
+
+def check(args: argparse.Namespace) -> tuple[int, int]:
+    """The tile size; raises TuningInputError on any bad argument, before anything renders."""
+    match = re.fullmatch(r"(\d+)x(\d+)", args.tile)
+    if not match or not (16 <= int(match[1]) <= 1280 and 9 <= int(match[2]) <= 720):
+        raise TuningInputError(f"--tile {args.tile}: must be WxH with W in 16..1280 and "
+                               f"H in 9..720, e.g. 320x180")
+    if args.out.suffix.lower() not in IMAGE_SUFFIXES:
+        raise TuningInputError(f"--out {args.out}: must end in .jpg, .jpeg or .png")
+    if not args.out.resolve().parent.is_dir():
+        raise TuningInputError(f"--out {args.out}: its folder does not exist")
+    if not 10 <= args.quality <= 100:
+        raise TuningInputError(f"--quality {args.quality}: must be in 10..100")
+    if args.real is not None and (repo := inside_a_repository(args.out)) is not None:
+        raise TuningInputError(f"--real puts real frames in the sheet: write it outside the "
+                               f"repository {repo}, not to {args.out}")
+    return int(match[1]), int(match[2])
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = parse_args(argv)
+    started = time.perf_counter()
+    try:
+        tile = check(args)
+        scenarios = load_scenarios(args.scenarios)
+        sheet = make_sheet(scenarios, tile, args.real,
+                           progress=lambda name: print(f"rendering {name}", file=sys.stderr))
+        write_sheet(sheet, args.out, args.quality)
+    except TuningInputError as err:
+        print(f"contact_sheet: error: {err}", file=sys.stderr)
+        return 2
+    print(f"wrote {args.out} ({sheet.shape[1]}x{sheet.shape[0]}, {len(scenarios)} scenarios, "
+          f"{time.perf_counter() - started:.0f} s)")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

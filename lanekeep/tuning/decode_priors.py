@@ -1,7 +1,7 @@
 """Choose LaneNet's decoding priors on the simulated validation split, never on the test sets.
 
     python tools/make_dataset.py --out data/lanenet --train 0 --val 24 --test 0   # ~1.5 min
-    python tools/tune_lanenet_decode.py --data data/lanenet
+    python -m lanekeep.tuning.decode_priors --data data/lanenet
 
 The shipped weights run once over every validation sequence (front and rear frames, each
 sequence from a reset state, frames upscaled to 1280x720 as `lanekeep eval` does), on the
@@ -14,7 +14,8 @@ network outputs, and the ego lane is scored by `lanekeep/evaluation/lane_metrics
 ADE at 4-20 m and the offset error (cm), and the share of valid frames. The choice is the
 lowest mean of ADE + offset error over the two copies. Labels are read only to score. The
 validation worlds are disjoint from the training worlds and from `lanekeep eval`'s, so the
-choice is scored afresh there.
+choice is scored afresh there. tools/tune_lanenet_decode.py runs the same command line
+from a clone.
 """
 
 from __future__ import annotations

@@ -1,19 +1,29 @@
-"""Values of one `[estimation]` key compared in the closed loop, on the tuning scenarios.
+"""Compare values of one `[estimation]` key in the closed loop, on the tuning scenarios.
 
-Each scenario runs once per value, full length at the shipped camera size. A choice of the
-estimator's defaults is made here, and the bench then reports it on scenarios it was not
-chosen on. tools/compare_estimation.py is its command line.
+    MUJOCO_GL=egl python -m lanekeep.tuning.estimation output=select,fused
+
+Runs every tuning scenario (lanekeep/tuning/scenario_files/*.toml, which `lanekeep bench` does
+not score) once per value, full length at the shipped camera size, and prints per episode the
+MMAE output's offset RMSE, the best front model's own track (like for like), the car's maximum
+lateral error and the rear reference's RMSE; then per value the mean of (output - best track)
+and the sum of the car maxima. A choice of the estimator's defaults is made here, and the bench
+then reports it on scenarios it was not chosen on. Shipped scenarios are refused (as by
+`python -m lanekeep.tuning.detector_noise`) unless --allow-scored is given.
+
+tools/compare_estimation.py runs the same command line from a clone.
 """
 
 from __future__ import annotations
 
+import argparse
 import dataclasses
+import sys
 from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from statistics import mean
 
 from lanekeep.core.workers import set_thread_counts, worker_pool
-from lanekeep.tuning.scenarios import TuningInputError
+from lanekeep.tuning.scenarios import TuningInputError, select_scenarios
 
 BOOLEANS = {"true": True, "false": False}
 
@@ -112,3 +122,44 @@ def summarise(results: Sequence[EpisodeResult], values: Sequence[str]) -> list[V
                                 sum(r.car_max_cm for r in mine),
                                 max(r.car_max_cm for r in mine)))
     return out
+
+
+def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
+    """The command line; exits 2 on a bad setting or a shipped scenario without
+    --allow-scored."""
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("setting",
+                        help="KEY=VALUE,VALUE... of [estimation] (strings, numbers, true/false)")
+    parser.add_argument("scenarios", nargs="*",
+                        help="scenario names or files (default: every tuning scenario, "
+                             "lanekeep/tuning/scenario_files/)")
+    parser.add_argument("--allow-scored", action="store_true",
+                        help="allow shipped scenarios, which `lanekeep bench` scores")
+    parser.add_argument("--workers", type=int, default=2)
+    args = parser.parse_args(argv)
+    try:
+        args.setting = Setting.parse(args.setting)
+        args.scenarios = select_scenarios(args.scenarios, allow_scored=args.allow_scored)
+    except TuningInputError as err:
+        parser.exit(2, f"error: {err}\n")
+    return args
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = parse_args(argv)
+    setting: Setting = args.setting
+    results = []
+    for r in run_all(args.scenarios, setting, args.workers):
+        results.append(r)
+        print(f"{r.scenario:<36} {r.value:<10} output {r.output_cm:6.3f}  best track "
+              f"{r.best_track_cm:6.3f} ({r.best_model})  car max {r.car_max_cm:5.1f}  "
+              f"reference {r.reference_cm:5.2f}", flush=True)
+    print(f"\nper value of {setting.key} over {len(args.scenarios)} scenarios (cm):")
+    for s in summarise(results, setting.values):
+        print(f"  {s.value:<10} output - best track: mean {s.output_minus_track:+.3f}; "
+              f"car max: sum {s.car_max_sum:.1f}, worst {s.car_max_worst:.1f}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

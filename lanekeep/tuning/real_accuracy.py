@@ -1,7 +1,7 @@
 """Score the detectors on labelled real frames (TuSimple rule), for tuning and validation.
 
-    .venv/bin/python tools/tune_real.py ../shared/real/tusimple_dev [--detector sliding_window]
-    .venv/bin/python tools/tune_real.py ../shared/real/tusimple_dev --detector lanenet
+    python -m lanekeep.tuning.real_accuracy ../shared/real/tusimple_dev [--detector sliding_window]
+    python -m lanekeep.tuning.real_accuracy ../shared/real/tusimple_dev --detector lanenet
 
 A detector that sees every boundary (LaneNet) is scored on all of them, as `lanekeep detect
 --format tusimple` reports them; the classical ones on their ego pair.
@@ -9,7 +9,8 @@ A detector that sees every boundary (LaneNet) is scored on all of them, as `lane
 The folder holds N.jpg and labels/N.txt (one labelled lane a line: "x y x y ..."). Prints per
 frame and mean accuracy over all labelled lanes, and the ego accuracy: the same rule on the two
 labelled lanes that bound the ego lane (nearest left and right of the image centre at their
-lowest labelled row). The photos are never copied anywhere.
+lowest labelled row). The photos are never copied anywhere. tools/tune_real.py runs the same
+command line from a clone.
 """
 
 from __future__ import annotations
@@ -20,7 +21,6 @@ from pathlib import Path
 
 import numpy as np
 
-import lanekeep  # noqa: F401
 from lanekeep.detectors.config import load_config
 from lanekeep.detectors.registry import known_detectors, make_detector
 from lanekeep.detectors.tusimple import estimate_lanes, every_lane, h_samples_for, score_frame
@@ -71,12 +71,12 @@ def ego_lanes(lanes: list[list[int]], h_samples: list[int], centre: float, botto
     return [side[1] for side in (left, right) if side is not None]
 
 
-def main() -> int:
+def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("folder")
     parser.add_argument("--detector", action="append", choices=known_detectors())
     parser.add_argument("--weights", default=None, help="LaneNet weights (default: shipped)")
-    args = parser.parse_args()
+    args = parser.parse_args(argv)
     folder = Path(args.folder)
     config = load_config()
     dash = config.dashcam

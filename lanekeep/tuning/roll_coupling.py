@@ -1,28 +1,45 @@
-"""The body roll compensation's constants (estimators/roll.py), fitted on the tuning curves.
+"""Measure the body roll compensation's constants (estimators/roll.py) on the tuning scenarios.
 
-With the compensation off, by least squares: the roll gradient (the body's true roll against
-the lateral accelerometer's signal, low-passed and clipped as the loop does, `RollFilter`) and,
-per detector, its lever (the offset error, detection minus the true offset at its look-ahead,
-against the true roll, in metres of offset per radian). The truth (roll, offsets) is read here
-only, to calibrate; the loop then uses the accelerometer alone.
+    MUJOCO_GL=egl python -m lanekeep.tuning.roll_coupling [SCENARIO ...]
+
+Runs each scenario (default: the curves of lanekeep/tuning/scenario_files/, which
+`lanekeep bench` does not score; a shipped scenario is refused unless --allow-scored) with the
+compensation off and fits, by least squares,
+
+* the roll gradient: the body's true roll against the lateral accelerometer's signal, low-passed
+  and clipped as the loop does (estimators/roll.py `RollFilter`);
+* per detector, the offset error (detection minus the true offset at its look-ahead) against
+  the true roll: its lever, in metres of offset per radian.
+
+It prints them and the `[estimation]` values: the front lever is the median of the front
+models' levers, the rear one the reference's. The truth (roll, offsets) is read here only,
+to calibrate; the loop then uses the accelerometer alone.
+
+tools/measure_roll_coupling.py runs the same command line from a clone.
 """
 
 from __future__ import annotations
 
+import argparse
 import dataclasses
+import sys
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+
+from lanekeep.tuning.scenarios import TuningInputError, select_scenarios, tuning_dir
 
 CURVES = ("tune_right_curve_r100", "tune_left_curve_r200_rain", "tune_gentle_s_curve_r700_r500",
           "tune_sharp_right_r45")
 CORE_M = 0.5  # an offset error this large is a wild fit, not roll
 
 
-def default_scenarios(tuning_dir: Path) -> list[str]:
-    """The tuning scenarios with curves enough to roll the body: the files of CURVES."""
-    return [str(Path(tuning_dir) / f"{name}.toml") for name in CURVES]
+def default_scenarios(folder: Path | None = None) -> list[str]:
+    """The tuning scenarios with curves enough to roll the body: the files of CURVES in
+    `folder` (by default the tuning scenarios' `tuning_dir()`)."""
+    folder = tuning_dir() if folder is None else Path(folder)
+    return [str(folder / f"{name}.toml") for name in CURVES]
 
 
 def samples(path: str) -> dict[str, list[tuple[float, float, float]]]:
@@ -88,3 +105,36 @@ def roll_gradient_deg(reference_rows: list[tuple[float, float, float]]) -> float
 def front_lever(levers: dict[str, Lever]) -> float:
     """The front models' lever: the median of theirs (every source but the reference)."""
     return float(np.median([v.lever_m_per_rad for k, v in levers.items() if k != "reference"]))
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("scenarios", nargs="*", help="names or files (default: tuning curves)")
+    parser.add_argument("--allow-scored", action="store_true")
+    args = parser.parse_args(argv)
+    try:
+        paths = select_scenarios(args.scenarios or default_scenarios(),
+                                 allow_scored=args.allow_scored)
+    except TuningInputError as err:
+        parser.exit(2, f"error: {err}\n")
+    pooled: dict[str, list] = {}
+    for path in paths:
+        for name, rows in samples(path).items():
+            pooled.setdefault(name, []).extend(rows)
+        print(f"  {Path(path).stem}: done", flush=True)
+    levers = {name: lever(rows) for name, rows in pooled.items()}
+    for name, fit in levers.items():
+        print(f"{name:>16}: lever {fit.lever_m_per_rad:.2f} m/rad "
+              f"({100 * np.radians(fit.lever_m_per_rad):.2f} cm/deg), offset RMS "
+              f"{100 * fit.rms_m:.2f} cm -> {100 * fit.rest_rms_m:.2f} without roll's part; "
+              f"{fit.steps} steps")
+    gradient = roll_gradient_deg(pooled["reference"])
+    front = front_lever(levers)
+    print(f"roll gradient {gradient:.3f} deg per m/s^2\n\n[estimation]")
+    print(f"roll_gradient_deg_per_mps2 = {gradient:.2f}\nroll_lever_front_m = {front:.1f}\n"
+          f"roll_lever_rear_m = {levers['reference'].lever_m_per_rad:.1f}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

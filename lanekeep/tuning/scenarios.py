@@ -1,13 +1,12 @@
-"""Which scenarios a tuning tool may measure on: the tuning scenarios, tools/tuning/*.toml, by
-default; a shipped scenario (scored by `lanekeep bench` at its file's seed) only when asked.
-
-tools/ is not installed: each tool passes the folder of the tuning scenarios beside it in the
-repository (`tuning_dir`), so an installed package serves a clone's tools.
+"""Which scenarios a tuning tool may measure on: the tuning scenarios,
+lanekeep/tuning/scenario_files/*.toml (package data), by default; a shipped scenario (scored by
+`lanekeep bench` at its file's seed) only when asked.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
+from importlib import resources
 from pathlib import Path
 
 from lanekeep.scenario.schema import ScenarioError, load_scenario, shipped_scenarios
@@ -23,22 +22,29 @@ class TuningInputError(Exception):
     """A user error of a tuning tool: its message is one line, the tool exits 2."""
 
 
-def tuning_scenarios(tuning_dir: Path) -> list[Path]:
-    """The tuning scenario files (tools/tuning/*.toml), sorted."""
-    return sorted(Path(tuning_dir).glob("*.toml"))
+def tuning_dir() -> Path:
+    """The folder of the tuning scenarios, lanekeep.tuning.scenario_files, wherever the package
+    is installed (a folder on disk: the tools hand its files to `load_scenario` by path)."""
+    return Path(str(resources.files("lanekeep.tuning.scenario_files")))
 
 
-def select_scenarios(scenarios: Sequence[str], tuning_dir: Path,
+def tuning_scenarios(folder: Path | None = None) -> list[Path]:
+    """The tuning scenario files (`folder`'s *.toml, by default `tuning_dir()`'s), sorted."""
+    return sorted(Path(tuning_dir() if folder is None else folder).glob("*.toml"))
+
+
+def select_scenarios(scenarios: Sequence[str], folder: Path | None = None,
                      allow_scored: bool = False) -> list[str]:
     """The scenario arguments to measure on: `scenarios` as given, or every tuning scenario
-    in `tuning_dir`.
+    in `folder` (by default `tuning_dir()`).
 
     Raises TuningInputError when there are no tuning scenarios, a scenario does not load, or
     one is shipped (by name or file) and `allow_scored` is false.
     """
-    selected = list(scenarios) or [str(path) for path in tuning_scenarios(tuning_dir)]
+    folder = tuning_dir() if folder is None else folder
+    selected = list(scenarios) or [str(path) for path in tuning_scenarios(folder)]
     if not selected:
-        raise TuningInputError(f"no tuning scenarios in {tuning_dir}")
+        raise TuningInputError(f"no tuning scenarios in {folder}")
     shipped = set(shipped_scenarios())
     for arg in selected:
         try:
@@ -47,7 +53,8 @@ def select_scenarios(scenarios: Sequence[str], tuning_dir: Path,
             raise TuningInputError(str(err)) from None
         if (name in shipped or Path(arg).stem in shipped) and not allow_scored:
             raise TuningInputError(f"{arg} is a shipped scenario, scored by `lanekeep bench`: "
-                                   f"tune on tools/tuning/ (or pass --allow-scored)")
+                                   f"tune on lanekeep/tuning/scenario_files/ "
+                                   f"(or pass --allow-scored)")
     return selected
 
 

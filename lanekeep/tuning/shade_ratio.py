@@ -1,6 +1,6 @@
 """Shade/sun luma ratio of the shipped shadow scenarios' front renders, measured exactly.
 
-    MUJOCO_GL=egl .venv/bin/python tools/measure_shade.py [--out DIR]
+    MUJOCO_GL=egl python -m lanekeep.tuning.shade_ratio [--out DIR]
 
 For each (scenario, arc length) pose in POSES: the bare front render (no camera chain, so the
 ratio is the world's, not the exposure's), and the road pixels within 30 m (asphalt between
@@ -8,20 +8,21 @@ the outer lines, paint and 1 px around it left out) that lie at least MARGIN_M i
 exact shadow polygons (`ConditionsInfo.shaded`, the middle of each penumbra) against those at
 least MARGIN_M outside all of them. Prints the mean luma of each and their ratio. Real dashcam
 frames show about 0.26 (the [realism] issue, #44); a sunlit-road tool reading, not a detector
-input: it reads the world's own shadow polygons and the car's pose.
+input: it reads the world's own shadow polygons and the car's pose. tools/measure_shade.py
+runs the same command line from a clone.
 """
 
 from __future__ import annotations
 
 import argparse
 import math
+import sys
 from pathlib import Path
 
 import cv2
 import mujoco
 import numpy as np
 
-import lanekeep  # noqa: F401  (pins the kernels first)
 from lanekeep.scenario.schema import load_scenario
 from lanekeep.sensing.cameras import CameraRig, RenderSettings
 from lanekeep.sensing.snapshot import place_on_road
@@ -90,4 +91,4 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    raise SystemExit(main())
+    sys.exit(main())

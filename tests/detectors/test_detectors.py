@@ -22,6 +22,7 @@ from lanekeep.geometry.lane_poly import LanePoly
 from lanekeep.scenario.schema import load_scenario
 from lanekeep.scoring.truth import lane_truth
 from lanekeep.sensing.cameras import CameraRig
+from lanekeep.tuning.scenarios import tuning_dir
 from lanekeep.world.build import build
 
 OFFSETS_M = (-0.8, -0.4, 0.0, 0.4, 0.8)
@@ -198,7 +199,7 @@ def test_detectors_import_no_mujoco():
 
 
 # -- other vehicles (detectors/vehicle_mask.py, boundaries.plausible) ---------------------------
-VAN_SCENARIO = "tools/tuning/tune_traffic_lead_van_three_lanes.toml"  # unscored: tuning data
+VAN_SCENARIO = tuning_dir() / "tune_traffic_lead_van_three_lanes.toml"  # unscored: tuning data
 
 
 def test_wide_runs_are_dropped_as_a_row_by_row_scan_drops_them():

@@ -1,8 +1,8 @@
-"""The tuning scenarios (tools/tuning/), on which the closed loop's tracker noise is measured,
-and the tuning tools' library (lanekeep/tuning/) and command lines (tools/).
+"""The tuning scenarios (lanekeep/tuning/scenario_files/), on which the closed loop's tracker
+noise is measured, and the tuning tools (lanekeep/tuning/) run by their scripts in tools/.
 
 They must load and build, and stay apart from the shipped scenarios that `lanekeep bench`
-scores; tools/measure_detector_noise.py refuses a shipped one unless told --allow-scored.
+scores; lanekeep.tuning.detector_noise refuses a shipped one unless told --allow-scored.
 """
 
 import subprocess
@@ -19,12 +19,13 @@ from lanekeep.tuning.scenarios import (
     TuningInputError,
     own_seed,
     select_scenarios,
+    tuning_dir,
     tuning_scenarios,
 )
 from lanekeep.world.build import build
 
 TOOLS = Path(__file__).resolve().parents[2] / "tools"
-TUNING_DIR = TOOLS / "tuning"
+TUNING_DIR = tuning_dir()
 TUNING = sorted(TUNING_DIR.glob("*.toml"))
 
 
@@ -55,7 +56,7 @@ def test_tuning_scenarios_are_not_shipped():
 
 
 def test_noise_tool_defaults_to_the_tuning_scenarios():
-    assert tuning_scenarios(TUNING_DIR) == TUNING
+    assert tuning_scenarios(TUNING_DIR) == tuning_scenarios() == TUNING
     assert sorted(Path(a) for a in select_scenarios([], TUNING_DIR)) == TUNING  # not scored
 
 
