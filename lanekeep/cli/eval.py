@@ -1,7 +1,7 @@
 """`lanekeep eval`: every detector on the fixed test sets of every condition; table and JSON.
 
     lanekeep eval [--detectors hough,sliding_window,lanenet] [--weights FILE] [--json FILE]
-                  [--quick] [--cache DIR] [--conditions clear,night,...]
+                  [--quick] [--frames N] [--cache DIR] [--conditions clear,night,...]
 
 Thin: the sets, the scoring loop, the table and the JSON document are
 lanekeep/evaluation/detector_eval.py's (the sets lanekeep/evaluation/eval_sets.py's, the metrics
@@ -13,26 +13,31 @@ be written) is one "lanekeep eval: error:" line and exit 2, before anything is r
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import sys
 
 from lanekeep.cli.outputs import error_line
 from lanekeep.evaluation.detector_eval import DEFAULT_DETECTORS, BadInput, evaluate, table
+from lanekeep.evaluation.eval_sets import EvalRecipe
 
 EXIT_OK, EXIT_BAD_INPUT = 0, 2
 
 
 def cmd_eval(args: argparse.Namespace) -> int:
     from lanekeep.evaluation.detector_eval import eval_document, plan_eval
-    from lanekeep.evaluation.eval_sets import EvalRecipe
     from lanekeep.report.json_io import write_json
 
     try:
+        if args.frames is not None and args.frames < 1:
+            raise BadInput(f"--frames must be at least 1, got {args.frames}")
         plan = plan_eval(args.detectors, args.conditions, args.weights, args.json, args.cache)
     except BadInput as err:
         if getattr(args, "debug", False):
             raise
         return error_line("eval", err)
     recipe = EvalRecipe.quick() if args.quick else EvalRecipe()
+    if args.frames is not None:
+        recipe = dataclasses.replace(recipe, frames=args.frames)
     results = evaluate(plan.conditions, plan.detectors, plan.weights, recipe, args.cache or None,
                        progress=lambda m: print(m, file=sys.stderr, flush=True))
     print(table(results))
@@ -59,6 +64,10 @@ def register(subparsers) -> None:
     p.add_argument("--json", metavar="FILE", default=None, help="write the results as JSON")
     p.add_argument("--quick", action="store_true",
                    help="one world and one sequence per condition (tests, smoke runs)")
+    p.add_argument("--frames", type=int, metavar="N", default=None,
+                   help=f"frames per sequence (default {EvalRecipe.frames}); each detector keeps "
+                        "its state across a sequence, so longer ones let LaneNet's recurrent "
+                        "part matter (sets of another length are other sets)")
     p.add_argument("--cache", metavar="DIR", default="out/eval_cache",
                    help="folder of rendered sets (default out/eval_cache; '' = no cache)")
     p.set_defaults(func=cmd_eval)
