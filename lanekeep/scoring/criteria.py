@@ -100,8 +100,9 @@ def for_run(config: CriteriaConfig, overrides: dict | None, full_length: bool
     """The criteria a run is judged by: the file's with the command line's in place, less the
     file's fused RMSE limit when the run is cut short on purpose (`full_length` False:
     `--seconds` below the scenario's duration). That limit is calibrated on whole episodes
-    (tools/calibrate_criteria.py), and the first seconds, while the trackers settle, weigh far
-    more in a short run. A limit given on the command line is judged whatever the length."""
+    (`python -m lanekeep.tuning.criteria_calibration`), and the first seconds, while the
+    trackers settle, weigh far more in a short run. A limit given on the command line is judged
+    whatever the length."""
     judged = with_overrides(config, overrides)
     if not full_length and "max_fused_rmse_m" not in (overrides or {}):
         judged = dataclasses.replace(judged, max_fused_rmse_m=None)
