@@ -23,6 +23,14 @@ simulated validation split, never on real photos):
 
 A JSON-lines log (one line per epoch: losses, validation scores, alpha, seconds) goes beside
 the weights; the weights file carries the same figures in its metadata.
+
+`--clip K` cuts every stored sequence into pieces of K frames, each trained from a zero state
+(`--clip 1`: frame by frame, the ablation without the temporal part; both see the same frames).
+Validation always runs the whole stored sequences, as the detector runs a drive.
+
+After every epoch the whole training state (weights, optimiser, schedule, random generators,
+best epoch so far) goes to OUT with `.ckpt` before its suffix; `--resume` goes on from there, so
+a long run may be stopped and restarted (the same arguments give the same weights either way).
 """
 
 from __future__ import annotations
@@ -132,6 +140,29 @@ def point_accuracy(obj_logits: torch.Tensor, x_offset: torch.Tensor, slot_logits
             float((hit & slot_right & ego).sum() / ego.sum().clamp(min=1)))
 
 
+def cut_clips(data: dict, clip: int) -> dict:
+    """Every sequence of T frames as T // clip sequences of `clip` frames (per-sequence arrays
+    repeated), so that each piece starts from a zero state."""
+    t = data["frames"].shape[1]
+    if clip <= 0 or clip >= t:
+        return data
+    if t % clip:
+        raise SystemExit(f"--clip {clip} does not divide the stored {t} frames")
+    pieces = t // clip
+    out = {}
+    for k, v in data.items():
+        if v.ndim >= 2 and v.shape[1] == t and k not in ("camera",):
+            out[k] = v.reshape(v.shape[0] * pieces, clip, *v.shape[2:])
+        else:
+            out[k] = np.repeat(v, pieces, axis=0)
+    return out
+
+
+def checkpoint_path(out: str | Path) -> Path:
+    p = Path(out)
+    return p.with_name(p.stem + ".ckpt" + p.suffix)
+
+
 def to_tensors(targets: dict[str, np.ndarray], idx: np.ndarray) -> dict[str, torch.Tensor]:
     return {k: torch.from_numpy(v[idx]) for k, v in targets.items()}
 
@@ -168,6 +199,10 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--limit", type=int, default=0, help="use only N training sequences")
     parser.add_argument("--occlusion", type=float, default=0.0,
                         help="share of training sequences given occluders (default 0: none)")
+    parser.add_argument("--clip", type=int, default=0,
+                        help="train on pieces of K frames (1: frame by frame; default: whole)")
+    parser.add_argument("--resume", action="store_true",
+                        help="go on from the checkpoint beside --out")
     args = parser.parse_args(argv)
     from tqdm import tqdm
 
@@ -178,13 +213,15 @@ def main(argv: list[str] | None = None) -> int:
     train, val = load_split(Path(args.data), "train"), load_split(Path(args.data), "val")
     if args.limit:
         train = {k: v[:args.limit] for k, v in train.items()}
+    stored_frames = train["frames"].shape[1]
+    train = cut_clips(train, args.clip)
     config = LaneNetConfig()
     rows, cols = config.grid
     grid = CellGrid(LABEL_WIDTH, LABEL_HEIGHT, rows, cols)
     targets = [targets_of(train, grid, flip=False), targets_of(train, grid, flip=True)]
     val_targets = targets_of(val, grid, flip=False)
     print(f"data: {len(train['frames'])} training sequences of {train['frames'].shape[1]} "
-          f"frames, {len(val['frames'])} validation; targets in "
+          f"frames (stored {stored_frames}), {len(val['frames'])} validation; targets in "
           f"{time.perf_counter() - start:.0f} s", file=sys.stderr)
 
     model = LaneNet(config, seed=args.seed)
@@ -196,10 +233,28 @@ def main(argv: list[str] | None = None) -> int:
     rng = np.random.default_rng(args.seed)
     log_path = Path(args.out).with_suffix(".log.jsonl")
     Path(args.out).parent.mkdir(parents=True, exist_ok=True)
-    log_path.write_text("")
     best: dict | None = None
+    first_epoch = 0
+    ckpt = checkpoint_path(args.out)
+    fixed = {k: getattr(args, k) for k in ("data", "epochs", "batch", "lr", "seed", "limit",
+                                            "occlusion", "clip")}
+    if args.resume and ckpt.is_file():
+        state = torch.load(str(ckpt), map_location="cpu", weights_only=True)
+        if state.get("args") != fixed:
+            changed = sorted(k for k in fixed if state.get("args", {}).get(k) != fixed[k])
+            raise SystemExit(f"train_lanenet: error: --resume with other arguments than the "
+                             f"checkpoint's ({', '.join(changed)}): {ckpt}")
+        model.load_state_dict(state["model"])
+        opt.load_state_dict(state["opt"])
+        sched.load_state_dict(state["sched"])
+        gen.set_state(state["gen"])
+        rng.bit_generator.state = state["rng"]
+        best, first_epoch = state["best"], state["epoch"]
+        print(f"resumed after epoch {first_epoch} ({ckpt})", file=sys.stderr)
+    else:
+        log_path.write_text("")
     weights = LossWeights()
-    for epoch in range(args.epochs):
+    for epoch in range(first_epoch, args.epochs):
         model.train()
         order = rng.permutation(len(train["frames"]))
         flips = rng.random(len(order)) < 0.5
@@ -247,6 +302,12 @@ def main(argv: list[str] | None = None) -> int:
                     "command": " ".join(["python tools/train_lanenet.py", *(argv or sys.argv[1:])]),
                     "chosen": row, "architecture": architecture_summary(model)}
             save_weights(model, args.out, meta)
+        tmp = ckpt.with_suffix(".tmp")
+        torch.save({"model": model.state_dict(), "opt": opt.state_dict(),
+                    "sched": sched.state_dict(), "gen": gen.get_state(),
+                    "rng": rng.bit_generator.state, "best": best, "epoch": epoch + 1,
+                    "args": fixed}, str(tmp))
+        tmp.replace(ckpt)
     total = time.perf_counter() - start
     print(json.dumps({"weights": args.out, "wall_s": round(total), "best_epoch": best["epoch"],
                       "val_point_acc": best["val_point_acc"], "val_ego_acc": best["val_ego_acc"]}))
