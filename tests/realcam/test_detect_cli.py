@@ -6,6 +6,7 @@ import json
 import cv2
 import numpy as np
 import pytest
+from cli.error_lines import one_error_line  # tests/ is on sys.path
 
 import lanekeep  # noqa: F401
 from lanekeep.cli import detect as cli_detect
@@ -121,14 +122,7 @@ DAMAGED = ["truncated jpeg", "truncated png", "zero-padded cut jpeg", "cut jpeg 
            "corrupt jpeg", "corrupt png", "empty", "text named .jpg", "missing"]
 
 
-def _one_error_line(err: str, *words: str) -> str:
-    lines = err.strip().splitlines()
-    assert len(lines) == 1, err
-    assert "Traceback" not in err
-    assert lines[0].startswith("lanekeep detect: error: ")
-    for w in words:
-        assert w in lines[0], (w, lines[0])
-    return lines[0]
+detect_error_line = partial(one_error_line, start="lanekeep detect: error: ")
 
 
 @pytest.mark.parametrize("case", DAMAGED)
@@ -136,10 +130,7 @@ def test_damaged_image_is_one_error_line_exit_2_and_no_output(tmp_path, capsys, 
     path, words = _damaged(tmp_path, case)
     overlay = tmp_path / "ov"
     code = _run(["detect", str(path), "--detector", "hough", "--overlay", str(overlay)])
-    out, err = capsys.readouterr()
-    assert code == 2
-    assert out == ""
-    _one_error_line(err, str(path), words)
+    detect_error_line(capsys, code, str(path), words)
     assert not overlay.exists()
 
 
@@ -149,10 +140,7 @@ def test_truncated_jpeg_through_main_prints_only_one_line_at_fd_level(tmp_path, 
 
     for case in ("truncated jpeg", "corrupt jpeg", "truncated png"):
         path, words = _damaged(tmp_path, case)
-        assert main(["detect", str(path)]) == 2
-        out, err = capfd.readouterr()
-        assert out == ""
-        _one_error_line(err, str(path), words)
+        detect_error_line(capfd, main(["detect", str(path)]), str(path), words)
 
 
 def test_debug_lets_the_image_error_through(tmp_path):
@@ -193,9 +181,7 @@ def test_image_of_another_size_than_the_camera_file_is_rejected(tmp_path, capsys
     small = tmp_path / "small.png"
     cv2.imwrite(str(small), cv2.resize(_synthetic_dashcam_frame(), (640, 360)))
     code = _run(["detect", str(small), "--camera", str(camera)])
-    out, err = capsys.readouterr()
-    assert code == 2 and out == ""
-    _one_error_line(err, str(small), "640x360", "1280x720", str(camera))
+    detect_error_line(capsys, code, str(small), "640x360", "1280x720", str(camera))
 
 
 @pytest.mark.parametrize("where", ["below a file", "is a file"])
@@ -206,10 +192,7 @@ def test_unwritable_overlay_folder_is_found_before_detection(tmp_path, capsys, w
     blocker.write_text("a regular file\n")
     overlay = blocker / "ov" if where == "below a file" else blocker
     code = _run(["detect", str(frame), "--overlay", str(overlay)])
-    out, err = capsys.readouterr()
-    assert code == 2
-    assert out == ""  # checked before any detection ran
-    _one_error_line(err, str(overlay))
+    detect_error_line(capsys, code, str(overlay))  # before any detection ran: no output
     assert blocker.read_text() == "a regular file\n"
 
 
@@ -220,14 +203,10 @@ def test_overlays_that_would_overwrite_each_other_are_rejected(tmp_path, capsys)
         cv2.imwrite(str(tmp_path / d / "road.png"), _synthetic_dashcam_frame())
     code = _run(["detect", str(tmp_path / "a" / "road.png"), str(tmp_path / "b" / "road.png"),
                  "--overlay", str(tmp_path / "ov")])
-    out, err = capsys.readouterr()
-    assert code == 2 and out == ""
-    _one_error_line(err, str(tmp_path / "b" / "road.png"), "would overwrite")
+    detect_error_line(capsys, code, str(tmp_path / "b" / "road.png"), "would overwrite")
     # ... and an overlay folder holding the input would overwrite the photo itself.
     code = _run(["detect", str(tmp_path / "a" / "road.png"), "--overlay", str(tmp_path / "a")])
-    out, err = capsys.readouterr()
-    assert code == 2 and out == ""
-    _one_error_line(err, "would overwrite the image itself")
+    detect_error_line(capsys, code, "would overwrite the image itself")
 
 
 def test_good_jpeg_with_camera_file_and_trailing_bytes_works(tmp_path, capsys):
