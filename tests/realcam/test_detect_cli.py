@@ -2,6 +2,7 @@
 
 import argparse
 import json
+from functools import partial
 
 import cv2
 import numpy as np
