@@ -1,5 +1,5 @@
 """The estimator's settings, defined once: `LaneEstimator` reads them, and a scenario's
-`[estimation]` table is this dataclass plus the loop's own keys (lanekeep/scenario/schema.py
+`[estimation]` table is this dataclass plus the loop's own keys (lanekeep/scenario/estimation.py
 `EstimationConfig` extends it), so an estimator built on its own runs the loop an `Episode`
 runs. Paper mode (lanekeep/driver/paper_mode.py) overrides the choices the paper makes otherwise.
 

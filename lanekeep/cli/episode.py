@@ -47,7 +47,8 @@ from lanekeep.report.tables import (
     single_model_table,
     summary_table,
 )
-from lanekeep.scenario.schema import ESTIMATION_MODES, Scenario
+from lanekeep.scenario.estimation import ESTIMATION_MODES
+from lanekeep.scenario.schema import Scenario
 from lanekeep.scoring import criteria as criteria_mod
 from lanekeep.tuning.scenarios import TUNING_SEEDS_START
 

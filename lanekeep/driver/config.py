@@ -22,7 +22,7 @@ from lanekeep.estimators.lane_estimator import EstimatorSettings
 from lanekeep.estimators.roll import RollCompensation
 from lanekeep.geometry.camera_model import CameraModel
 from lanekeep.geometry.car import CarGeometry
-from lanekeep.scenario.schema import EstimationConfig
+from lanekeep.scenario.estimation import EstimationConfig
 
 
 @dataclass(frozen=True)

@@ -27,7 +27,7 @@ from dataclasses import replace
 from lanekeep.detectors.config import DetectorsConfig, load_config
 from lanekeep.estimators.lane_estimator import EstimatorSettings
 from lanekeep.estimators.roll import RollCompensation
-from lanekeep.scenario.schema import EstimationConfig
+from lanekeep.scenario.estimation import EstimationConfig
 
 # Front ground windows (x_near_m, x_far_m, y_half_m) of the paper's two models. Model #2's
 # 4-12 m x +-3 m holds the ego lane's two boundaries (+-1.85 m) on a straight, and loses the

@@ -24,17 +24,11 @@ import numpy as np
 
 from lanekeep.geometry.markings import MarkingStyle
 from lanekeep.geometry.road import SegmentSpec
+from lanekeep.scenario.camera import CameraConfig
+from lanekeep.scenario.conditions import Conditions, ShadowZone, VehicleSpec
+from lanekeep.scenario.road import RoadConfig, StartConfig
 from lanekeep.scenario.roadside import Roadside
-from lanekeep.scenario.schema import (
-    CameraConfig,
-    Conditions,
-    RoadConfig,
-    Scenario,
-    ScenarioError,
-    ShadowZone,
-    StartConfig,
-    VehicleSpec,
-)
+from lanekeep.scenario.schema import Scenario, ScenarioError
 from lanekeep.world.camera_mount import DASHCAM_HFOV_DEG
 
 NOMINAL_FRONT_PITCH_DEG = 10.0  # mjcf/car.xml: the front camera looks 10 deg up

@@ -47,7 +47,8 @@ from lanekeep.evaluation.dataset import DatasetRecipe, camera_from_vector, rende
 from lanekeep.evaluation.dataset_world import ROAD_LENGTH_M, random_scenario
 from lanekeep.geometry.markings import MarkingStyle
 from lanekeep.geometry.road import SegmentSpec
-from lanekeep.scenario.schema import Scenario, ScenarioError, ShadowZone
+from lanekeep.scenario.conditions import ShadowZone
+from lanekeep.scenario.schema import Scenario, ScenarioError
 
 EVAL_NAMESPACE = 0xE7A1
 FORMAT = "lanekeep-eval-set/1"

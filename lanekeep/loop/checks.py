@@ -2,7 +2,7 @@
 milliseconds before anything runs or any file is written. `check_scenario` is what `lanekeep
 run`, `bench`, `perf`, a sweep's and a falsification's every parameter value
 (lanekeep/sweep/spec.py `check_world`) and each sweep cell call; it adds to the checks of
-reading the file (each field's range, lanekeep/scenario/schema.py) the world's cross-field
+reading the file (each field's range, lanekeep/scenario/*.py) the world's cross-field
 checks (lanekeep/world/build.py `check_buildable`), the detector and controller names and a
 `seconds` of at least one step. `check_weights_option` adds the weights files the learned
 detectors load."""

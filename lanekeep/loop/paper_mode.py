@@ -7,7 +7,8 @@ from __future__ import annotations
 
 from dataclasses import replace
 
-from lanekeep.scenario.schema import DEFAULT_FRONT_DETECTORS, Scenario
+from lanekeep.scenario.estimation import DEFAULT_FRONT_DETECTORS
+from lanekeep.scenario.schema import Scenario
 
 
 def with_mode(scenario: Scenario, mode: str | None) -> Scenario:

@@ -17,12 +17,8 @@ import tomllib
 import typing
 from typing import Any
 
-from lanekeep.scenario.schema import (
-    DEFAULT_FRONT_DETECTORS,
-    Scenario,
-    ScenarioError,
-    scenario_from_dict,
-)
+from lanekeep.scenario.estimation import DEFAULT_FRONT_DETECTORS
+from lanekeep.scenario.schema import Scenario, ScenarioError, scenario_from_dict
 
 _TOKEN = re.compile(r"([A-Za-z_][A-Za-z0-9_]*)((?:\[\d+\])*)")
 

@@ -13,7 +13,7 @@ SURFACES = ("asphalt", "concrete")
 @dataclass(frozen=True)
 class PavementStyle:
     """How the carriageway is surfaced. Densities are 0 (none) .. 1 (a road overdue for repair).
-    A scenario holds these keys in `[road]` (lanekeep/scenario/schema.py `RoadConfig`, whose
+    A scenario holds these keys in `[road]` (lanekeep/scenario/road.py `RoadConfig`, whose
     fields are these)."""
 
     surface: str = setting("asphalt", "Pavement material (concrete: light grey slabs with "

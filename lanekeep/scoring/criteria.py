@@ -1,5 +1,5 @@
 """Pass/fail judgement of an episode: a scenario's `[criteria]`
-(lanekeep.scenario.schema.CriteriaConfig),
+(lanekeep.scenario.criteria.CriteriaConfig),
 overridden by `run` / `bench` options, against its report.
 
 Why: a CI job needs an exit code, not a table to read. Each limit is optional (None = not
@@ -17,7 +17,7 @@ import dataclasses
 import math
 
 from lanekeep.core.config_io import ConfigError, InvalidValue
-from lanekeep.scenario.schema import CriteriaConfig
+from lanekeep.scenario.criteria import CriteriaConfig
 from lanekeep.scoring.metrics import EpisodeReport, Verdict
 
 # Command-line option -> CriteriaConfig field (the options override the scenario file's table).

@@ -18,7 +18,7 @@ import numpy as np
 
 from lanekeep.core.busy import all_cores_busy
 from lanekeep.geometry.lens import Lens, is_distorted
-from lanekeep.scenario.schema import CameraConfig
+from lanekeep.scenario.camera import CameraConfig
 from lanekeep.sensing.gl_backend import RendererUnavailable
 from lanekeep.sensing.weather import needs_depth
 from lanekeep.world.camera_mount import camera_from_model
@@ -33,7 +33,7 @@ from lanekeep.world.groups import (
 @dataclass(frozen=True)
 class RenderSettings:
     """What the renderer draws. The image size, shadows and hood default to the scenario's
-    `[camera]` defaults (lanekeep/scenario/schema.py `CameraConfig`, their one definition):
+    `[camera]` defaults (lanekeep/scenario/camera.py `CameraConfig`, their one definition):
     a rig built without a scenario renders what a default scenario's does."""
 
     width: int = CameraConfig.width

@@ -15,7 +15,7 @@ import numpy as np
 
 from lanekeep.geometry.camera_model import CameraModel
 from lanekeep.mjcf import SCENE_XML
-from lanekeep.scenario.schema import CameraConfig
+from lanekeep.scenario.camera import CameraConfig
 from lanekeep.sensing.cameras import CameraRig, RenderSettings
 
 

@@ -18,7 +18,8 @@ from __future__ import annotations
 import numpy as np
 
 from lanekeep.geometry.camera_model import CameraModel
-from lanekeep.scenario.schema import CameraConfig, Conditions
+from lanekeep.scenario.camera import CameraConfig
+from lanekeep.scenario.conditions import Conditions
 from lanekeep.sensing.camera_sensor import CameraSensor
 from lanekeep.sensing.paint_visibility import visible_paint
 from lanekeep.sensing.weather import DEPTH_STEP_PX, Weather, needs_depth

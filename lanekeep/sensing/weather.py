@@ -42,7 +42,7 @@ import cv2
 import numpy as np
 
 from lanekeep.geometry.camera_model import CameraModel
-from lanekeep.scenario.schema import Conditions
+from lanekeep.scenario.conditions import Conditions
 from lanekeep.world.lighting import fog_visibility_m
 
 DEPTH_STEP_PX = 4  # the depth map is read at a quarter of the image resolution

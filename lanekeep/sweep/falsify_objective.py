@@ -26,7 +26,7 @@ from dataclasses import fields
 from typing import Any
 
 from lanekeep.core.config_io import InvalidValue
-from lanekeep.scenario.schema import CriteriaConfig
+from lanekeep.scenario.criteria import CriteriaConfig
 from lanekeep.sweep.fields import SweepError
 
 OBJECTIVE_KEYS = tuple(f.name for f in fields(CriteriaConfig))

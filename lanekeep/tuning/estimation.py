@@ -47,7 +47,7 @@ class Setting:
     def parse(cls, text: str) -> Setting:
         """`KEY=VALUE,VALUE...`; TuningInputError if the key is not one of `[estimation]` or a
         value is not of its type."""
-        from lanekeep.scenario.schema import EstimationConfig
+        from lanekeep.scenario.estimation import EstimationConfig
 
         key, _, values = text.partition("=")
         if key not in {f.name for f in dataclasses.fields(EstimationConfig)} or not values:

@@ -14,7 +14,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from lanekeep.geometry.road import Road
-from lanekeep.scenario.schema import Conditions, Scenario
+from lanekeep.scenario.conditions import Conditions
+from lanekeep.scenario.schema import Scenario
 from lanekeep.world.lighting import (
     CLEAR_SKY_CLOUDS,
     FOG_END_OF_VISIBILITY,

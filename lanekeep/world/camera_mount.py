@@ -1,7 +1,7 @@
 """The onboard cameras of a compiled model: re-mounted (height, pitch, roll, yaw and field of
 view) and read back as pinhole camera models.
 
-The scenario's `[camera]` mounting keys (lanekeep/scenario/schema.py CameraConfig) change the
+The scenario's `[camera]` mounting keys (lanekeep/scenario/camera.py CameraConfig) change the
 car's own cameras (mjcf/car.xml) after compilation, in `model.cam_pos`, `cam_quat` and
 `cam_fovy`. Everything that projects (`camera_from_model`, so the detectors and the dataset's
 labels) reads those fields, so render and projection agree for any mounting.
@@ -26,7 +26,7 @@ import mujoco
 import numpy as np
 
 from lanekeep.geometry.camera_model import CameraModel
-from lanekeep.scenario.schema import CameraConfig
+from lanekeep.scenario.camera import CameraConfig
 
 ONBOARD_CAMERAS = ("front", "rear")
 

@@ -18,7 +18,7 @@ import mujoco
 import numpy as np
 
 from lanekeep.geometry.road import Road
-from lanekeep.scenario.schema import Conditions
+from lanekeep.scenario.conditions import Conditions
 
 # A clear day's sky, zenith and horizon: a mid blue, not a saturated one, over a pale hazy band
 # (real dashcam skies are washed out; the bright band at the horizon is the air's haze).

@@ -12,7 +12,7 @@ import numpy as np
 
 from lanekeep.geometry.road import Road
 from lanekeep.geometry.road_mesh import Ribbon
-from lanekeep.scenario.schema import Conditions, ShadowZone
+from lanekeep.scenario.conditions import Conditions, ShadowZone
 from lanekeep.world import prop_assets as assets
 from lanekeep.world import textures
 from lanekeep.world.appearance import SNOW_TEXTURE

@@ -43,7 +43,7 @@ import cv2
 import mujoco
 import numpy as np
 
-from lanekeep.scenario.schema import Conditions
+from lanekeep.scenario.conditions import Conditions
 from lanekeep.world.groups import GROUP_SHADOW
 from lanekeep.world.lighting import LIGHTING, SKY_SCATTER, direct_sun_share
 from lanekeep.world.parts import OVERLAY_Z_M, add_mesh_geom

@@ -16,7 +16,7 @@ import numpy as np
 
 from lanekeep.geometry.road import Road
 from lanekeep.geometry.road_mesh import Ribbon
-from lanekeep.scenario.schema import Conditions
+from lanekeep.scenario.conditions import Conditions
 from lanekeep.world.groups import GROUP_SHADOW, GROUP_WORLD
 from lanekeep.world.parts import MARKING_Z_M, OVERLAY_Z_M, WorldLayout, add_mesh_geom
 

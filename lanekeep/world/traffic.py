@@ -28,7 +28,7 @@ import numpy as np
 
 from lanekeep.geometry.road import Road
 from lanekeep.geometry.road_mesh import Ribbon
-from lanekeep.scenario.schema import VehicleSpec
+from lanekeep.scenario.conditions import VehicleSpec
 from lanekeep.world.groups import GROUP_SHADOW, GROUP_WORLD
 from lanekeep.world.parts import (
     OVERLAY_Z_M,

@@ -15,7 +15,8 @@ from __future__ import annotations
 import numpy as np
 
 from lanekeep.geometry.road import Road
-from lanekeep.scenario.schema import Scenario, VehicleSpec
+from lanekeep.scenario.conditions import VehicleSpec
+from lanekeep.scenario.schema import Scenario
 from lanekeep.scenario.streams import stream_entropy
 
 TRAFFIC_STREAM = 0x7AF1C  # the traffic's own generator: stream_entropy(scenario, this)

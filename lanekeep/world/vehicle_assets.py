@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from lanekeep.scenario.schema import VehicleSpec
+from lanekeep.scenario.conditions import VehicleSpec
 
 Vec3 = tuple[float, float, float]
 Quat = tuple[float, float, float, float]

@@ -1,0 +1,78 @@
+"""The `[estimation]` table of a scenario: which detectors run, the MMAE's reference, how the
+output is formed, and the estimation modes' default front detectors.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+from lanekeep.core.config_io import InvalidValue
+from lanekeep.core.setting import setting
+from lanekeep.estimators.settings import EstimatorSettings
+
+ESTIMATION_MODES = ("default", "paper")
+CAMERAS = ("front", "rear")
+# The front models of each estimation mode when a scenario names none: our loop adds the
+# learned model (detectors/lanenet.py) to the paper's two classical ones; the paper's loop
+# keeps its two.
+DEFAULT_FRONT_DETECTORS = {"default": ("hough", "sliding_window", "lanenet"),
+                           "paper": ("hough", "sliding_window")}
+
+
+@dataclass(frozen=True)
+class EstimationConfig(EstimatorSettings):
+    """Which detectors run, which one is the MMAE reference, and how the output is formed.
+
+    The estimator's own keys (residual_mode, output, model_lane, mmae_prior, ...) and their
+    defaults are `EstimatorSettings`' (estimators/settings.py), defined once; the keys below
+    are the loop's. The paper runs two front models and a rear-camera reference; residuals
+    compare the reference with the models one step earlier (eq. 2) or, our default, at the
+    same road position.
+    """
+
+    # "paper": the paper's own loop (lanekeep/driver/paper_mode.py): one-step-delay residuals, the
+    # selected model's detection at its nearest row into eq. 9 with Table 2's gain shape and no
+    # feed-forward, model #1 long range and model #2 short range. It overrides residual_mode,
+    # model_lane, mmae_prior and the front windows; "default" is our loop with its improvements.
+    mode: str = setting("default", "default = our loop; paper = the paper's own loop (overrides "
+                        "residual_mode, model_lane and the front windows).",
+                        choices=ESTIMATION_MODES)
+    # None: the mode's own (DEFAULT_FRONT_DETECTORS), filled in at construction.
+    front_detectors: tuple[str, ...] | None = setting(
+        None, "The MMAE's models, front camera, in order. Not set: the mode's own, hough, "
+        "sliding_window and lanenet (default) or the paper's hough and sliding_window (paper).",
+        allowed="registered names, package.module:Class, entry points")
+    # The learned detector on the rear camera, as the paper's reference is a learned one
+    # (CLRNet); model #2 ("sliding_window") there errs with front model #2 and fails in traffic.
+    reference_detector: str = setting("lanenet", "The MMAE's reference (the paper's observer).",
+                                      allowed="as front_detectors")
+    reference_camera: str = setting("rear", "Camera the reference detector looks through.",
+                                    choices=CAMERAS)
+    control_lookahead_m: float = setting(8.0, "Where the controller reads the chosen lane.",
+                                         bounds=(0.0, 40.0))
+    # Body roll compensation (estimators/roll.py; default mode only): the car's roll per m/s^2
+    # of lateral acceleration (a suspension constant; 0 turns it off) and each camera's offset
+    # error per radian of roll, both measured by tools/measure_roll_coupling.py on the tuning
+    # scenarios.
+    roll_gradient_deg_per_mps2: float = setting(0.71, "The car's body roll per m/s^2 of lateral "
+                                                "acceleration, with which each camera's lane is "
+                                                "corrected for roll from the lateral "
+                                                "accelerometer (default mode; 0 = off).",
+                                                unit="deg/(m/s^2)", bounds=(0.0, 5.0))
+    roll_lever_front_m: float = setting(2.4, "Front camera's offset error per radian of body "
+                                        "roll.", bounds=(-10.0, 10.0))
+    roll_lever_rear_m: float = setting(2.5, "Rear camera's offset error per radian of body roll.",
+                                       bounds=(-10.0, 10.0))
+
+    def __post_init__(self):
+        super().__post_init__()  # the estimator's checks, and every field's bounds and choices
+        if self.front_detectors is None:
+            object.__setattr__(self, "front_detectors", DEFAULT_FRONT_DETECTORS[self.mode])
+        if not self.front_detectors:
+            raise InvalidValue("front_detectors", "at least one front detector is needed")
+
+    def estimator_settings(self) -> EstimatorSettings:
+        """The estimator's part of this table, as the estimator's own type."""
+        return EstimatorSettings(**{f.name: getattr(self, f.name)
+                                    for f in dataclasses.fields(EstimatorSettings)})
