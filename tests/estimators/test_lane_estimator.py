@@ -133,7 +133,7 @@ def test_paper_settings_hand_on_the_selected_detection_at_its_own_row():
     """Paper mode's PID input is the selected model's detection as the detector reported it
     (offset and look-ahead), even when its track's gate rejects it; the MMAE compares every
     offset at the car (x = 0), the reference's too."""
-    from lanekeep.loop.paper_mode import estimator_settings
+    from lanekeep.driver.paper_mode import estimator_settings
     from lanekeep.scenario.schema import EstimationConfig
 
     settings = estimator_settings(EstimationConfig(mode="paper"))
@@ -203,7 +203,7 @@ def test_precision_output_equals_a_direct_computation():
 
 def test_the_reference_noise_setting_reaches_the_mmae():
     """Eq. 8's R comes from the scenario: a noisier reference moves the probabilities less."""
-    from lanekeep.loop.paper_mode import estimator_settings
+    from lanekeep.driver.paper_mode import estimator_settings
     from lanekeep.scenario.schema import EstimationConfig
 
     spreads = []
@@ -264,7 +264,7 @@ def test_a_reference_that_reads_a_lane_of_the_wrong_width_is_taken_as_missed():
 
 
 def test_the_reference_width_tolerance_is_a_scenario_setting_paper_mode_leaves_out():
-    from lanekeep.loop.paper_mode import estimator_settings
+    from lanekeep.driver.paper_mode import estimator_settings
     from lanekeep.scenario.schema import EstimationConfig, InvalidValue
 
     assert estimator_settings(EstimationConfig()).reference_width_tolerance_m == 0.2
@@ -287,7 +287,7 @@ def test_a_misspelt_estimator_choice_is_refused_not_taken_for_another():
 def test_an_estimator_built_on_its_own_runs_the_loop_an_episode_runs():
     """One definition of the settings: the scenario's [estimation] defaults are the
     estimator's own, so `EstimatorSettings()` is what a default Episode runs."""
-    from lanekeep.loop.paper_mode import estimator_settings
+    from lanekeep.driver.paper_mode import estimator_settings
     from lanekeep.scenario.schema import EstimationConfig
 
     assert EstimationConfig().estimator_settings() == EstimatorSettings()
