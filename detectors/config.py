@@ -1,15 +1,21 @@
-"""Tuned numbers of the classical detectors: frozen dataclasses read from `detectors.toml`.
+"""Tuned numbers of the classical detectors: frozen dataclasses, overridable from TOML.
 
-Every threshold and window size lives in the shipped TOML (detectors/detectors.toml), and
-the dataclass defaults are the same tuned values (a test holds them equal), so
-`DetectorsConfig()` and a partial TOML file are tuned too. Loading is strict (unknown keys
-raise, naming the key), as for scenario files.
+Each setting is defined once, here: its default is the tuned value, with a comment saying what
+it is and, for a tuned or measured number, where it came from. The shipped
+detectors/detectors.toml holds overrides of these defaults only (none today), and so does a
+user's file (`lanekeep detect --config`, `python -m lanekeep.tuning.detector_replay score
+--config`): a key it leaves out keeps the default. Loading is strict (unknown keys raise,
+naming the key), as for scenario files.
+
+"#44" marks the re-tune of the classical detectors on the realistic renders (closed loop and
+`python -m lanekeep.tuning.detector_replay` on the tuning scenarios only,
+lanekeep/tuning/scenario_files); "traffic" the tuning on its unscored traffic scenarios.
 """
 
 from __future__ import annotations
 
 import tomllib
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field, fields, is_dataclass, replace
 from importlib import resources
 from pathlib import Path
 
@@ -26,11 +32,11 @@ class GroundWindow:
     `m_per_col` wide and `m_per_row` long (the long axis needs less resolution).
     """
 
-    x_near_m: float = 4.0
-    x_far_m: float = 20.0
-    y_half_m: float = 6.0
-    m_per_col: float = 0.05
-    m_per_row: float = 0.1
+    x_near_m: float = 4.0  # near edge of the view, metres ahead (negative: behind)
+    x_far_m: float = 20.0  # far edge of the view
+    y_half_m: float = 6.0  # the view spans y in [-y_half_m, +y_half_m]: the lane and its neighbours
+    m_per_col: float = 0.05  # across-road size of a bird's-eye pixel
+    m_per_row: float = 0.1  # along-road size of a bird's-eye pixel
     lookahead_m: float | None = None  # where the offset is reported; None = the near edge
 
     def __post_init__(self) -> None:
@@ -52,8 +58,9 @@ class GroundWindow:
 class Profiles:
     """One ground window per camera kind; a detector picks by the camera's name."""
 
-    front: GroundWindow = GroundWindow()
-    rear: GroundWindow = GroundWindow(x_near_m=-4.0, x_far_m=-16.0)
+    front: GroundWindow = GroundWindow()  # the simulated front cameras (the scored ADE window)
+    rear: GroundWindow = GroundWindow(x_near_m=-4.0, x_far_m=-16.0)  # the rear camera
+    # Real cameras (any camera not named front or rear): a longer, coarser window.
     dashcam: GroundWindow = GroundWindow(x_near_m=6.0, x_far_m=40.0, m_per_row=0.15)
 
 
@@ -72,7 +79,7 @@ class Preprocess:
     destreak_width_px: float = 6.0  # bright features narrower than this along a row (pixels of
     # a 720-row frame at full resolution) are opened away before binarising: rain streaks
     # Other vehicles (detectors/vehicle_mask.py): the dark band under a vehicle hides the road
-    # above it in its columns; 0 turns the cue off.
+    # above it in its columns; 0 turns the cue off. Tuned on the traffic scenarios.
     vehicle_dark_ratio: float = 0.3  # darker than this share of the road's median: underside
     vehicle_min_width_m: float = 1.0  # a dark run this wide (across the road) or wider ...
     vehicle_max_width_m: float = 4.5  # ... and no wider is a vehicle's underside
@@ -101,10 +108,12 @@ class Preprocess:
 class LaneRules:
     """What counts as an ego-lane boundary, in metres."""
 
-    lane_width_m: float = LANE_WIDTH_PRIOR_M  # a belief, not the road's (geometry/lane_width.py)
+    # The car's lane-width belief, shared with the estimator (geometry/lane_width.py); not the
+    # road's width and not tuned here.
+    lane_width_m: float = LANE_WIDTH_PRIOR_M
     width_tolerance_m: float = 0.8  # |measured - lane_width| above this: keep only the better side
-    min_half_width: float = 0.1  # a boundary's |y| at the near edge, in lane widths
-    max_half_width: float = 1.1
+    min_half_width: float = 0.1  # a boundary's |y| at the near edge, in lane widths, at least ...
+    max_half_width: float = 1.1  # ... and at most this
     min_span_m: float = 2.0  # a boundary must cover this much x
     quadratic_span_m: float = 8.0  # fit a parabola only over at least this x span
     max_curvature_1pm: float = 0.05  # |2 c2| above this: a bad fit (R < 20 m)
@@ -124,15 +133,20 @@ class HoughConfig:
 
     # A pixel must exceed the road on both sides of it (a paint width away along the row) by
     # `adaptive_ratio` of it: relative to the local light, for paint in shade keeps its ratio
-    # to the asphalt (1.5-1.8), not its level; faint sunlit paint is only ~1.2-1.35 of it.
+    # to the asphalt (1.5-1.8), not its level; faint sunlit paint is only ~1.2-1.35 of it. A
+    # shoulder's edge is bright on one side only, so it is no ridge.
     adaptive_ratio: float = 0.2  # #44 ridge re-tune (closed loop on the tuning scenarios)
-    adaptive_c: float = 10.0  # and by at least this many grey levels (sensor noise, dark road)
-    min_grey: int = 20  # and be at least this bright (a dark floor: #44's paint is ~58-110)
-    rho_px: float = 1.0
-    theta_deg: float = 1.0
-    votes: int = 12
-    min_length_m: float = 1.0
-    max_gap_m: float = 1.5
+    # ... and by at least this many grey levels: only the noise floor (sensor noise, dark
+    # road); #44: was 35, above shaded paint (20-30 DN over the asphalt).
+    adaptive_c: float = 10.0
+    # ... and be at least this bright: a dark floor only; #44: was 120, above the realistic
+    # paint (sunlit ~110, shaded ~58).
+    min_grey: int = 20
+    rho_px: float = 1.0  # Hough distance resolution, bird's-eye pixels
+    theta_deg: float = 1.0  # Hough angle resolution
+    votes: int = 12  # accumulator votes a line needs
+    min_length_m: float = 1.0  # shortest Hough segment kept
+    max_gap_m: float = 1.5  # gaps up to this along a line are bridged into one segment
     max_angle_deg: float = 35.0  # segments further from the driving direction are dropped
     seed_length_m: float = 10.0  # boundaries are seeded from segments starting this near
     cluster_m: float = 0.4  # seeds closer than this (at the near edge) are one boundary
@@ -148,30 +162,36 @@ class HoughConfig:
 class SlidingWindowConfig:
     """Model #2: Sobel-x + HLS saturation/hue thresholds, histogram, sliding windows."""
 
-    sobel_kernel: int = 3
+    sobel_kernel: int = 3  # Sobel aperture: 1, 3, 5 or 7
     # Shade compensation: lightness is scaled so that the local background (a wide box blur)
     # reads `illumination_target`, by a gain of at most `illumination_max_gain` (1 = off)
     # and at least `illumination_min_gain`. Paint in a building's shadow keeps its contrast
     # ratio to the asphalt, not its level.
-    illumination_block_px: int = 61
-    illumination_target: float = 80.0
-    illumination_max_gain: float = 4.0
-    illumination_min_gain: float = 0.5  # #44: thresholds below are shares of the light
+    illumination_block_px: int = 61  # box blur side that measures the background, working px
+    illumination_target: float = 80.0  # lightness the background is scaled to
+    illumination_max_gain: float = 4.0  # most brightening (building shade, dusk)
+    # Most dimming; #44: below 1 it dims bright roads too, so the white threshold is a share
+    # (105/80) of the local light in sun and shade alike.
+    illumination_min_gain: float = 0.5
     sobel_min: float = 25.0  # |d lightness / dx| in grey levels per pixel (Sobel-scaled / 4)
-    min_lightness_gain: float = 15.0  # gradient pixels must sit in a brighter-than-local ridge
-    local_block_px: int = 25
-    white_lightness: int = 105  # normalised HLS L at or above: paint-white (#44: was 180)
-    white_saturation_max: int = 255
+    # Every cue must sit on a ridge this much brighter than its row neighbours a block away;
+    # #44: was 10, fewer texture ridges on the normalised lightness.
+    min_lightness_gain: float = 15.0
+    local_block_px: int = 25  # the ridge's neighbourhood along a row, working px (odd)
+    # Normalised HLS lightness at or above: paint-white; #44: was 180, unreachable for paint
+    # 40-70 DN above the asphalt.
+    white_lightness: int = 105
+    white_saturation_max: int = 255  # and saturation at most this (255 = any)
     yellow_hue: tuple[int, int] = (12, 38)  # OpenCV hue (0..180) range of yellow paint
-    yellow_saturation: int = 90
-    yellow_lightness: int = 80
-    n_windows: int = 11
+    yellow_saturation: int = 90  # yellow paint's HLS saturation, at least
+    yellow_lightness: int = 80  # and its lightness, at least
+    n_windows: int = 11  # windows stacked along the view's length per boundary
     margin_m: float = 0.45  # half width of a window
     min_pixels: int = 8  # a window re-centres when it holds this many pixels
     histogram_fraction: float = 0.5  # the near part of the view that the histogram sums
-    min_peak_pixels: int = 15
+    min_peak_pixels: int = 15  # a histogram peak needs this many (smoothed) pixels
     search_margin_m: float = 0.4  # around the previous frame's fit
-    min_fit_pixels: int = 40
+    min_fit_pixels: int = 40  # pixels a boundary's fit needs (else it is not found)
 
     def __post_init__(self) -> None:
         if not 0.0 < self.illumination_min_gain <= max(1.0, self.illumination_max_gain):
@@ -186,11 +206,11 @@ class SlidingWindowConfig:
 class DashcamDefaults:
     """An unknown real camera (`lanekeep detect` without --camera): typical highway dashcam."""
 
-    hfov_deg: float = 60.0
-    height_m: float = 1.5
+    hfov_deg: float = 60.0  # horizontal field of view of the assumed pinhole
+    height_m: float = 1.5  # its mounting height above the road
     horizon_fraction: float = 0.5  # horizon row / image height when it cannot be estimated
-    min_horizon_fraction: float = 0.2
-    max_horizon_fraction: float = 0.75
+    min_horizon_fraction: float = 0.2  # an estimated horizon row / image height, at least ...
+    max_horizon_fraction: float = 0.75  # ... and at most this
 
 
 # Top-level tables that belong to detectors registered with their own settings class
@@ -222,8 +242,27 @@ class DetectorsConfig:
         return self.profiles.dashcam
 
 
+def _as_table(config) -> dict:
+    """A settings dataclass as the TOML table that would spell it out in full."""
+    return {f.name: _as_table(v) if is_dataclass(v := getattr(config, f.name)) else v
+            for f in fields(config) if f.metadata.get("toml", True)}
+
+
+def _merged(defaults: dict, overrides: dict) -> dict:
+    """`defaults` with `overrides` laid over them, table by table: a key a file leaves out
+    keeps the default of the table it sits in (`[profiles.rear]` keeps the rear window's
+    near edge, not `GroundWindow`'s)."""
+    out = dict(defaults)
+    for key, value in overrides.items():
+        base = out.get(key)
+        out[key] = (_merged(base, value) if isinstance(base, dict) and isinstance(value, dict)
+                    else value)
+    return out
+
+
 def load_config(path: str | Path | None = None) -> DetectorsConfig:
-    """Read a detectors TOML file; None reads the shipped, tuned detectors/detectors.toml."""
+    """The defaults with a detectors TOML file's overrides; None reads the shipped
+    detectors/detectors.toml. Strict: an unknown key raises `ConfigError` naming it."""
     if path is None:
         text = resources.files("lanekeep.detectors").joinpath("detectors.toml").read_text()
         source = "detectors.toml"
@@ -232,4 +271,5 @@ def load_config(path: str | Path | None = None) -> DetectorsConfig:
         source = str(path)
     data = tomllib.loads(text)
     tables = {name: data.pop(name) for name in list(data) if name in _DETECTOR_TABLES}
+    data = _merged(_as_table(DetectorsConfig()), data)
     return replace(from_dict(DetectorsConfig, data, source=source), tables=tables)

@@ -173,13 +173,6 @@ def test_tusimple_output_round_trips_through_the_scorer(rendered):
     assert score_frame(shift(slanted, 25), slanted, h_samples)[0] == 1.0
 
 
-def test_config_defaults_are_the_tuned_values():
-    """`DetectorsConfig()` (and any key a user's TOML leaves out) is the shipped tuning."""
-    from lanekeep.detectors.config import DetectorsConfig, load_config
-
-    assert DetectorsConfig() == load_config()
-
-
 def test_detectors_import_no_mujoco():
     """Perception runs on frames alone: the detectors and their camera model load without
     MuJoCo (a real-camera user need not have it)."""
