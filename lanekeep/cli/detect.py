@@ -148,8 +148,8 @@ def register(subparsers) -> None:
         "detect", help="run a lane detector on real road photos",
         description="Without --camera the camera is an unknown 1.5 m high dashcam with a "
                     "60 deg horizontal field of view whose pitch is taken from each image's "
-                    "vanishing point (detectors.toml [dashcam]). A folder stands for its "
-                    "images (PNG, JPEG, BMP, TIFF, WebP; not its subfolders) in sorted order. "
+                    "vanishing point (detectors/config.py DashcamDefaults). A folder stands for "
+                    "its images (PNG, JPEG, BMP, TIFF, WebP; not its subfolders) in sorted order. "
                     "All images are checked before "
                     "any is processed: if one is missing, empty, truncated, corrupt, not an "
                     "image, too small or (with --camera) not the camera file's size, or the "

@@ -18,9 +18,9 @@ camera is a pinhole with a 60 deg horizontal field of view, centred principal po
 1.5 m high, and its pitch follows from the horizon row found in each image: the vanishing
 point of its lane lines (lanekeep/realcam/horizon.py), taken as
 pitch = atan((v_horizon - cy) / fy). When no vanishing point is found, the horizon is assumed
-at the image middle (a level camera). Numbers: detectors.toml [dashcam]. A sequence of frames
-(`lanekeep detect --sequence`) gets one camera, its horizon the median over its first frames
-(`camera_for_frames`), so that the camera does not jump from frame to frame.
+at the image middle (a level camera). Numbers: detectors/config.py DashcamDefaults. A sequence
+of frames (`lanekeep detect --sequence`) gets one camera, its horizon the median over its first
+frames (`camera_for_frames`), so that the camera does not jump from frame to frame.
 """
 
 from __future__ import annotations

@@ -11,7 +11,7 @@ Definitions (all against ground truth from the road, never from images):
     boundary shifted by the estimator's measured lane width), a model's track, the fused lane;
   - ADE / FDE (cm) of a tracked lane centre line: at each step, the lateral error
     |y_est(x) - y_true(x)| at look-ahead points x_1 < ... < x_N, default x = 4, 6, ..., 20 m
-    (ADE_POINTS_M: the front detectors' ground window, detectors.toml [profiles.front], so no
+    (ADE_POINTS_M: the front detectors' ground window, detectors/config.py profiles.front, so no
     source is scored on extrapolation beyond what the cameras see). y_true is the road's exact
     lane centre at each x (`ground_truth.lane_centre_at`), not a polynomial fitted to it. ADE is
     the error's mean over the points and the steps, FDE its mean over the steps at the farthest

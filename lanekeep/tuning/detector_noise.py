@@ -19,7 +19,7 @@ estimators/closed_loop_tracker.toml: the pooled covariance as `measured_coeffici
 one's lateral std is 0.64 cm, the classical ones' 1.3-2.1; at 20 m it is the noisiest), and a
 track whose R is its detector's follows a good detector without lag and smooths a noisy one. The
 truth is the least-squares quadratic of the exact road centre over the front detectors' own fit
-window (detectors/detectors.toml [profiles.front]), so that the errors are the detectors' and
+window (detectors/config.py profiles.front), so that the errors are the detectors' and
 not the difference between two windows' quadratic fits of a curving road.
 
 tools/measure_detector_noise.py runs the same command line from a clone.
@@ -183,7 +183,7 @@ def main(argv: list[str] | None = None) -> int:
     print(f"measuring on {len(names)} scenarios: {' '.join(shown(a) for a in args.scenarios)}")
     print("  scored by the bench: " + (", ".join(scored) if scored else "none"))
     print(f"  truth: least-squares quadratic of the road centre over x = {window[0]:g} .. "
-          f"{window[1]:g} m (detectors.toml [profiles.front])")
+          f"{window[1]:g} m (detectors/config.py profiles.front)")
     per_detector: dict[str, list[np.ndarray]] = {}
     jobs = errors_per_scenario(args.scenarios, window, args.workers)
     for name, errors in zip(names, jobs, strict=True):

@@ -23,7 +23,8 @@ def _score(centres, truth_y, points=ADE_POINTS_M):
 
 
 def test_ade_points_span_the_front_detectors_window():
-    """No source is scored beyond what the front cameras see (detectors.toml [profiles.front])."""
+    """No source is scored beyond what the front cameras see (detectors/config.py's front
+    window)."""
     front = load_config().profiles.front
     assert (ADE_POINTS_M[0], ADE_POINTS_M[-1]) == (front.x_near_m, front.x_far_m)
     assert np.all(np.diff(ADE_POINTS_M) > 0)
