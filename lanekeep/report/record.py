@@ -53,13 +53,15 @@ import uuid
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Protocol
+from typing import Protocol
 
 import cv2
 import numpy as np
 
 from lanekeep.core.busy import CORES_FREE
 from lanekeep.core.interrupts import stop_signals_held
+from lanekeep.geometry.camera_model import CameraModel
+from lanekeep.geometry.road import Road
 from lanekeep.report.blueprint import blueprint, key_names, key_positions, scenario_document
 from lanekeep.report.overlay import (
     MAX_POINTS_PER_SIDE,
@@ -82,6 +84,7 @@ from lanekeep.report.palette import (
     TRUTH,
     colour,
 )
+from lanekeep.scoring.step_result import StepResult
 from lanekeep.scoring.truth import LanePolylines
 
 APPLICATION_ID = "lanekeep"
@@ -96,8 +99,8 @@ PERCENT = 100.0  # steer and throttle (each in [-1, 1]) are plotted in %
 class EpisodeInfo:
     """What a recorder is told once, before the first step: nothing it could step with."""
 
-    road: Any  # lanekeep.geometry.road.Road
-    cameras: dict[str, Any]  # camera name -> lanekeep.geometry.camera_model.CameraModel
+    road: Road
+    cameras: dict[str, CameraModel]  # camera name -> its model at the frames' size
     models: list[str]  # the front models, in the MMAE's order
     dt_s: float
     car_size_m: tuple[float, float]  # length, width
@@ -113,7 +116,7 @@ class Recorder(Protocol):
         (`StepResult.marking_masks_after`)."""
         ...
 
-    def log_step(self, step: Any) -> None: ...
+    def log_step(self, step: StepResult) -> None: ...
 
     def close(self) -> None: ...
 
@@ -127,7 +130,7 @@ class NullRecorder:
     def wants_masks(self, step_index: int) -> bool:
         return False
 
-    def log_step(self, step: Any) -> None:
+    def log_step(self, step: StepResult) -> None:
         return None
 
     def close(self) -> None:
@@ -248,7 +251,7 @@ class RerunRecorder:
     def wants_masks(self, step_index: int) -> bool:
         return self.segmentation and (step_index + 1) % self.every == 0
 
-    def log_step(self, step: Any) -> None:
+    def log_step(self, step: StepResult) -> None:
         if self._closed:
             return
         if self._view is None:
