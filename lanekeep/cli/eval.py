@@ -1,7 +1,7 @@
 """`lanekeep eval`: every detector on the fixed test sets of every condition; table and JSON.
 
     lanekeep eval [--detectors hough,sliding_window,lanenet] [--weights FILE] [--json FILE]
-                  [--quick] [--frames N] [--cache DIR] [--conditions clear,night,...]
+                  [--quick] [--frames N] [--stateless] [--cache DIR] [--conditions clear,night,...]
 
 Thin: the sets, the scoring loop, the table and the JSON document are
 lanekeep/evaluation/detector_eval.py's (the sets lanekeep/evaluation/eval_sets.py's, the metrics
@@ -39,10 +39,11 @@ def cmd_eval(args: argparse.Namespace) -> int:
     if args.frames is not None:
         recipe = dataclasses.replace(recipe, frames=args.frames)
     results = evaluate(plan.conditions, plan.detectors, plan.weights, recipe, args.cache or None,
-                       progress=lambda m: print(m, file=sys.stderr, flush=True))
+                       progress=lambda m: print(m, file=sys.stderr, flush=True),
+                       stateless=args.stateless)
     print(table(results))
     if args.json:
-        write_json(args.json, eval_document(plan, recipe, args.quick, results))
+        write_json(args.json, eval_document(plan, recipe, args.quick, results, args.stateless))
         print(f"wrote {args.json}")
     return EXIT_OK
 
@@ -68,6 +69,10 @@ def register(subparsers) -> None:
                    help=f"frames per sequence (default {EvalRecipe.frames}); each detector keeps "
                         "its state across a sequence, so longer ones let LaneNet's recurrent "
                         "part matter (sets of another length are other sets)")
+    p.add_argument("--stateless", action="store_true",
+                   help="reset each detector before every frame, not only before each sequence: "
+                        "what it gives without its memory of earlier frames (LaneNet without "
+                        "its recurrent state: the frame-only ablation on the same frames)")
     p.add_argument("--cache", metavar="DIR", default="out/eval_cache",
                    help="folder of rendered sets (default out/eval_cache; '' = no cache)")
     p.set_defaults(func=cmd_eval)

@@ -98,8 +98,11 @@ class DetectorRunner:
 
 
 def evaluate(conditions: list[str], detectors: list[str], weights: str | None, recipe,
-             cache: str | None, progress: Callable[[str], None] | None = None) -> dict:
-    """Scores per condition per detector, with what made each set (the JSON's `conditions`)."""
+             cache: str | None, progress: Callable[[str], None] | None = None,
+             stateless: bool = False) -> dict:
+    """Scores per condition per detector, with what made each set (the JSON's `conditions`).
+    `stateless`: each detector reset before every frame, not only before each sequence (what
+    it gives without its memory of earlier frames: LaneNet without its recurrent state)."""
     import cv2
     import numpy as np
 
@@ -120,6 +123,8 @@ def evaluate(conditions: list[str], detectors: list[str], weights: str | None, r
             for r in runners:
                 r.start(camera, seq[0])
                 for t, frame in enumerate(seq):
+                    if stateless:
+                        r.det.reset()
                     pred, ms = r.predict(frame)
                     tallies[r.name].add(pred, data["xs"][q, t], data["slots"][q, t],
                                         data["ground_y"][q, t], ms)
@@ -196,10 +201,12 @@ def plan_eval(detectors: str, conditions: str, weights: str | None,
     return EvalPlan(names, chosen, check_weights(weights, names))
 
 
-def eval_document(plan: EvalPlan, recipe, quick: bool, results: dict) -> dict:
+def eval_document(plan: EvalPlan, recipe, quick: bool, results: dict,
+                  stateless: bool = False) -> dict:
     """`eval --json`: the results with what made them."""
     from lanekeep.report.json_io import SCHEMA_VERSION, lanekeep_version
 
     return {"schema_version": SCHEMA_VERSION, "lanekeep_version": lanekeep_version(),
-            "command": "eval", "quick": bool(quick), "recipe": asdict(recipe),
+            "command": "eval", "quick": bool(quick), "stateless": bool(stateless),
+            "recipe": asdict(recipe),
             "weights": plan.weights, "detectors": plan.detectors, "conditions": results}

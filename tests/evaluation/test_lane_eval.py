@@ -296,3 +296,22 @@ def test_the_eval_cache_key_covers_the_code_that_renders_a_set():
     for needed in ("world/build.py", "sensing/cameras.py", "sensing/camera_sensor.py",
                    "scenario/schema.py", "evaluation/eval_sets.py", "mjcf/car.xml"):
         assert needed in names, needed
+
+
+def test_stateless_eval_resets_lanenet_before_every_frame(tmp_path):
+    """`--stateless`: the same frames without LaneNet's recurrent state (the frame-only
+    ablation) score otherwise than with it, and the document says which it was."""
+    docs = {}
+    for flag in ([], ["--stateless"]):
+        out = tmp_path / f"eval{len(flag)}.json"
+        assert main(["eval", "--quick", "--detectors", "lanenet", "--conditions", "clear",
+                     "--frames", "4", "--cache", str(tmp_path / "c"), "--json", str(out),
+                     *flag]) == 0
+        docs[bool(flag)] = _strict(out)
+    assert [docs[k]["stateless"] for k in (False, True)] == [False, True]
+    assert docs[False]["recipe"]["frames"] == 4
+    with_state, without = (docs[k]["conditions"]["clear"]["detectors"]["lanenet"]
+                           for k in (False, True))
+    assert with_state["frames"] == without["frames"] == 4
+    keys = ("ap", "ade_cm", "offset_err_cm")
+    assert [with_state[k] for k in keys] != [without[k] for k in keys]
