@@ -18,13 +18,13 @@ import sys
 
 from lanekeep.cli.outputs import error_line
 from lanekeep.evaluation.detector_eval import DEFAULT_DETECTORS, BadInput, evaluate, table
-from lanekeep.evaluation.eval_sets import EvalRecipe
 
 EXIT_OK, EXIT_BAD_INPUT = 0, 2
 
 
 def cmd_eval(args: argparse.Namespace) -> int:
     from lanekeep.evaluation.detector_eval import eval_document, plan_eval
+    from lanekeep.evaluation.eval_sets import EvalRecipe
     from lanekeep.report.json_io import write_json
 
     try:
@@ -66,7 +66,8 @@ def register(subparsers) -> None:
     p.add_argument("--quick", action="store_true",
                    help="one world and one sequence per condition (tests, smoke runs)")
     p.add_argument("--frames", type=int, metavar="N", default=None,
-                   help=f"frames per sequence (default {EvalRecipe.frames}); each detector keeps "
+                   help="frames per sequence (default: the sets' own, EvalRecipe.frames in "
+                        "lanekeep/evaluation/eval_sets.py); each detector keeps "
                         "its state across a sequence, so longer ones let LaneNet's recurrent "
                         "part matter (sets of another length are other sets)")
     p.add_argument("--stateless", action="store_true",
