@@ -73,6 +73,11 @@ MARGINS: dict[str, Margin] = {
     "valid_share": Margin(0.02), "mmae_switches": Margin(1.0, 0.1),
     "reference_repairs": Margin(1.0, 0.1), "no_estimate_s": Margin(0.1, 0.05),
     "lane_departures": Margin(0.0), "reference_error_corr": Margin(0.05),
+    # open-loop detector scores (lanekeep eval): 0.02 of AP, F1 or IoU and 2 points of the
+    # valid share, a tenth of the spread between conditions; the ego offset error as the
+    # lateral errors above
+    "ap": Margin(0.02), "f1": Margin(0.02), "iou": Margin(0.02), "iou_ego": Margin(0.02),
+    "valid": Margin(0.02), "offset_err_cm": Margin(0.1, 0.05),
 }
 # Positive and skewed: intervals and comparisons on the log scale (ratios).
 LOG_SCALE = frozenset({"rmse_cm", "ade_cm", "fde_cm", "max_cm", "car_rms_cm", "car_max_cm"})
