@@ -23,6 +23,7 @@ SCRIPTS = {
     "calibrate_criteria.py": "criteria_calibration",
     "compare_estimation.py": "estimation",
     "contact_sheet.py": "contact_sheet",
+    "drive_video.py": "drive_video",
     "measure_antialiasing.py": "antialiasing",
     "measure_detector_noise.py": "detector_noise",
     "measure_roll_coupling.py": "roll_coupling",
