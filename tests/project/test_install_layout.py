@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import subprocess
 import sys
-from pathlib import PurePosixPath
+from pathlib import Path, PurePosixPath
 
 import lanekeep.detectors
 import lanekeep.estimators
@@ -68,3 +68,20 @@ def _site_packages() -> str:
     import sysconfig
 
     return sysconfig.get_paths()["purelib"]
+
+
+def test_every_subpackage_of_the_tree_is_listed_for_the_install():
+    """pyproject's explicit `packages`: a subpackage left out imports from a clone (and an
+    editable install) but is missing from a real install, as CI's is."""
+    import tomllib
+
+    root = Path(__file__).resolve().parents[2]
+    listed = set(tomllib.loads((root / "pyproject.toml").read_text())["tool"]["setuptools"]
+                 ["packages"])
+    found = {".".join(p.parent.relative_to(root).parts)
+             for p in root.glob("lanekeep/**/__init__.py")}
+    for folder in ("detectors", "estimators", "mjcf"):
+        found |= {".".join(("lanekeep", *p.parent.relative_to(root).parts))
+                  for p in root.glob(f"{folder}/**/__init__.py")}
+    assert found - listed == set(), f"not installed: {sorted(found - listed)}"
+    assert listed - found == set(), f"listed but absent: {sorted(listed - found)}"
