@@ -38,7 +38,12 @@ from scipy.stats import chi2
 
 from lanekeep.core.workers import set_thread_counts, worker_pool
 from lanekeep.scenario.schema import load_scenario, shipped_scenarios
-from lanekeep.tuning.scenarios import TuningInputError, select_scenarios, shown
+from lanekeep.tuning.scenarios import (
+    TuningInputError,
+    add_scenario_arguments,
+    select_scenarios,
+    shown,
+)
 
 
 def front_window() -> tuple[float, float]:
@@ -155,11 +160,7 @@ def toml_block(pooled: Fit, per_detector: dict[str, Fit], names: list[str]) -> s
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     """The command line; exits 2 on a shipped (bench-scored) scenario without --allow-scored."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("scenarios", nargs="*",
-                        help="scenario names or files (default: every tuning scenario, "
-                             "lanekeep/tuning/scenario_files/)")
-    parser.add_argument("--allow-scored", action="store_true",
-                        help="allow shipped scenarios, which `lanekeep bench` scores")
+    add_scenario_arguments(parser)
     parser.add_argument("--workers", type=int, default=2, help="episodes run at a time")
     parser.add_argument("--list", action="store_true",
                         help="print the scenarios it would measure on, one a line, and stop")

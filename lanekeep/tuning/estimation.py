@@ -23,7 +23,7 @@ from dataclasses import dataclass
 from statistics import mean
 
 from lanekeep.core.workers import set_thread_counts, worker_pool
-from lanekeep.tuning.scenarios import TuningInputError, select_scenarios
+from lanekeep.tuning.scenarios import TuningInputError, add_scenario_arguments, select_scenarios
 
 BOOLEANS = {"true": True, "false": False}
 
@@ -130,11 +130,7 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("setting",
                         help="KEY=VALUE,VALUE... of [estimation] (strings, numbers, true/false)")
-    parser.add_argument("scenarios", nargs="*",
-                        help="scenario names or files (default: every tuning scenario, "
-                             "lanekeep/tuning/scenario_files/)")
-    parser.add_argument("--allow-scored", action="store_true",
-                        help="allow shipped scenarios, which `lanekeep bench` scores")
+    add_scenario_arguments(parser)
     parser.add_argument("--workers", type=int, default=2)
     args = parser.parse_args(argv)
     try:

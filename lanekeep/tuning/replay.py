@@ -40,7 +40,12 @@ from statistics import mean
 import numpy as np
 
 from lanekeep.tuning.estimation import typed_value
-from lanekeep.tuning.scenarios import TuningInputError, own_seed, select_scenarios
+from lanekeep.tuning.scenarios import (
+    TuningInputError,
+    add_scenario_arguments,
+    own_seed,
+    select_scenarios,
+)
 
 
 def path_stem(name: str, seed: int | None) -> str:
@@ -175,10 +180,7 @@ def main(argv: list[str] | None = None) -> int:
     sub = parser.add_subparsers(dest="command", required=True)
     rec = sub.add_parser("record", help="drive scenarios and keep the estimator's inputs")
     rec.add_argument("out", type=Path)
-    rec.add_argument("scenarios", nargs="*",
-                     help="default: every tuning scenario (lanekeep/tuning/scenario_files/)")
-    rec.add_argument("--allow-scored", action="store_true",
-                     help="allow shipped scenarios, which `lanekeep bench` scores")
+    add_scenario_arguments(rec)
     rec.add_argument("--seed", type=int, help="record this seed instead of the file's")
     cmp = sub.add_parser("compare", help="replay recordings with values of one setting")
     cmp.add_argument("recordings", type=Path, help="a directory of `record`'s pickles")

@@ -28,7 +28,12 @@ from pathlib import Path
 
 import numpy as np
 
-from lanekeep.tuning.scenarios import TuningInputError, select_scenarios, tuning_dir
+from lanekeep.tuning.scenarios import (
+    TuningInputError,
+    add_scenario_arguments,
+    select_scenarios,
+    tuning_dir,
+)
 
 CURVES = ("tune_right_curve_r100", "tune_left_curve_r200_rain", "tune_gentle_s_curve_r700_r500",
           "tune_sharp_right_r45")
@@ -109,8 +114,7 @@ def front_lever(levers: dict[str, Lever]) -> float:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("scenarios", nargs="*", help="names or files (default: tuning curves)")
-    parser.add_argument("--allow-scored", action="store_true")
+    add_scenario_arguments(parser, default="the tuning curves")
     args = parser.parse_args(argv)
     try:
         paths = select_scenarios(args.scenarios or default_scenarios(),

@@ -5,6 +5,7 @@ lanekeep/tuning/scenario_files/*.toml (package data), by default; a shipped scen
 
 from __future__ import annotations
 
+import argparse
 from collections.abc import Sequence
 from importlib import resources
 from pathlib import Path
@@ -73,3 +74,14 @@ def own_seed(scenario_arg: str) -> int | None:
         return load_scenario(scenario_arg).seed
     except ScenarioError:
         return None
+
+
+def add_scenario_arguments(parser: argparse.ArgumentParser,
+                           default: str = "every tuning scenario, lanekeep/tuning/scenario_files/"
+                           ) -> None:
+    """The tuning tools' shared arguments: scenario names or files (`default` says what none
+    means) and --allow-scored, which `select_scenarios` needs for a shipped scenario."""
+    parser.add_argument("scenarios", nargs="*",
+                        help=f"scenario names or files (default: {default})")
+    parser.add_argument("--allow-scored", action="store_true",
+                        help="allow shipped scenarios, which `lanekeep bench` scores")
