@@ -1,4 +1,5 @@
-"""Train LaneNet (detectors/lanenet_model.py) from scratch on the simulated dataset, on a CPU.
+"""Train LaneNet (detectors/lanenet_model.py) on the simulated dataset, on a CPU: from scratch,
+or from given weights (`--init W`: fine-tuning, the same loop and schedule).
 
     python tools/make_dataset.py --out data/lanenet            # first: the data (~16 min)
     python tools/train_lanenet.py --data data/lanenet --out detectors/weights/lanenet.pt
@@ -45,7 +46,7 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from lanekeep.detectors.lanenet import save_weights
+from lanekeep.detectors.lanenet import WeightsError, load_weights, save_weights
 from lanekeep.detectors.lanenet_model import LaneNet, LaneNetConfig, architecture_summary
 from lanekeep.detectors.lanenet_targets import CellGrid, LossWeights, Targets, encode, lanenet_loss
 from lanekeep.evaluation.dataset import (
@@ -201,6 +202,8 @@ def main(argv: list[str] | None = None) -> int:
                         help="share of training sequences given occluders (default 0: none)")
     parser.add_argument("--clip", type=int, default=0,
                         help="train on pieces of K frames (1: frame by frame; default: whole)")
+    parser.add_argument("--init", default="",
+                        help="start from these weights (fine-tuning) instead of a seeded draw")
     parser.add_argument("--resume", action="store_true",
                         help="go on from the checkpoint beside --out")
     args = parser.parse_args(argv)
@@ -215,7 +218,11 @@ def main(argv: list[str] | None = None) -> int:
         train = {k: v[:args.limit] for k, v in train.items()}
     stored_frames = train["frames"].shape[1]
     train = cut_clips(train, args.clip)
-    config = LaneNetConfig()
+    try:
+        init = load_weights(args.init) if args.init else None
+    except WeightsError as exc:
+        raise SystemExit(f"train_lanenet: error: --init: {exc}") from None
+    config = init.config if init is not None else LaneNetConfig()
     rows, cols = config.grid
     grid = CellGrid(LABEL_WIDTH, LABEL_HEIGHT, rows, cols)
     targets = [targets_of(train, grid, flip=False), targets_of(train, grid, flip=True)]
@@ -224,7 +231,7 @@ def main(argv: list[str] | None = None) -> int:
           f"frames (stored {stored_frames}), {len(val['frames'])} validation; targets in "
           f"{time.perf_counter() - start:.0f} s", file=sys.stderr)
 
-    model = LaneNet(config, seed=args.seed)
+    model = init if init is not None else LaneNet(config, seed=args.seed)
     opt = torch.optim.AdamW(model.parameters(), lr=args.lr, weight_decay=1e-4)
     steps_per_epoch = math.ceil(len(train["frames"]) / args.batch)
     sched = torch.optim.lr_scheduler.OneCycleLR(opt, max_lr=args.lr, pct_start=0.1,
@@ -237,7 +244,7 @@ def main(argv: list[str] | None = None) -> int:
     first_epoch = 0
     ckpt = checkpoint_path(args.out)
     fixed = {k: getattr(args, k) for k in ("data", "epochs", "batch", "lr", "seed", "limit",
-                                            "occlusion", "clip")}
+                                            "occlusion", "clip", "init")}
     if args.resume and ckpt.is_file():
         state = torch.load(str(ckpt), map_location="cpu", weights_only=True)
         if state.get("args") != fixed:

@@ -1,7 +1,8 @@
 """`lanekeep eval`: every detector on the fixed test sets of every condition; table and JSON.
 
     lanekeep eval [--detectors hough,sliding_window,lanenet] [--weights FILE] [--json FILE]
-                  [--quick] [--frames N] [--stateless] [--cache DIR] [--conditions clear,night,...]
+                  [--quick] [--frames N] [--stateless] [--split test|tuning] [--cache DIR]
+                  [--conditions clear,night,...]
 
 Thin: the sets, the scoring loop, the table and the JSON document are
 lanekeep/evaluation/detector_eval.py's (the sets lanekeep/evaluation/eval_sets.py's, the metrics
@@ -38,6 +39,7 @@ def cmd_eval(args: argparse.Namespace) -> int:
     recipe = EvalRecipe.quick() if args.quick else EvalRecipe()
     if args.frames is not None:
         recipe = dataclasses.replace(recipe, frames=args.frames)
+    recipe = dataclasses.replace(recipe, split=args.split)
     results = evaluate(plan.conditions, plan.detectors, plan.weights, recipe, args.cache or None,
                        progress=lambda m: print(m, file=sys.stderr, flush=True),
                        stateless=args.stateless)
@@ -74,6 +76,9 @@ def register(subparsers) -> None:
                    help="reset each detector before every frame, not only before each sequence: "
                         "what it gives without its memory of earlier frames (LaneNet without "
                         "its recurrent state: the frame-only ablation on the same frames)")
+    p.add_argument("--split", choices=("test", "tuning"), default="test",
+                   help="which worlds: test (default), the scored sets; tuning, other worlds of "
+                        "every condition to choose settings on (never on the scored ones)")
     p.add_argument("--cache", metavar="DIR", default="out/eval_cache",
                    help="folder of rendered sets (default out/eval_cache; '' = no cache)")
     p.set_defaults(func=cmd_eval)

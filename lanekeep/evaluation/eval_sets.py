@@ -9,6 +9,11 @@ worn on both sides or unpainted, and `--quick`'s one clear world was such a one.
 Seeds come from their own SeedSequence namespace, SeedSequence([EVAL_NAMESPACE,
 condition index, world index]), never one the dataset's splits use ([recipe seed, split, i]).
 
+Two splits of sets, the same conditions drawn from two namespaces: `test` (EVAL_NAMESPACE), the
+sets `lanekeep eval` scores, and `tuning` (TUNING_NAMESPACE), other worlds of every condition
+for choosing a detector's settings (`lanekeep eval --split tuning`). A number chosen on the
+test sets would be scored on the worlds it was chosen on.
+
     clear       day, no shadows, no weather
     curve       clear, the road one arc of radius 150-300 m after a short lead-in
     buildings   clear, building shadows across the whole road (hard-edged, 40-80% of it)
@@ -51,6 +56,8 @@ from lanekeep.scenario.conditions import ShadowZone
 from lanekeep.scenario.schema import Scenario, ScenarioError
 
 EVAL_NAMESPACE = 0xE7A1
+TUNING_NAMESPACE = 0x7C1E  # the tuning split's sets: the same conditions, other worlds
+SPLITS = {"test": EVAL_NAMESPACE, "tuning": TUNING_NAMESPACE}
 FORMAT = "lanekeep-eval-set/1"
 CONDITIONS = ("clear", "curve", "buildings", "half_shade", "night", "rain", "fog", "snow",
               "worn", "occlusion_40", "occlusion_60")
@@ -69,17 +76,25 @@ class EvalRecipe:
     frames: int = 3
     render_width: int = 640
     render_height: int = 360
+    split: str = "test"  # "test": the scored sets; "tuning": other worlds, for tuning
 
     def __post_init__(self) -> None:
         if min(self.worlds, self.sequences, self.frames) < 1:
             raise ValueError("worlds, sequences and frames must be >= 1")
+        if self.split not in SPLITS:
+            raise ValueError(f"unknown split {self.split!r}; known: {', '.join(SPLITS)}")
+
+    @property
+    def namespace(self) -> int:
+        """The seed namespace of this split's worlds."""
+        return SPLITS[self.split]
 
     @classmethod
     def quick(cls) -> EvalRecipe:
         return cls(worlds=1, sequences=1)
 
     def dataset_recipe(self) -> DatasetRecipe:
-        return DatasetRecipe(seed=EVAL_NAMESPACE, sequences_per_world=self.sequences,
+        return DatasetRecipe(seed=self.namespace, sequences_per_world=self.sequences,
                              frames=self.frames, render_width=self.render_width,
                              render_height=self.render_height, store_width=self.render_width,
                              store_height=self.render_height)
@@ -90,8 +105,9 @@ def occlusion_share(condition: str) -> float:
     return int(condition.split("_")[1]) / 100.0 if condition.startswith("occlusion_") else 0.0
 
 
-def condition_seed(condition: str, index: int, attempt: int = 0) -> int:
-    parts = [EVAL_NAMESPACE, CONDITIONS.index(condition), index] + ([attempt] if attempt else [])
+def condition_seed(condition: str, index: int, attempt: int = 0,
+                   namespace: int = EVAL_NAMESPACE) -> int:
+    parts = [namespace, CONDITIONS.index(condition), index] + ([attempt] if attempt else [])
     return int(np.random.SeedSequence(parts).generate_state(1)[0])
 
 
@@ -132,8 +148,9 @@ def _force(condition: str, s: Scenario, rng: np.random.Generator) -> Scenario:
     return replace(s, road=road, conditions=c, name=f"eval_{condition}_{s.seed}")
 
 
-def condition_scenario(condition: str, index: int) -> Scenario:
-    """World `index` of `condition`'s set (redrawn from the next seed if the builder rejects
+def condition_scenario(condition: str, index: int, namespace: int = EVAL_NAMESPACE
+                       ) -> Scenario:
+    """World `index` of `condition`'s set in a split's `namespace` (redrawn from the next seed if the builder rejects
     the forced condition, e.g. a shadow the drawn sun cannot cast)."""
     from lanekeep.world.build import check_buildable
 
@@ -141,8 +158,8 @@ def condition_scenario(condition: str, index: int) -> Scenario:
         raise ValueError(f"unknown condition {condition!r}; known: {', '.join(CONDITIONS)}")
     last: Exception | None = None
     for attempt in range(ATTEMPTS):
-        seed = condition_seed(condition, index, attempt)
-        rng = np.random.default_rng([seed, EVAL_NAMESPACE])
+        seed = condition_seed(condition, index, attempt, namespace)
+        rng = np.random.default_rng([seed, namespace])
         try:
             scenario = _force(condition, random_scenario(seed, BASE_TAG.get(condition, "clear")),
                               rng)
@@ -214,8 +231,8 @@ def build_set(condition: str, recipe: EvalRecipe) -> dict[str, np.ndarray]:
     parts: dict[str, list] = {}
     share = occlusion_share(condition)
     for i in range(recipe.worlds):
-        scenario = condition_scenario(condition, i)
-        rng = np.random.default_rng([scenario.seed, EVAL_NAMESPACE, 1])
+        scenario = condition_scenario(condition, i, recipe.namespace)
+        rng = np.random.default_rng([scenario.seed, recipe.namespace, 1])
         arrays = render_world(scenario, recipe.dataset_recipe(), rng)
         front = ~arrays["is_rear"]
         for key in ("frames", "paint", "xs", "slots", "ground_y", "camera"):
@@ -225,7 +242,7 @@ def build_set(condition: str, recipe: EvalRecipe) -> dict[str, np.ndarray]:
     out = {k: np.concatenate(v) for k, v in parts.items()}
     out["coverage"] = np.full(out["frames"].shape[:2], np.nan)
     if share > 0.0:
-        occ_rng = np.random.default_rng([EVAL_NAMESPACE, CONDITIONS.index(condition), 0x0CC])
+        occ_rng = np.random.default_rng([recipe.namespace, CONDITIONS.index(condition), 0x0CC])
         small_h = out["frames"].shape[2]
         for q in range(len(out["frames"])):
             cam = camera_from_vector(out["camera"][q])
@@ -262,10 +279,11 @@ def fingerprinted_files() -> list[tuple[str, Path]]:
 
 def set_key(condition: str, recipe: EvalRecipe) -> str:
     """Hash of everything that makes the set, the renderer's code included."""
-    seeds = [condition_seed(condition, i) for i in range(recipe.worlds)]
+    seeds = [condition_seed(condition, i, namespace=recipe.namespace)
+             for i in range(recipe.worlds)]
     blob = json.dumps({"format": FORMAT, "dataset": DATASET_FORMAT, "condition": condition,
                        "recipe": asdict(recipe), "rendered": asdict(recipe.dataset_recipe()),
-                       "seeds": seeds, "ns": EVAL_NAMESPACE, "code": renderer_fingerprint()},
+                       "seeds": seeds, "ns": recipe.namespace, "code": renderer_fingerprint()},
                       sort_keys=True)
     return hashlib.sha256(blob.encode()).hexdigest()
 
@@ -276,7 +294,8 @@ def load_set(condition: str, recipe: EvalRecipe, cache: str | Path | None
     key = set_key(condition, recipe)
     if cache is None:
         return build_set(condition, recipe), key
-    path = Path(cache) / f"{condition}-{key[:16]}.npz"
+    prefix = "" if recipe.split == "test" else f"{recipe.split}-"
+    path = Path(cache) / f"{prefix}{condition}-{key[:16]}.npz"
     if path.is_file():
         try:
             with np.load(path) as z:

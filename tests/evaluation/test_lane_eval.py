@@ -185,6 +185,23 @@ def test_eval_seeds_are_not_dataset_seeds():
     theirs = {world_seed(DatasetRecipe(), split, i) for split in ("train", "val", "test")
               for i in range(3000)}
     assert not ours & theirs
+    tuning = {condition_seed(c, i, namespace=EvalRecipe(split="tuning").namespace)
+              for c in CONDITIONS for i in range(8)}
+    assert len(tuning) == len(CONDITIONS) * 8
+    assert not tuning & ours and not tuning & theirs  # tuning worlds are never scored ones
+
+
+def test_tuning_split_draws_other_worlds_of_the_same_conditions():
+    from lanekeep.evaluation.eval_sets import set_key
+
+    test, tuning = EvalRecipe.quick(), EvalRecipe(worlds=1, sequences=1, split="tuning")
+    assert test.namespace != tuning.namespace
+    assert set_key("clear", test) != set_key("clear", tuning)
+    night = condition_scenario("night", 0, tuning.namespace)
+    assert night.conditions.time_of_day == "night"
+    assert night.seed != condition_scenario("night", 0).seed
+    with pytest.raises(ValueError, match="split"):
+        EvalRecipe(split="train")
     assert occlusion_share("occlusion_40") == 0.4 and occlusion_share("clear") == 0.0
 
 
