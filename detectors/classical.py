@@ -65,9 +65,14 @@ class ClassicalDetector:
     def remember(self, estimate: LaneEstimate) -> None:
         """Keep what the next frame needs from this frame's estimate (nothing by default)."""
 
+    def bird_eye(self, frame: np.ndarray) -> tuple[np.ndarray | None, str]:
+        """The frame's binary bird's-eye view (0/255), or None and why it is noise: the
+        shared image stage with this model's `binarise`."""
+        return binary_bird_eye(frame, self.camera, self.view, self.config.preprocess,
+                               self.binarise, self.vehicles, self.rois)
+
     def detect(self, frame: np.ndarray) -> LaneEstimate:
-        bev, noise = binary_bird_eye(frame, self.camera, self.view, self.config.preprocess,
-                                     self.binarise, self.vehicles, self.rois)
+        bev, noise = self.bird_eye(frame)
         if bev is None:
             self.reset()
             return LaneEstimate.invalid(noise, self.x_ref)

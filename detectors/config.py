@@ -87,6 +87,12 @@ class Preprocess:
     vehicle_edge_px: int = 2  # working pixels along a row from vehicle-dark that are not paint
     max_paint_width_m: float = 0.35  # wider bird's-eye runs are not paint; 0 = keep all
     paint_blur_px: float = 3.0  # working pixels of spread added to that width at each distance
+    # For the models that find paint in the bird's-eye view (hough's "ridge", sliding_window's
+    # "edges"): the region of interest's grain (median |grey - its 3x3 mean| / median grey)
+    # above which the frame is noise: at most 0.051 on the tuning sets (half shade), 0.031 in
+    # the shipped night scenario's frames, 0.091 on uniform noise, whose random streaks the
+    # along-line average would otherwise join into lines.
+    max_grain: float = 0.07
 
     def __post_init__(self) -> None:
         if not 0.1 <= self.scale <= 1.0:
@@ -127,6 +133,35 @@ class LaneRules:
 
 
 @dataclass(frozen=True)
+class RidgeConfig:
+    """Paint as a ridge in the bird's-eye view (detectors/ridge.py): a stripe brighter than
+    the road bands on both sides of it, averaged along its length."""
+
+    gap_m: float = 0.25  # centre of each road band, this far beside the stripe's centre
+    band_m: float = 0.2  # width of each road band
+    length_m: float = 1.5  # the along-line average (shorter than a 3 m dash)
+    max_heading: float = 0.35  # steepest line (m across per m along, ~19 deg) integrated along
+    leans: int = 7  # headings tried between -max_heading and +max_heading
+    dark_floor: float = 10.0  # road level (grey) below which the ratio is taken against this
+    min_ratio: float = 0.06  # the averaged step, a share of the road level, at least ...
+    min_step: float = 3.0  # ... and at least this many grey levels (the noise floor)
+    # The pixel's own step (over 3 rows), a share of the road level, at least: the line
+    # average runs past a dash's end and leans to reach beside it; paint is where the
+    # stripe itself is.
+    own_ratio: float = 0.03
+    # Ridges over more than this share of the view are texture or noise, not paint: at most
+    # 2.8% on any frame of the tuning sets (snow), 4.6% on a frame of uniform noise.
+    max_fill: float = 0.04
+
+    def __post_init__(self) -> None:
+        for key in ("gap_m", "band_m", "length_m", "dark_floor"):
+            if not getattr(self, key) > 0:
+                raise InvalidValue(key, f"must be > 0, got {getattr(self, key)}")
+        if self.leans < 1 or self.max_heading < 0:
+            raise InvalidValue("leans", "leans must be >= 1 and max_heading >= 0")
+
+
+@dataclass(frozen=True)
 class HoughConfig:
     """Model #1: brightness threshold relative to the road beside a ridge, bird's-eye view,
     probabilistic Hough."""
@@ -135,6 +170,9 @@ class HoughConfig:
     # `adaptive_ratio` of it: relative to the local light, for paint in shade keeps its ratio
     # to the asphalt (1.5-1.8), not its level; faint sunlit paint is only ~1.2-1.35 of it. A
     # shoulder's edge is bright on one side only, so it is no ridge.
+    # "ridge": paint found in the bird's-eye view as a ridge averaged along the line ([ridge]
+    # settings, detectors/ridge.py); "image": the per-pixel ridge test below, in the image.
+    binarisation: str = "ridge"
     adaptive_ratio: float = 0.2  # #44 ridge re-tune (closed loop on the tuning scenarios)
     # ... and by at least this many grey levels: only the noise floor (sensor noise, dark
     # road); #44: was 35, above shaded paint (20-30 DN over the asphalt).
@@ -154,6 +192,9 @@ class HoughConfig:
     sample_m: float = 0.5  # spacing of the points taken along each segment
 
     def __post_init__(self) -> None:
+        if self.binarisation not in ("ridge", "image"):
+            raise InvalidValue("binarisation", f"must be 'ridge' or 'image', got "
+                                               f"{self.binarisation!r}")
         if self.adaptive_ratio < 0 or self.adaptive_c < 0:
             raise InvalidValue("adaptive_ratio", "adaptive_ratio and adaptive_c must be >= 0")
 
@@ -162,7 +203,18 @@ class HoughConfig:
 class SlidingWindowConfig:
     """Model #2: Sobel-x + HLS saturation/hue thresholds, histogram, sliding windows."""
 
-    sobel_kernel: int = 3  # Sobel aperture: 1, 3, 5 or 7
+    # "edges": the cues read in the bird's-eye view, averaged along lines (detectors/
+    # edge_pairs.py, the edge_* settings and the yellow ones); "image": per pixel in the image.
+    binarisation: str = "edges"
+    edge_half_width_m: float = 0.1  # the rising and falling edges lie this far either side
+    edge_length_m: float = 1.5  # the along-line average
+    edge_max_heading: float = 0.35  # steepest line averaged along (m across per m along)
+    edge_leans: int = 7  # headings tried
+    edge_dark_floor: float = 10.0  # lightness below which the ratio is taken against this
+    edge_ratio: float = 0.04  # the weaker averaged edge, a share of the road's lightness ...
+    edge_min_step: float = 2.0  # ... and at least this (grey levels per column)
+    yellow_share: float = 0.6  # share of yellow pixels along a line that makes it paint
+    sobel_kernel: int = 3  # Sobel aperture (the "image" binarisation): 1, 3, 5 or 7
     # Shade compensation: lightness is scaled so that the local background (a wide box blur)
     # reads `illumination_target`, by a gain of at most `illumination_max_gain` (1 = off)
     # and at least `illumination_min_gain`. Paint in a building's shadow keeps its contrast
@@ -194,6 +246,13 @@ class SlidingWindowConfig:
     min_fit_pixels: int = 40  # pixels a boundary's fit needs (else it is not found)
 
     def __post_init__(self) -> None:
+        if self.binarisation not in ("edges", "image"):
+            raise InvalidValue("binarisation", f"must be 'edges' or 'image', got "
+                                               f"{self.binarisation!r}")
+        if self.edge_leans < 1 or min(self.edge_half_width_m, self.edge_length_m,
+                                      self.edge_dark_floor) <= 0:
+            raise InvalidValue("edge_leans", "edge_leans must be >= 1 and the edge widths, "
+                                             "length and floor > 0")
         if not 0.0 < self.illumination_min_gain <= max(1.0, self.illumination_max_gain):
             raise InvalidValue("illumination_min_gain", "must be > 0 and <= the max gain")
         if self.sobel_kernel not in (1, 3, 5, 7):
@@ -229,6 +288,7 @@ class DetectorsConfig:
     profiles: Profiles = Profiles()
     preprocess: Preprocess = Preprocess()
     lane: LaneRules = LaneRules()
+    ridge: RidgeConfig = RidgeConfig()
     hough: HoughConfig = HoughConfig()
     sliding_window: SlidingWindowConfig = SlidingWindowConfig()
     dashcam: DashcamDefaults = DashcamDefaults()

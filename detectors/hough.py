@@ -20,7 +20,7 @@ import numpy as np
 
 from lanekeep.detectors.boundaries import Boundary, fit_boundary, parallel
 from lanekeep.detectors.classical import ClassicalDetector
-from lanekeep.detectors.image_stage import RegionOfInterest
+from lanekeep.detectors.image_stage import RegionOfInterest, ridge_bird_eye
 from lanekeep.geometry.lane_poly import LanePoly
 
 
@@ -30,6 +30,14 @@ class HoughDetector(ClassicalDetector):
     default_name = "hough"
 
     # -- stages -------------------------------------------------------------------------------
+    def bird_eye(self, frame: np.ndarray) -> tuple[np.ndarray | None, str]:
+        """Ridges found in the bird's-eye view (`binarisation = "ridge"`, the default), or the
+        image-space ridge test below warped (`"image"`)."""
+        if self.config.hough.binarisation == "image":
+            return super().bird_eye(frame)
+        return ridge_bird_eye(frame, self.camera, self.view, self.config.preprocess,
+                              self.config.ridge, self.vehicles, self.rois)
+
     def binarise(self, roi: RegionOfInterest) -> np.ndarray:
         """Paint candidates: narrow bright ridges, brighter than the road on BOTH sides of them
         (a paint width away along the row) by a share of it (adaptive_ratio), by at least

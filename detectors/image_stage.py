@@ -252,6 +252,50 @@ def _same_pixels(a: np.ndarray, b: np.ndarray) -> bool:
 SHARED_ROIS = RoiMemo()  # the classical models' memo (ClassicalDetector.detect)
 
 
+def warped_roi(frame: np.ndarray, camera: CameraModel, view: BirdsEye, preprocess,
+               vehicles: VehicleFilter | None = None, memo: RoiMemo | None = None
+               ) -> tuple[RegionOfInterest, np.ndarray]:
+    """A frame's region of interest (as `binary_bird_eye` makes it: crop, scale, rain opened
+    away, what vehicles cover) and the bird's-eye pixels where the road is seen: inside the
+    image and not covered by a vehicle. For the models that find paint in the bird's-eye
+    view itself, where a line runs along the rows and can be averaged along its length."""
+    check_frame(frame, camera)
+    roi = (region_of_interest(frame, view, preprocess, vehicles) if memo is None
+           else memo.get(frame, view, preprocess, vehicles))
+    seen = view.warp(np.full(roi.grey.shape, 255, np.uint8)) == 255
+    if roi.covered is not None:
+        seen &= view.warp(roi.covered.view(np.uint8) * np.uint8(255)) == 0
+    return roi, seen
+
+
+def grain_noise(roi: RegionOfInterest, preprocess) -> str:
+    """Why the region of interest is sensor noise rather than a road ('' when it is not):
+    its grain above `preprocess.max_grain` (detectors/ridge.py's `grain`)."""
+    from lanekeep.detectors.ridge import grain
+
+    speckle = grain(roi.grey)
+    if speckle > preprocess.max_grain:
+        return f"image is speckle (grain {speckle:.2f} > {preprocess.max_grain:g}): noise"
+    return ""
+
+
+def ridge_bird_eye(frame: np.ndarray, camera: CameraModel, view: BirdsEye, preprocess, ridge,
+                   vehicles: VehicleFilter | None = None, memo: RoiMemo | None = None
+                   ) -> tuple[np.ndarray | None, str]:
+    """A frame's binary bird's-eye view (0/255) found as ridges in the bird's-eye view
+    (detectors/ridge.py, `ridge` its settings), or None and why it is noise."""
+    from lanekeep.detectors.ridge import paint_ridges
+
+    roi, seen = warped_roi(frame, camera, view, preprocess, vehicles, memo)
+    noise = grain_noise(roi, preprocess)
+    if noise:
+        return None, noise
+    w = view.window
+    mask = paint_ridges(view.warp(roi.grey), seen, w.m_per_col, w.m_per_row, ridge)
+    noise = reject_noise(mask, ridge.max_fill, 0.0)
+    return (None, noise) if noise else (mask, "")
+
+
 def binary_bird_eye(frame: np.ndarray, camera: CameraModel, view: BirdsEye, preprocess,
                     binarise: Callable[[RegionOfInterest], np.ndarray],
                     vehicles: VehicleFilter | None = None, memo: RoiMemo | None = None
