@@ -23,6 +23,9 @@ from lanekeep.detectors.image_stage import (
 )
 from lanekeep.detectors.vehicle_mask import VehicleFilter
 from lanekeep.geometry.camera_model import CameraModel
+from lanekeep.geometry.lane_poly import LanePoly
+
+WIDTH_GAIN = 0.3  # weight of a new frame's measured width in the running width
 
 
 class ClassicalDetector:
@@ -44,6 +47,7 @@ class ClassicalDetector:
         self.vehicles = VehicleFilter.of(self.view, self.config.preprocess)
         # Where the region of interest is shared with the other models (None: not shared).
         self.rois: RoiMemo | None = SHARED_ROIS
+        self._width: float | None = None  # the lane's width as measured on earlier frames
 
     @property
     def window(self) -> GroundWindow:
@@ -51,7 +55,29 @@ class ClassicalDetector:
         return self.view.window
 
     def reset(self) -> None:
-        """Forget state carried between frames (none unless a model keeps some)."""
+        """Forget state carried between frames: the lane width measured so far (and what a
+        model keeps of its own)."""
+        self._width = None
+
+    @property
+    def lane_width_m(self) -> float:
+        """The width a lone boundary is offset by: as measured on earlier frames of this
+        drive, else the car's prior."""
+        return self._width if self._width is not None else self.config.lane.lane_width_m
+
+    def _measure_width(self, estimate: LaneEstimate) -> None:
+        """Fold a frame's measured width (both boundaries, consistent with the prior) into
+        the running width: roads are 3.0-3.9 m wide where the prior says one figure, and a
+        lone boundary offset by the wrong width errs by half the difference."""
+        if not estimate.valid or estimate.left is None or estimate.right is None:
+            return
+        x = estimate.x_m
+        measured = float(LanePoly.of(estimate.left).y(x) - LanePoly.of(estimate.right).y(x))
+        rules = self.config.lane
+        if abs(measured - rules.lane_width_m) > rules.width_tolerance_m:
+            return
+        self._width = (measured if self._width is None
+                       else (1.0 - WIDTH_GAIN) * self._width + WIDTH_GAIN * measured)
 
     def binarise(self, roi: RegionOfInterest) -> np.ndarray:
         """Paint candidates (0/255) in the region of interest at the working scale (its
@@ -74,10 +100,12 @@ class ClassicalDetector:
     def detect(self, frame: np.ndarray) -> LaneEstimate:
         bev, noise = self.bird_eye(frame)
         if bev is None:
-            self.reset()
-            return LaneEstimate.invalid(noise, self.x_ref)
+            estimate = LaneEstimate.invalid(noise, self.x_ref)
+            self.remember(estimate)  # a noisy frame drops the fit, not the measured width
+            return estimate
         left, right = self.find_boundaries(bev)
         estimate = assemble(left, right, self.x_ref, self.config.lane, self.camera,
-                            support_confidence(left, right, self.view))
+                            support_confidence(left, right, self.view), self.lane_width_m)
+        self._measure_width(estimate)
         self.remember(estimate)
         return estimate

@@ -4,7 +4,7 @@ Paper 001's model #2 marks paint by the Sobel-x gradient of lightness and by sat
 hue. Per pixel those cues fail where paint is faint (concrete, fog, night: the gradient of a
 stripe 10-20% over the road is the size of the texture's), so here they are read in the
 bird's-eye view, where a boundary runs along the rows and each cue can be averaged over a
-metre or two of its length (line kernels leaning up to a heading, the best kept, as in
+metre or two of its length (along lines leaning up to a heading, the best kept, as in
 detectors/ridge.py):
 
 - a stripe is a RISING lightness edge followed, a paint width to the right, by a FALLING
@@ -25,12 +25,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from lanekeep.detectors.ridge import line_kernels
-
-
-def _along(image: np.ndarray, kernels: tuple[np.ndarray, ...]) -> list[np.ndarray]:
-    return [cv2.filter2D(image, -1, k, borderType=cv2.BORDER_CONSTANT) for k in kernels]
-
+from lanekeep.detectors.ridge import along_line, leans
 
 def _shift(image: np.ndarray, cols: int) -> np.ndarray:
     """`image` moved `cols` columns right (negative: left), zeros shifted in."""
@@ -58,18 +53,22 @@ def edge_pair_paint(hls_bev: np.ndarray, valid: np.ndarray, m_per_col: float,
     level = level / np.maximum(weight, 1e-3)
     half = max(1, int(round(config.edge_half_width_m / m_per_col)))
     length = max(1, int(round(config.edge_length_m / m_per_row)) | 1)
-    lean = config.edge_max_heading * m_per_row / m_per_col
-    kernels = line_kernels(length, lean, config.edge_leans)
+    max_lean = config.edge_max_heading * m_per_row / m_per_col
     lo, hi = config.yellow_hue
     yellow = ((hue >= lo) & (hue <= hi) & (sat >= config.yellow_saturation)
               & (light >= config.yellow_lightness) & ok).astype(np.float32)
     paint = np.zeros(lf.shape, bool)
-    floor = np.maximum(level, config.edge_dark_floor)
-    for g, y in zip(_along(grad, kernels), _along(yellow, kernels), strict=True):
+    needed = np.maximum(np.maximum(level, config.edge_dark_floor) * config.edge_ratio,
+                        config.edge_min_step)
+    any_yellow = bool(yellow.any())  # most roads have none: half the work then
+    cues = np.dstack([grad, yellow]) if any_yellow else grad
+    for lean in leans(max_lean, config.edge_leans):
+        averaged = along_line(cues, length, lean)
+        g = averaged[..., 0] if any_yellow else averaged
         # rising edge `half` columns left of the pixel, falling edge `half` right of it
-        rising, falling = _shift(g, half), -_shift(g, -half)
-        pair = np.minimum(rising, falling)
-        paint |= (pair / floor >= config.edge_ratio) & (pair >= config.edge_min_step)
-        paint |= y >= config.yellow_share
+        pair = np.minimum(_shift(g, half), -_shift(g, -half))
+        paint |= pair >= needed
+        if any_yellow:
+            paint |= averaged[..., 1] >= config.yellow_share
     paint &= ok
     return paint.view(np.uint8) * np.uint8(255)

@@ -265,6 +265,9 @@ def warped_roi(frame: np.ndarray, camera: CameraModel, view: BirdsEye, preproces
     seen = view.warp(np.full(roi.grey.shape, 255, np.uint8)) == 255
     if roi.covered is not None:
         seen &= view.warp(roi.covered.view(np.uint8) * np.uint8(255)) == 0
+    blind = int(round(view.window.blind_m / view.window.m_per_row))
+    if blind > 0:
+        seen[-blind:] = False  # the rows nearest the car: the hood's edge (GroundWindow)
     return roi, seen
 
 

@@ -46,7 +46,8 @@ class SlidingWindowDetector(ClassicalDetector):
         _, self._near_y = self.view.to_ground(cols, np.full(len(cols), self.view.rows - 1))
 
     def reset(self) -> None:
-        """Forget the previous frame's fit."""
+        """Forget the previous frame's fit and the measured width."""
+        super().reset()
         self._previous = [None, None]
 
     # -- stages -------------------------------------------------------------------------------
@@ -212,4 +213,4 @@ class SlidingWindowDetector(ClassicalDetector):
         if estimate.valid:
             self._previous = [estimate.left, estimate.right]
         else:
-            self.reset()
+            self._previous = [None, None]

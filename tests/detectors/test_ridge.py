@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from lanekeep.detectors.config import RidgeConfig
-from lanekeep.detectors.ridge import crest, line_kernels, paint_ridges
+from lanekeep.detectors.ridge import along_line, crest, paint_ridges
 
 M_PER_COL, M_PER_ROW = 0.05, 0.1  # the front profile's bird's-eye pixels
 ROWS, COLS = 160, 240
@@ -76,8 +76,13 @@ def test_a_leaning_line_is_followed_and_thinned_to_its_crest():
     assert on.sum(axis=1).max() <= 2  # one crest per row
 
 
-def test_kernels_average_and_crest_keeps_row_maxima():
-    for k in line_kernels(15, 0.8, 7):
-        assert k.shape[0] == 15 and k.sum() == pytest.approx(1.0)
+def test_along_line_means_follow_their_lean_and_crest_keeps_row_maxima():
+    image = np.zeros((40, 40), np.float32)
+    rows = np.arange(40)
+    image[rows, np.round(20 + 0.5 * (rows - 19.5)).astype(int)] = 1.0  # a line leaning 0.5
+    on = along_line(image, 9, 0.5)
+    assert on[20, 20] == pytest.approx(1.0)  # every pixel of the line averaged
+    assert along_line(image, 9, -0.5)[20, 20] < 0.5  # the other lean crosses it
+    assert along_line(np.full((5, 7, 2), 3.0, np.float32), 3, 0.3) == pytest.approx(3.0)
     row = np.array([[0, 1, 3, 2, 0, 5, 4]], np.float32)
     assert crest(row, 1).tolist() == [[False, False, True, False, False, True, False]]
