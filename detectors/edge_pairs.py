@@ -27,6 +27,7 @@ import numpy as np
 
 from lanekeep.detectors.ridge import along_line, leans
 
+
 def _shift(image: np.ndarray, cols: int) -> np.ndarray:
     """`image` moved `cols` columns right (negative: left), zeros shifted in."""
     out = np.zeros_like(image)
