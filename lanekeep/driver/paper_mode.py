@@ -17,7 +17,11 @@ What changes from our default loop, and why the default differs:
     a time constant and adds a curvature feed-forward;
   - regions of interest: model #1 (Hough) looks far, model #2 (sliding windows) looks near and
     narrow ("its ROI is larger and has a better performance in long-distance detection";
-    model #2 "has a smaller ROI"); ours gives both the same 4-20 m window.
+    model #2 "has a smaller ROI"); ours gives both the same 4-20 m window;
+  - binarisation: per pixel in the image, as the paper's models threshold it (model #1 a
+    brightness test, model #2 Sobel-x, saturation and hue), no blind band at the hood; ours
+    finds paint in the bird's-eye view, averaged along each line ([classical],
+    detectors/ridge.py and detectors/edge_pairs.py).
 """
 
 from __future__ import annotations
@@ -60,10 +64,12 @@ def roll_compensation(est: EstimationConfig) -> RollCompensation:
 def front_detector_config(name: str, mode: str,
                           base: DetectorsConfig | None = None) -> DetectorsConfig | None:
     """The detectors config a front model runs with: the shipped one (None), or in paper
-    mode the same with the model's own window."""
+    mode the same with the model's own window and the paper's per-pixel binarisation."""
     if mode != "paper" or name not in PAPER_WINDOWS:
         return base
     base = base or load_config()
     near, far, half = PAPER_WINDOWS[name]
-    front = replace(base.profiles.front, x_near_m=near, x_far_m=far, y_half_m=half)
-    return replace(base, profiles=replace(base.profiles, front=front))
+    front = replace(base.profiles.front, x_near_m=near, x_far_m=far, y_half_m=half, blind_m=0.0)
+    return replace(base, profiles=replace(base.profiles, front=front),
+                   hough=replace(base.hough, binarisation="image"),
+                   sliding_window=replace(base.sliding_window, binarisation="image"))
