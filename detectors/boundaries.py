@@ -28,16 +28,17 @@ class Boundary:
         return LanePoly.of(self.coeffs)
 
 
-def fit_boundary(xy: np.ndarray, rules: LaneRules, camera_x_m: float = 0.0) -> Boundary | None:
+def fit_boundary(xy: np.ndarray, rules: LaneRules, camera_x_m: float = 0.0,
+                 weighted: bool = True) -> Boundary | None:
     """Least-squares y(x): a parabola over long spans, a line over short ones.
 
-    Every point weighs the same. Points were once weighted by 1 / distance (a pixel's lateral
-    uncertainty grows with distance), but the bird's-eye ridges give one point per 0.1 m of
-    paint wherever it is, and then a near, partial dash beside the hood outweighed two whole
-    dashes further on (27-33 cm off at 10 m on clear_straight); on the tuning sets the two
-    weightings score the same. Points further than `rules.inlier_m` from the fit (a
-    vehicle's edge or a shadow's beside the paint) are dropped and the rest fitted again,
-    twice at most. None if unfit.
+    `weighted`: each point weighed by 1 / its distance from the camera, for a pixel's lateral
+    uncertainty grows with distance (the per-pixel image binarisations). The bird's-eye
+    models give one point per 0.1 m of paint wherever it is and fit unweighted: weighted, a
+    near, partial dash beside the hood outweighed two whole dashes further on (27-33 cm off
+    at 10 m on clear_straight), and on the tuning sets the two weightings score the same.
+    Points further than `rules.inlier_m` from the fit (a vehicle's edge or a shadow's beside
+    the paint) are dropped and the rest fitted again, twice at most. None if unfit.
     """
     coeffs = None
     for _ in range(3):
@@ -48,7 +49,8 @@ def fit_boundary(xy: np.ndarray, rules: LaneRules, camera_x_m: float = 0.0) -> B
         if span < rules.min_span_m:
             return None
         degree = 2 if span >= rules.quadratic_span_m else 1
-        c = np.polyfit(x, y, degree)[::-1]
+        weights = 1.0 / np.maximum(np.abs(x - camera_x_m), 1.0) if weighted else None
+        c = np.polyfit(x, y, degree, w=weights)[::-1]
         coeffs = np.zeros(3)
         coeffs[: degree + 1] = c
         inliers = np.abs(y - LanePoly.of(coeffs).y(x)) <= rules.inlier_m

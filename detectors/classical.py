@@ -60,6 +60,12 @@ class ClassicalDetector:
         self._width = None
 
     @property
+    def bird_eye_paint(self) -> bool:
+        """Whether this model finds paint in the bird's-eye view (its binarisation setting);
+        such a model also fits unweighted and remembers the lane's measured width."""
+        return False
+
+    @property
     def lane_width_m(self) -> float:
         """The width a lone boundary is offset by: as measured on earlier frames of this
         drive, else the car's prior."""
@@ -104,8 +110,10 @@ class ClassicalDetector:
             self.remember(estimate)  # a noisy frame drops the fit, not the measured width
             return estimate
         left, right = self.find_boundaries(bev)
+        width = self.lane_width_m if self.bird_eye_paint else None
         estimate = assemble(left, right, self.x_ref, self.config.lane, self.camera,
-                            support_confidence(left, right, self.view), self.lane_width_m)
-        self._measure_width(estimate)
+                            support_confidence(left, right, self.view), width)
+        if self.bird_eye_paint:
+            self._measure_width(estimate)
         self.remember(estimate)
         return estimate

@@ -29,11 +29,15 @@ class HoughDetector(ClassicalDetector):
 
     default_name = "hough"
 
+    @property
+    def bird_eye_paint(self) -> bool:
+        return self.config.hough.binarisation == "ridge"
+
     # -- stages -------------------------------------------------------------------------------
     def bird_eye(self, frame: np.ndarray) -> tuple[np.ndarray | None, str]:
-        """Ridges found in the bird's-eye view (`binarisation = "ridge"`, the default), or the
-        image-space ridge test below warped (`"image"`)."""
-        if self.config.hough.binarisation == "image":
+        """Ridges found in the bird's-eye view (`binarisation = "ridge"`), or the image-space
+        ridge test below warped (`"image"`, the default)."""
+        if not self.bird_eye_paint:
             return super().bird_eye(frame)
         return ridge_bird_eye(frame, self.camera, self.view, self.config.preprocess,
                               self.config.ridge, self.vehicles, self.rois)
@@ -155,7 +159,9 @@ class HoughDetector(ClassicalDetector):
         # side's fit and reach change only when a segment joins it, so they are kept until
         # then (the fit is the grow loop's cost: one per side per segment otherwise).
         x_cam = float(self.camera.position_m[0])
-        fits = [None if p is None else fit_boundary(p, rules, x_cam) for p in points]
+        weighted = not self.bird_eye_paint
+        fits = [None if p is None else fit_boundary(p, rules, x_cam, weighted)
+                for p in points]
         current = [None if p is None else self._provisional(f, p, heading)
                    for f, p in zip(fits, points, strict=True)]
         reached = [None if p is None else float((d * p[:, 0]).max()) for p in points]
@@ -178,7 +184,7 @@ class HoughDetector(ClassicalDetector):
                 used[j] = True
                 pts = np.concatenate([points[best_side], self._samples(seg[j : j + 1])])
                 points[best_side] = pts
-                fits[best_side] = fit_boundary(pts, rules, x_cam)
+                fits[best_side] = fit_boundary(pts, rules, x_cam, weighted)
                 current[best_side] = self._provisional(fits[best_side], pts, heading)
                 reached[best_side] = float((d * pts[:, 0]).max())
         return parallel(fits[0], fits[1], rules, x_cam)

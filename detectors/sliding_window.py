@@ -50,11 +50,15 @@ class SlidingWindowDetector(ClassicalDetector):
         super().reset()
         self._previous = [None, None]
 
+    @property
+    def bird_eye_paint(self) -> bool:
+        return self.config.sliding_window.binarisation == "edges"
+
     # -- stages -------------------------------------------------------------------------------
     def bird_eye(self, frame: np.ndarray) -> tuple[np.ndarray | None, str]:
-        """The cues read in the bird's-eye view (`binarisation = "edges"`, the default), or
-        per pixel in the image and warped (`"image"`)."""
-        if self.config.sliding_window.binarisation == "image":
+        """The cues read in the bird's-eye view (`binarisation = "edges"`), or per pixel in
+        the image and warped (`"image"`, the default)."""
+        if not self.bird_eye_paint:
             return super().bird_eye(frame)
         pre = self.config.preprocess
         roi, seen = warped_roi(frame, self.camera, self.view, pre, self.vehicles, self.rois)
@@ -184,6 +188,7 @@ class SlidingWindowDetector(ClassicalDetector):
         ys, xs = np.nonzero(bev)
         gx, gy = self.view.to_ground(xs, ys)
         x_cam = float(self.camera.position_m[0])
+        weighted = not self.bird_eye_paint
         fits: list[Boundary | None] = [None, None]
         starts = None
         for k, side in enumerate((1.0, -1.0)):
@@ -191,7 +196,8 @@ class SlidingWindowDetector(ClassicalDetector):
             if prev is not None:
                 band = np.abs(gy - LanePoly.of(prev).y(gx)) <= cfg.search_margin_m
                 if band.sum() >= cfg.min_fit_pixels:
-                    fits[k] = fit_boundary(np.stack([gx[band], gy[band]], 1), rules, x_cam)
+                    fits[k] = fit_boundary(np.stack([gx[band], gy[band]], 1), rules, x_cam,
+                                           weighted)
                     if fits[k] is not None:
                         continue
             if starts is None:
@@ -200,7 +206,7 @@ class SlidingWindowDetector(ClassicalDetector):
                 continue
             idx = self._slide(starts[k], ys, xs)
             if len(idx) >= cfg.min_fit_pixels:
-                fit = fit_boundary(np.stack([gx[idx], gy[idx]], 1), rules, x_cam)
+                fit = fit_boundary(np.stack([gx[idx], gy[idx]], 1), rules, x_cam, weighted)
                 ok = fit is not None and side * fit.lane.y(self.view.window.x_near_m) > 0
                 fits[k] = fit if ok else None
         return parallel(fits[0], fits[1], rules, x_cam)

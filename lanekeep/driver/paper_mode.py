@@ -19,9 +19,9 @@ What changes from our default loop, and why the default differs:
     narrow ("its ROI is larger and has a better performance in long-distance detection";
     model #2 "has a smaller ROI"); ours gives both the same 4-20 m window;
   - binarisation: per pixel in the image, as the paper's models threshold it (model #1 a
-    brightness test, model #2 Sobel-x, saturation and hue), no blind band at the hood; ours
-    finds paint in the bird's-eye view, averaged along each line ([classical],
-    detectors/ridge.py and detectors/edge_pairs.py).
+    brightness test, model #2 Sobel-x, saturation and hue), whatever a detectors file
+    chooses for the default mode (which may find paint in the bird's-eye view: [classical],
+    detectors/ridge.py and detectors/edge_pairs.py, opt-in).
 """
 
 from __future__ import annotations

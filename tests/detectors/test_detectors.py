@@ -73,11 +73,25 @@ def _errors(world, frames, detector, camera="front", x_boundary=10.0, fit_range=
     return np.array(offset_err), np.array(boundary_err), invalid
 
 
+BIRD_EYE = {"hough": ("hough", "ridge"), "sliding_window": ("sliding_window", "edges")}
+
+
+def bird_eye_config(name: str):
+    """The shipped settings with `name`'s bird's-eye binarisation ([classical]; opt-in)."""
+    from lanekeep.detectors.config import load_config
+
+    config = load_config()
+    table, mode = BIRD_EYE[name]
+    return dataclasses.replace(config, **{table: dataclasses.replace(
+        getattr(config, table), binarisation=mode)})
+
+
 @pytest.mark.parametrize("scenario", ["clear_straight", "clear_curve"])
 @pytest.mark.parametrize("name", ["hough", "sliding_window"])
-def test_offsets_and_boundaries_match_ground_truth(rendered, scenario, name):
+@pytest.mark.parametrize("bird_eye", [False, True], ids=["image", "bird_eye"])
+def test_offsets_and_boundaries_match_ground_truth(rendered, scenario, name, bird_eye):
     world, frames, cameras = rendered[scenario]
-    detector = make_detector(name, cameras["front"])
+    detector = make_detector(name, cameras["front"], bird_eye_config(name) if bird_eye else None)
     offset_err, boundary_err, invalid = _errors(world, frames, detector)
     assert not invalid, f"{name} found no lane at {invalid}"
     assert np.median(offset_err) <= 0.10, offset_err
@@ -124,9 +138,10 @@ def test_sliding_window_on_the_rear_camera_reports_the_lane_behind(
 
 
 @pytest.mark.parametrize("name", ["hough", "sliding_window"])  # the shipped ones
-def test_hard_frames_are_invalid_never_nan(rendered, name):
+@pytest.mark.parametrize("bird_eye", [False, True], ids=["image", "bird_eye"])
+def test_hard_frames_are_invalid_never_nan(rendered, name, bird_eye):
     camera = rendered["clear_straight"][2]["front"]
-    detector = make_detector(name, camera)
+    detector = make_detector(name, camera, bird_eye_config(name) if bird_eye else None)
     rng = np.random.default_rng(0)
     sky = np.zeros((720, 1280, 3), np.uint8)
     sky[:] = np.linspace([90, 140, 220], [170, 200, 240], 720)[:, None, :].astype(np.uint8)
