@@ -20,6 +20,9 @@ from lanekeep.detectors.image_stage import (
     RegionOfInterest,
     RoiMemo,
     binary_bird_eye,
+    grain_noise,
+    reject_noise,
+    warped_roi,
 )
 from lanekeep.detectors.vehicle_mask import VehicleFilter
 from lanekeep.geometry.camera_model import CameraModel
@@ -99,9 +102,29 @@ class ClassicalDetector:
 
     def bird_eye(self, frame: np.ndarray) -> tuple[np.ndarray | None, str]:
         """The frame's binary bird's-eye view (0/255), or None and why it is noise: the
-        shared image stage with this model's `binarise`."""
-        return binary_bird_eye(frame, self.camera, self.view, self.config.preprocess,
-                               self.binarise, self.vehicles, self.rois)
+        shared image stage with this model's `binarise`, or, for a model that finds paint
+        in the bird's-eye view, the region's warp with this model's `bird_eye_mask`."""
+        pre = self.config.preprocess
+        if not self.bird_eye_paint:
+            return binary_bird_eye(frame, self.camera, self.view, pre, self.binarise,
+                                   self.vehicles, self.rois)
+        roi, seen = warped_roi(frame, self.camera, self.view, pre, self.vehicles, self.rois)
+        noise = grain_noise(roi, pre)
+        if noise:
+            return None, noise
+        mask = self.bird_eye_mask(roi, seen)
+        noise = reject_noise(mask, self.bird_eye_max_fill, 0.0)
+        return (None, noise) if noise else (mask, "")
+
+    def bird_eye_mask(self, roi: RegionOfInterest, seen: np.ndarray) -> np.ndarray:
+        """Paint (0/255) in the bird's-eye view, from the region of interest and where the
+        road is seen there (the models with `bird_eye_paint`)."""
+        raise NotImplementedError
+
+    @property
+    def bird_eye_max_fill(self) -> float:
+        """The share of the bird's-eye view above which a paint mask is noise."""
+        return self.config.preprocess.max_fill
 
     def detect(self, frame: np.ndarray) -> LaneEstimate:
         bev, noise = self.bird_eye(frame)

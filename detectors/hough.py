@@ -20,7 +20,8 @@ import numpy as np
 
 from lanekeep.detectors.boundaries import Boundary, fit_boundary, parallel
 from lanekeep.detectors.classical import ClassicalDetector
-from lanekeep.detectors.image_stage import RegionOfInterest, ridge_bird_eye
+from lanekeep.detectors.image_stage import RegionOfInterest
+from lanekeep.detectors.ridge import paint_ridges
 from lanekeep.geometry.lane_poly import LanePoly
 
 
@@ -33,14 +34,17 @@ class HoughDetector(ClassicalDetector):
     def bird_eye_paint(self) -> bool:
         return self.config.hough.binarisation == "ridge"
 
+    @property
+    def bird_eye_max_fill(self) -> float:
+        return self.config.ridge.max_fill
+
     # -- stages -------------------------------------------------------------------------------
-    def bird_eye(self, frame: np.ndarray) -> tuple[np.ndarray | None, str]:
-        """Ridges found in the bird's-eye view (`binarisation = "ridge"`), or the image-space
-        ridge test below warped (`"image"`, the default)."""
-        if not self.bird_eye_paint:
-            return super().bird_eye(frame)
-        return ridge_bird_eye(frame, self.camera, self.view, self.config.preprocess,
-                              self.config.ridge, self.vehicles, self.rois)
+    def bird_eye_mask(self, roi: RegionOfInterest, seen: np.ndarray) -> np.ndarray:
+        """Ridges found in the bird's-eye view (`binarisation = "ridge"`, detectors/ridge.py);
+        `"image"` (the default) uses `binarise` below instead."""
+        w = self.view.window
+        return paint_ridges(self.view.warp(roi.grey), seen, w.m_per_col, w.m_per_row,
+                            self.config.ridge)
 
     def binarise(self, roi: RegionOfInterest) -> np.ndarray:
         """Paint candidates: narrow bright ridges, brighter than the road on BOTH sides of them

@@ -282,23 +282,6 @@ def grain_noise(roi: RegionOfInterest, preprocess) -> str:
     return ""
 
 
-def ridge_bird_eye(frame: np.ndarray, camera: CameraModel, view: BirdsEye, preprocess, ridge,
-                   vehicles: VehicleFilter | None = None, memo: RoiMemo | None = None
-                   ) -> tuple[np.ndarray | None, str]:
-    """A frame's binary bird's-eye view (0/255) found as ridges in the bird's-eye view
-    (detectors/ridge.py, `ridge` its settings), or None and why it is noise."""
-    from lanekeep.detectors.ridge import paint_ridges
-
-    roi, seen = warped_roi(frame, camera, view, preprocess, vehicles, memo)
-    noise = grain_noise(roi, preprocess)
-    if noise:
-        return None, noise
-    w = view.window
-    mask = paint_ridges(view.warp(roi.grey), seen, w.m_per_col, w.m_per_row, ridge)
-    noise = reject_noise(mask, ridge.max_fill, 0.0)
-    return (None, noise) if noise else (mask, "")
-
-
 def binary_bird_eye(frame: np.ndarray, camera: CameraModel, view: BirdsEye, preprocess,
                     binarise: Callable[[RegionOfInterest], np.ndarray],
                     vehicles: VehicleFilter | None = None, memo: RoiMemo | None = None

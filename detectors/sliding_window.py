@@ -21,12 +21,7 @@ from lanekeep.detectors.base import LaneEstimate
 from lanekeep.detectors.boundaries import Boundary, fit_boundary, parallel
 from lanekeep.detectors.classical import ClassicalDetector
 from lanekeep.detectors.edge_pairs import edge_pair_paint
-from lanekeep.detectors.image_stage import (
-    RegionOfInterest,
-    grain_noise,
-    reject_noise,
-    warped_roi,
-)
+from lanekeep.detectors.image_stage import RegionOfInterest
 from lanekeep.geometry.lane_poly import LanePoly
 
 _KERNEL_3X3 = np.ones((3, 3), np.uint8)  # the ridge's dilation
@@ -55,21 +50,12 @@ class SlidingWindowDetector(ClassicalDetector):
         return self.config.sliding_window.binarisation == "edges"
 
     # -- stages -------------------------------------------------------------------------------
-    def bird_eye(self, frame: np.ndarray) -> tuple[np.ndarray | None, str]:
-        """The cues read in the bird's-eye view (`binarisation = "edges"`), or per pixel in
-        the image and warped (`"image"`, the default)."""
-        if not self.bird_eye_paint:
-            return super().bird_eye(frame)
-        pre = self.config.preprocess
-        roi, seen = warped_roi(frame, self.camera, self.view, pre, self.vehicles, self.rois)
-        noise = grain_noise(roi, pre)
-        if noise:
-            return None, noise
+    def bird_eye_mask(self, roi: RegionOfInterest, seen: np.ndarray) -> np.ndarray:
+        """The cues read in the bird's-eye view (`binarisation = "edges"`,
+        detectors/edge_pairs.py); `"image"` (the default) uses `binarise` below instead."""
         hls = self.view.warp(cv2.cvtColor(roi.rgb, cv2.COLOR_RGB2HLS))
         w = self.view.window
-        mask = edge_pair_paint(hls, seen, w.m_per_col, w.m_per_row, self.config.sliding_window)
-        noise = reject_noise(mask, pre.max_fill, 0.0)
-        return (None, noise) if noise else (mask, "")
+        return edge_pair_paint(hls, seen, w.m_per_col, w.m_per_row, self.config.sliding_window)
 
     def binarise(self, roi: RegionOfInterest) -> np.ndarray:
         """Sobel-x on lightness | white lightness (both on a bright ridge) | yellow hue+sat."""
