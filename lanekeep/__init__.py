@@ -7,7 +7,9 @@ imports `cli` (tests/project/test_layers.py enforces it):
     0  core        config reading, plug-in loading, stop signals, timing, progress, workers,
                    files, the vehicle-signal and step types;  mjcf (the car's MJCF, data)
     1  geometry    road (Frenet), road meshes, marking layout, pinhole camera, lens, car specs
-    2  detectors   lane detectors (frames -> LaneEstimate);  realcam (real cameras, photos)
+    2  detectors   lane detectors (frames -> LaneEstimate);  realcam (real cameras, photos);
+                   traffic (IDM car following, MOBIL lane changes, lane-change paths:
+                   pure maths on the road's Frenet frame)
     3  estimators  Kalman trackers, MMAE, the closed loop's estimator and its settings
     4  scenario    the scenario schema (frozen dataclasses from TOML), shipped scenarios
     5  world       the MjSpec world: road, paint, props, traffic, lighting, the car

@@ -20,7 +20,7 @@ FOLDERS = ("lanekeep", "detectors", "estimators", "mjcf")
 LAYERS = {
     "core": 0, "mjcf": 0,
     "geometry": 1,
-    "detectors": 2, "realcam": 2,
+    "detectors": 2, "realcam": 2, "traffic": 2,
     "estimators": 3,
     "scenario": 4,
     "world": 5,
