@@ -11,6 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Protocol, runtime_checkable
 
+from lanekeep.control.acc import AccSettings, AdaptiveCruise, acc_settings
 from lanekeep.core.signals import VehicleSignals
 
 if TYPE_CHECKING:
@@ -30,12 +31,22 @@ class ControlContext:
     max_steer_rad: float  # road-wheel angle at steer = +-1
     control_lookahead_m: float  # where the PID reads the lane ([estimation])
     mode: str = "default"  # [estimation] mode: "paper" runs the paper's own PID
+    # The adaptive cruise's settings ([control] acc_*); None: it is off and the throttle holds
+    # target_speed_mps. Paper mode never has one: the paper drives at a constant speed.
+    acc: AccSettings | None = None
 
     @classmethod
     def of(cls, scenario: Scenario, geometry: CarGeometry) -> ControlContext:
+        mode = scenario.estimation.mode
         return cls(scenario.control_period_s, scenario.target_speed_mps, geometry.wheelbase_m,
-                   geometry.max_steer_rad, scenario.estimation.control_lookahead_m,
-                   scenario.estimation.mode)
+                   geometry.max_steer_rad, scenario.estimation.control_lookahead_m, mode,
+                   acc_settings(scenario.control, mode))
+
+    def adaptive_cruise(self) -> AdaptiveCruise | None:
+        """The ACC this context asks for (lanekeep/control/acc.py), None when it is off."""
+        if self.acc is None:
+            return None
+        return AdaptiveCruise(self.acc, self.target_speed_mps, self.dt_s)
 
 
 @runtime_checkable

@@ -46,7 +46,8 @@ def lane_curvature(centre: np.ndarray, x_m: float) -> float:
 
 
 class PidController:
-    """The default: the steering PID of paper eq. 9 (lanekeep/control/pid.py) and the speed PI.
+    """The default: the steering PID of paper eq. 9 (lanekeep/control/pid.py) and the speed PI,
+    or the adaptive cruise for the throttle when the context has one (lanekeep/control/acc.py).
 
     Default mode: feedback on the lane's offset and heading projected `control_lookahead_m`
     ahead, the lane's curvature there into the feed-forward, and the gains scheduled on the
@@ -61,10 +62,17 @@ class PidController:
                                     context.wheelbase_m, context.max_steer_rad,
                                     paper_gains=PaperGains() if self.paper_mode else None)
         self.speed = SpeedController(context.target_speed_mps, context.dt_s)
+        self.acc = context.adaptive_cruise()
 
     def reset(self) -> None:
         self.steering.reset()
         self.speed.reset()
+        if self.acc is not None:
+            self.acc.reset()
+
+    def throttle(self, signals: VehicleSignals) -> float:
+        """The speed PI toward the target speed, or the adaptive cruise's when it is on."""
+        return self.speed(signals.speed_mps) if self.acc is None else self.acc(signals)
 
     def control(self, estimate: EstimatorOutput, signals: VehicleSignals
                 ) -> tuple[float, float]:
@@ -91,7 +99,7 @@ class PidController:
             # a curve the car is already turning through.
             steer = self.steering(control_offset, speed, curvature_1pm=curvature,
                                   schedule_curvature_1pm=max(curvature, path, key=abs))
-        return steer, self.speed(speed)
+        return steer, self.throttle(signals)
 
 
 CONTROLLERS: dict[str, Callable[[ControlContext], Controller]] = {

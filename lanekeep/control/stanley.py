@@ -41,7 +41,8 @@ class StanleyGains:
 
 
 class StanleyController:
-    """Stanley steering on the estimator's lane centre, the speed PI for throttle.
+    """Stanley steering on the estimator's lane centre, the speed PI for throttle (or the
+    adaptive cruise when the context has one, lanekeep/control/acc.py).
 
     The lane is a polynomial y(x) = c0 + c1 x + c2 x^2 in the vehicle frame (origin under the
     middle of the wheelbase, y left); the front axle is at x = L / 2, where the tracker's
@@ -52,9 +53,12 @@ class StanleyController:
         self.context = context
         self.gains = gains or StanleyGains()
         self.speed = SpeedController(context.target_speed_mps, context.dt_s)
+        self.acc = context.adaptive_cruise()
 
     def reset(self) -> None:
         self.speed.reset()
+        if self.acc is not None:
+            self.acc.reset()
 
     def steering_angle(self, centre, speed_mps: float) -> float:
         """delta (rad, + = left) for lane centre coefficients `centre` at speed `speed_mps`."""
@@ -69,7 +73,7 @@ class StanleyController:
 
     def control(self, estimate: EstimatorOutput, signals: VehicleSignals
                 ) -> tuple[float, float]:
-        throttle = self.speed(signals.speed_mps)
+        throttle = self.speed(signals.speed_mps) if self.acc is None else self.acc(signals)
         if estimate.centre is None:  # no lane: wheel straight, as the PID does
             return 0.0, throttle
         delta = self.steering_angle(estimate.centre, signals.speed_mps)

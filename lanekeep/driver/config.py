@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from lanekeep.control.acc import AccSettings
 from lanekeep.control.base import ControlContext
 from lanekeep.detectors.config import DetectorsConfig
 from lanekeep.detectors.registry import builtin_family, front_labels
@@ -36,6 +37,7 @@ class DriverConfig:
     car: CarGeometry
     cameras: Mapping[str, CameraModel]  # per camera name, its model at the frames' size
     distortions: Mapping[str, np.ndarray | None] = field(default_factory=dict)  # OpenCV lens
+    acc: AccSettings | None = None  # the adaptive cruise ([control] acc); None: off
 
     # -- what the settings imply (paper mode folded in) --------------------------------------
     @property
@@ -68,7 +70,8 @@ class DriverConfig:
         """What the controller is built from."""
         est = self.estimation
         return ControlContext(self.period_s, self.target_speed_mps, self.car.wheelbase_m,
-                              self.car.max_steer_rad, est.control_lookahead_m, est.mode)
+                              self.car.max_steer_rad, est.control_lookahead_m, est.mode,
+                              self.acc)
 
     @property
     def odometry_lever_m(self) -> float:

@@ -1,6 +1,7 @@
 """The `[sensors]` table of a scenario: the error magnitudes of the car's sensors, with the
 sources of their defaults (the simulator that applies them is
-lanekeep/sensing/vehicle_sensors.py)."""
+lanekeep/sensing/vehicle_sensors.py), and its `[sensors.radar]` table: the forward radar's
+coverage and accuracy from its data sheet (lanekeep/sensing/radar.py models it)."""
 
 from __future__ import annotations
 
@@ -14,6 +15,54 @@ from lanekeep.core.setting import check_settings, setting
 G_MPS2 = 9.80665  # standard gravity, to convert µg figures
 MAX_SPEED_SCALE_SIGMA = 0.1  # beyond this a drawn scale factor could come near zero
 STEERING_RATIO_RANGE = (5.0, 30.0)
+KMH = 1.0 / 3.6  # km/h in m/s
+
+
+@dataclass(frozen=True)
+class RadarConfig:
+    """The forward radar: Continental ARS 408-21 long-range radar (77 GHz FMCW), from its data
+    sheet ("ARS 408-21 Premium Long Range Radar Sensor 77 GHz", Continental Engineering
+    Services, technical data; the 250 m reach and ~13 Hz cycle also in Caesar et al., nuScenes,
+    CVPR 2020, which fits five of them):
+      - far scan: 0.20-250 m over +-9 deg azimuth; near scan: 0.20-70 m over +-45 deg (the
+        sheet's third zone, 0.20-20 m at +-60 deg, is left out: nothing the car follows is
+        there);
+      - distance accuracy +-0.40 m far, +-0.10 m near; azimuth accuracy +-0.1 deg far, near
+        +-0.3 deg at 0 deg growing to +-1 deg at +-45 deg; velocity accuracy +-0.1 km/h;
+      - cycle ~72 ms (here one reading per control period).
+    The sheet's "+-" accuracies are taken as 1-sigma of Gaussian noise: conservative, since a
+    tolerance band usually covers more than one sigma. `[sensors] perfect = true` makes the
+    radar exact too.
+    """
+
+    far_range_m: float = setting(250.0, "Reach of the far scan, straight ahead.",
+                                 bounds=(1.0, 1000.0))
+    far_half_fov_deg: float = setting(9.0, "Half the far scan's azimuth field of view.",
+                                      bounds=(0.5, 60.0))
+    near_range_m: float = setting(70.0, "Reach of the near scan (0 = none); a ray in both scans "
+                                  "reaches the longer.", bounds=(0.0, 1000.0))
+    near_half_fov_deg: float = setting(45.0, "Half the near scan's azimuth field of view.",
+                                       bounds=(0.5, 60.0))
+    min_range_m: float = setting(0.2, "Nothing nearer is reported.", bounds=(0.0, 10.0))
+    range_sigma_far_m: float = setting(0.40, "Range noise beyond near_range_m, 1-sigma.",
+                                       allowed=">= 0")
+    range_sigma_near_m: float = setting(0.10, "Range noise within near_range_m, 1-sigma.",
+                                        allowed=">= 0")
+    azimuth_sigma_far_deg: float = setting(0.1, "Azimuth noise of far detections, 1-sigma.",
+                                           allowed=">= 0")
+    azimuth_sigma_near_deg: float = setting(0.3, "Azimuth noise of near detections straight "
+                                            "ahead, 1-sigma.", allowed=">= 0")
+    azimuth_sigma_near_edge_deg: float = setting(1.0, "Azimuth noise at the near scan's edge, "
+                                                 "1-sigma (linear in between).", allowed=">= 0")
+    range_rate_sigma_mps: float = setting(0.1 * KMH, "Range-rate (Doppler) noise, 1-sigma "
+                                          "(0.1 km/h).", allowed=">= 0")
+
+    def __post_init__(self):
+        check_settings(self)
+        for f in dataclasses.fields(self):
+            value = getattr(self, f.name)
+            if not 0.0 <= value < math.inf:
+                raise InvalidValue(f.name, f"must be finite and >= 0, got {value}")
 
 
 @dataclass(frozen=True)
@@ -71,11 +120,13 @@ class SensorsConfig:
                                           "wheel.", allowed=">= 0")
     steering_ratio: float = setting(15.0, "Steering wheel to road wheel, for the two keys above.",
                                     bounds=STEERING_RATIO_RANGE)
+    radar: RadarConfig = setting(factory=RadarConfig, doc="The forward radar (Continental ARS "
+                                 "408-21 data sheet; sources: lanekeep/scenario/sensors.py).")
 
     def __post_init__(self):
         check_settings(self)
         for f in dataclasses.fields(self):
-            if f.name in ("perfect", "steering_ratio"):
+            if f.name in ("perfect", "steering_ratio", "radar"):
                 continue
             value = getattr(self, f.name)
             if not 0.0 <= value < math.inf:

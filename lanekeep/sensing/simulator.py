@@ -8,10 +8,14 @@ car is built from is its spec sheet (`car`, `cameras`, `distortions`), never the
 
 Randomness: one generator per episode from the scenario's seed and name
 (lanekeep/scenario/streams.py); the image effects draw from it, the sensors from a child
-stream of their own, so that a perfect-sensor run sees the same frames.
+stream of their own, so that a perfect-sensor run sees the same frames, and the forward radar
+from a second child (spawned after the sensors', so the frames and the other signals are the
+same with or without it).
 """
 
 from __future__ import annotations
+
+from dataclasses import replace
 
 import numpy as np
 
@@ -22,6 +26,7 @@ from lanekeep.geometry.car import CarGeometry
 from lanekeep.scenario.schema import Scenario
 from lanekeep.scenario.streams import stream_entropy
 from lanekeep.sensing.cameras import CameraRig, RenderSettings
+from lanekeep.sensing.radar import Radar
 from lanekeep.sensing.snapshot import make_effects
 from lanekeep.sensing.vehicle_sensors import VehicleSensors
 from lanekeep.world.build import World, build
@@ -49,6 +54,8 @@ class Simulator:
         # One effects pipeline per camera: lens drops and the auto-exposure keep state.
         self.effects = make_effects(scenario, self.world, self.rig, self.rng)
         self.sensors = VehicleSensors(scenario.sensors, self.period_s, self.rng.spawn(1)[0])
+        self.radar = Radar(self.world.model, scenario.sensors.radar, scenario.sensors.perfect,
+                           self.rng.spawn(1)[0])
 
     def restart(self) -> None:
         """The same drive from its start: the car back at its start pose and speed, the other
@@ -75,7 +82,8 @@ class Simulator:
     # -- the period ----------------------------------------------------------------------------
     def sense(self) -> Observation:
         """The cameras' frames (the renderer and the image effects image the true scene;
-        motion blur follows the true motion), then the sensors' signals."""
+        motion blur follows the true motion), then the sensors' signals with the radar's
+        cycle, all of the world at one instant."""
         data, car = self.world.data, self.world.car
         frames = {}
         for name in self.rig.CAMERA_NAMES:
@@ -89,12 +97,18 @@ class Simulator:
                                               depth_m=depth)
             self.clock.lap(f"effects_{name}")
         signals = self.sensors.sample(car)
+        signals = replace(signals, radar=self.radar.sample(data))
+        self.clock.lap("sensors")
         return Observation(time_s=float(data.time), frames=frames, signals=signals)
 
     def actuate(self, command: Command) -> None:
         """Apply the command for one control period (lanekeep.world.build.SimulationError
-        when the physics goes unstable)."""
-        self.world.step(command.steer, command.throttle, self.period_s)
+        when the physics goes unstable). The clock's stages: "physics" (the car), "traffic"
+        (the other vehicles' model and poses, the lamps' pools)."""
+        self.world.step(command.steer, command.throttle, self.period_s, move_scene=False)
+        self.clock.lap("physics")
+        self.world.move_scene()
+        self.clock.lap("traffic")
 
     # -- for the recording ---------------------------------------------------------------------
     def marking_masks(self) -> dict[str, np.ndarray]:
