@@ -44,6 +44,7 @@ from lanekeep.report.tables import (
     episode_table,
     interval_table,
     paired_table,
+    safety_table,
     single_model_table,
     summary_table,
 )
@@ -234,6 +235,9 @@ def _cmd_bench(args: argparse.Namespace) -> int:
     note = (f"on the baseline's seeds ({args.baseline})" if plan else seeds_note(args))
     print("\n" + note if note else "", file=out)
     print(interval_table(main_docs, args.wide), file=out)
+    safety = safety_table(main_docs)  # "" without other vehicles or hard braking
+    if safety:
+        print("\n" + safety, file=out)
     if many or args.single_model:
         print("\n" + paired_table(main_docs), file=out)
     print(f"\nbench wall time: {wall:.1f} s for {len(jobs)} episodes "

@@ -24,11 +24,35 @@ def _plot(origin: str, name: str, **kwargs):
                               plot_legend=rrb.PlotLegend(visible=False), **kwargs)
 
 
+def has_other_vehicles(scenario) -> bool:
+    """Whether the scenario puts other vehicles on the road (listed ones, drawn traffic or a
+    scripted event's): then the layout shows the safety plots."""
+    traffic = scenario.traffic
+    return bool(scenario.conditions.vehicles or traffic.vehicles_per_km > 0
+                or any(getattr(traffic, "lane_vehicles_per_km", ()))
+                or getattr(traffic, "events", ()))
+
+
+def _safety_column(scenario):
+    """Gap and time to collision to the vehicle ahead, the car's acceleration (one unit a
+    plot; lanekeep/scoring/safety.py)."""
+    import rerun.blueprint as rrb
+
+    return rrb.Vertical(
+        _plot("plots/gap", "gap to the vehicle ahead (m)",
+              axis_y=rrb.ScalarAxis(range=(0.0, 3.0 * max(10.0, scenario.target_speed_mps)))),
+        _plot("plots/ttc", "time to collision (s, at most 10)",
+              axis_y=rrb.ScalarAxis(range=(0.0, 10.0))),
+        _plot("plots/accel", "acceleration (m/s^2; hard braking at -3.9)"),
+    )
+
+
 def blueprint(scenario):
     """Cameras and the 3D follow view on top; below, the road map with the colour key |
     offsets, errors and MMAE residuals (cm) | MMAE probabilities, the car's offset (cm),
-    steer, throttle and speed, each unit in its own plot; events at the bottom. Time runs in
-    simulated seconds."""
+    steer, throttle and speed, each unit in its own plot | with other vehicles, the gap and
+    time to collision to the vehicle ahead and the car's acceleration; events at the bottom.
+    Time runs in simulated seconds."""
     import rerun.blueprint as rrb
 
     x, y, yaw = scenario.start_pose()
@@ -44,6 +68,7 @@ def blueprint(scenario):
     models = front_labels(scenario.estimation.front_detectors)
     hidden = [f"- $origin/{m}:track" for m in models]
     names = key_names(models)
+    traffic = has_other_vehicles(scenario)
     return rrb.Blueprint(
         rrb.Vertical(
             rrb.Horizontal(
@@ -80,7 +105,8 @@ def blueprint(scenario):
                     _plot("plots/speed", "speed (m/s)", axis_y=rrb.ScalarAxis(
                         range=(0.0, 1.5 * max(1.0, scenario.target_speed_mps)))),
                 ),
-                column_shares=[1.6, 2.6, 2.4, 2.4],
+                *([_safety_column(scenario)] if traffic else []),
+                column_shares=[1.6, 2.6, 2.4, 2.4] + ([2.0] if traffic else []),
             ),
             rrb.TextLogView(origin="events", name="events"),
             row_shares=[3, 6.5, 1],

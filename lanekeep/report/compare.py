@@ -17,6 +17,11 @@ and the number chance alone would give.
 
 a_mean and b_mean are the means over the n pairs where both values are finite (a source with
 no estimate gives NaN / null); `dropped` counts the pairs left out, and a note names them.
+
+The safety metrics (SAFETY_METRICS: collisions, hard_braking_events, min_ttc_s, min_gap_m) are
+compared when asked for by name. Files written before them lack the keys: such a metric is
+left out of the comparison with a note, never an error. An episode that never closed on a
+vehicle ahead has no finite min_ttc_s (null) and its pair is dropped like a missing estimate.
 """
 
 from __future__ import annotations
@@ -31,6 +36,7 @@ from lanekeep.core.reproducibility import kernel_differences
 from lanekeep.report.json_io import SCHEMA_VERSION, lanekeep_version
 from lanekeep.report.seed_summary import EPISODE_KEYS, HIGHER_IS_BETTER, SOURCE_KEYS
 from lanekeep.scoring import statistics as stats
+from lanekeep.scoring.metrics import SAFETY_METRICS
 
 WIDTH = 120  # the table keeps within this many columns
 NOT_BENCH = f"not a bench --json document (schema_version {SCHEMA_VERSION})"
@@ -74,14 +80,14 @@ TABLE_KEYS = ("fused.rmse_cm", "car_rms_cm", "car_max_cm", "lane_departures")
 def parse_metric(key: str) -> Metric:
     """A Metric from its key ("fused.rmse_cm", "hough:track.drift_cm", "car_rms_cm");
     ValueError naming the keys allowed otherwise."""
-    if key in EPISODE_KEYS:
+    if key in EPISODE_KEYS or key in SAFETY_METRICS:
         return Metric(None, key)
     source, _, field = key.rpartition(".")
     if source and field in SOURCE_KEYS:
         return Metric(source, field)
     raise ValueError(f"unknown metric {key!r}: use SOURCE.FIELD with FIELD one of "
                      f"{', '.join(SOURCE_KEYS)} (e.g. fused.rmse_cm), or one of "
-                     f"{', '.join(EPISODE_KEYS)}")
+                     f"{', '.join((*EPISODE_KEYS, *SAFETY_METRICS))}")
 
 
 def metric_set(keys: Sequence[str] | None = None, sources: Sequence[str] = ()
@@ -176,6 +182,27 @@ def metric_value(run: Run, label: str, episode: dict, metric: Metric) -> float:
         raise IncomparableRuns(f"source {metric.source!r} is not in {run.name} ({label} seed "
                                f"{episode['seed']} has {', '.join(sources) or 'none'})")
     return _number(sources[metric.source].get(metric.field), f"{where}: {metric.source}")
+
+
+def carries(run: Run, labels: Sequence[str], field: str) -> bool:
+    """Whether every episode of `labels` in `run` has the episode key `field`."""
+    return all(field in e for label in labels for e in run.episodes(label).values())
+
+
+def absent_metrics(a: Run, b: Run, labels: Sequence[str], metrics: Sequence[Metric]
+                   ) -> tuple[list[Metric], list[str]]:
+    """The safety metrics among `metrics` that a run's episodes lack (written before them),
+    and a note for each: they are left out of the comparison rather than failing it."""
+    absent, notes = [], []
+    for m in metrics:
+        if m.source is not None or m.field not in SAFETY_METRICS:
+            continue
+        lacking = [r.name for r in (a, b) if not carries(r, labels, m.field)]
+        if lacking:
+            absent.append(m)
+            notes.append(f"{m.key} is not in {' and '.join(lacking)} (written before lanekeep "
+                         "reported it): not compared")
+    return absent, notes
 
 
 def _pairs(a: Run, b: Run, label: str, metric: Metric) -> list[tuple[float, float]]:
@@ -328,6 +355,8 @@ def compare_runs(a: dict, b: dict, metrics: Iterable[Metric | str] = DEFAULT_MET
     ra, rb = check_bench(a, a_name), check_bench(b, b_name)
     labels = check_pairing(ra, rb)
     chosen = tuple(m if isinstance(m, Metric) else parse_metric(m) for m in metrics)
+    absent, absent_notes = absent_metrics(ra, rb, labels, chosen)
+    chosen = tuple(m for m in chosen if m not in absent)
     per_label: dict[str, dict[str, Any]] = {label: {} for label in labels}
     pooled: dict[str, Any] = {}
     counts: dict[str, Any] = {}
@@ -346,7 +375,8 @@ def compare_runs(a: dict, b: dict, metrics: Iterable[Metric | str] = DEFAULT_MET
         "seeds": {label: sorted(ra.docs[label]["seeds"]) for label in labels},
         "better_when": {m.key: "lower" if m.lower_is_better else "higher" for m in chosen},
         "margins": {m.key: margin_of(m, None, margins).text() for m in chosen},
-        "labels": per_label, "all": pooled, "counts": counts, "notes": _notes(ra, rb, labels),
+        "labels": per_label, "all": pooled, "counts": counts,
+        "notes": absent_notes + _notes(ra, rb, labels),
     }
 
 
@@ -386,9 +416,12 @@ compare --json: one document (strict JSON: NaN is null):
                                        that survive Holm's adjustment within the metric) and
                                        expected_by_chance (of each claim, at most)
   notes                                scenario files or versions that differ, episodes that
-                                       did not complete or had no estimate
+                                       did not complete or had no estimate, safety metrics a
+                                       file lacks (not compared)
 METRIC: SOURCE.FIELD (fused.rmse_cm, hough:track.max_cm, ...) or an episode's car_rms_cm,
-car_max_cm, lane_departures, ...
+car_max_cm, lane_departures, ...; the safety metrics on request: collisions (exact, like the
+departures), hard_braking_events, min_ttc_s and min_gap_m (higher better; an episode that
+never closed on a vehicle ahead has no min_ttc_s)
 """
 
 
@@ -398,7 +431,7 @@ def _digits(key: str) -> int:
     """Decimals shown: the car's errors in mm are noise, a share needs three."""
     if key.endswith("valid_share"):
         return 3
-    return 1 if key.startswith("car_") else 2
+    return 1 if key.startswith(("car_", "min_")) else 2
 
 
 def _signed(x: float, digits: int) -> str:
@@ -423,10 +456,12 @@ def cell_text(entry: dict, key: str) -> str:
 
 
 def table_keys(result: dict) -> list[str]:
-    """The table's columns: TABLE_KEYS present, each other source's RMSE; else every metric."""
+    """The table's columns: TABLE_KEYS present, each other source's RMSE, the safety metrics
+    asked for; else every metric."""
     keys = list(result["better_when"])
     shown = [k for k in TABLE_KEYS if k in keys]
     shown += [k for k in keys if k.endswith(".rmse_cm") and k not in shown]
+    shown += [k for k in keys if k in SAFETY_METRICS]
     return shown or keys
 
 
@@ -491,14 +526,15 @@ def compare_table(result: dict) -> str:
     label for the key metrics, the verdict counts of every metric, the notes."""
     seeds = {len(s) for s in result["seeds"].values()}
     n_text = "/".join(str(n) for n in sorted(seeds))
+    higher = ", ".join(["valid_share", *(k for k, way in result["better_when"].items()
+                                         if way == "higher" and k in SAFETY_METRICS)])
     lines = [f"A = {result['a']}", f"B = {result['b']}",
              f"differs: {_differences(result)}",
              *textwrap.wrap(f"B - A: mean of the per-seed differences over {n_text} seeds "
                             "[paired 95% interval; errors on the log scale] and the verdict "
                             "for B against each metric's margin:", WIDTH),
              *_wrapped("", [f"{k} {v}" for k, v in result.get("margins", {}).items()]),
-             *textwrap.wrap(stats.LEGEND + "; better = B lower (higher for valid_share)",
-                            WIDTH),
+             *textwrap.wrap(stats.LEGEND + f"; better = B lower (higher for {higher})", WIDTH),
              "all (stratified): each scenario counts once; errors as the ratio B / A", ""]
     for group in _column_groups(result, table_keys(result)):
         lines += [*_block(result, group), ""]

@@ -3,6 +3,8 @@
 Strict means what every JSON parser accepts (RFC 8259): a value that is not a finite number
 (an episode's NaN "no estimate", an infinity) is written as null, never as the NaN / Infinity
 tokens Python's json module writes by default, which jq and a browser's JSON.parse reject.
+So an episode's `min_ttc_s` is null when the car never closed on a vehicle ahead (inf in the
+EpisodeReport; read back as inf), and `min_gap_m` null when it never had one ahead.
 
 Each document carries where it came from (METADATA_KEYS):
   schema_version     SCHEMA_VERSION; raised when a key changes meaning or goes away
@@ -119,7 +121,8 @@ def _floats_back(cls: type, data: dict) -> dict:
 
 def report_from_dict(data: dict) -> EpisodeReport:
     """An EpisodeReport from `to_dict()` or from a report document read back from JSON (the
-    metadata keys dropped, null floats NaN again)."""
+    metadata keys dropped, null floats NaN again, but a null `min_ttc_s` inf: never closing;
+    a document from before the safety metrics gets their defaults)."""
     d = _floats_back(EpisodeReport, data)
     d["sources"] = {name: SourceReport(**_floats_back(SourceReport, values))
                     for name, values in d["sources"].items()}

@@ -3,9 +3,9 @@
 
 One <testsuite> "lanekeep bench"; one <testcase> per episode (a scenario, or a scenario driven
 by one front model alone, "SCENARIO@MODEL"), its time the episode's wall time:
-  - a failed criterion (lanekeep/scoring/criteria.py), the car off the road among them: <failure>,
-  its
-    message naming each failed criterion with value and limit, its text the episode's table;
+  - a failed criterion (lanekeep/scoring/criteria.py), the car off the road or in a collision
+    among them: <failure>, its message naming each failed criterion with value and limit, its
+    text the episode's table;
   - physics that went unstable, an episode stopped part-way (an interrupted bench): <error>
     of type "unstable" / "interrupted" (the run broke off, it did not fail);
   - an episode that never ran (an interrupted bench): <skipped>.

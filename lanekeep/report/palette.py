@@ -7,6 +7,7 @@ from lanekeep.scoring.step_score import FUSED, REFERENCE
 
 TRUTH, OUTPUT = "truth", "output"
 ROAD_COLOUR, PATH_COLOUR, CAR_COLOUR = (128, 128, 128), (140, 80, 30), (60, 60, 200)
+VEHICLE_COLOUR = (230, 120, 0)  # the other vehicles' footprints and boxes
 
 
 # Mid-tone colours, each readable on the viewer's light and dark themes (no white, no black);

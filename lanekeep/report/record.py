@@ -22,7 +22,9 @@ y left are drawn in world coordinates):
     map/road, map/lane                    static: the whole road to scale (2D, x east, y flipped
                                           so that north is up), the ego lane in green
     map/car, map/car/marker, map/path     the car's footprint, a marker, the driven path
+    map/vehicles                          the other vehicles' footprints (true, labelled)
     world/car, world/car/body             pose (Transform3D) and a box the car's size
+    world/vehicles                        a box for each other vehicle (its footprint, 1.5 m tall)
     world/path                            the driven path so far
     world/lanes/{model}, world/lanes/output  lane estimates in world coordinates
     plots/offset/{truth,model...,reference,fused}  lateral offsets at each look-ahead (cm)
@@ -34,10 +36,16 @@ y left are drawn in world coordinates):
     plots/speed/speed_mps                 one panel each (one unit a plot); steer and
                                           throttle in % of their range [-1, 1]
     plots/sensors/...                     what the vehicle sensors told the estimator (SI)
+    plots/gap/gap_m, plots/ttc/ttc_s      among other vehicles (lanekeep/scoring/safety.py): the
+                                          gap to the vehicle ahead in the car's path and the
+                                          time to collision with it (while one is ahead; TTC
+                                          drawn at most TTC_PLOT_MAX_S, not closing included)
+    plots/accel/accel_mps2                the car's true longitudinal acceleration (hard braking
+                                          at -0.4 g)
     key                                   static: the colour key (a labelled point per source)
     events                                text: model switches, reference repairs, gated
                                           measurements, lanes lost/found, detector failures,
-                                          lane departures
+                                          lane departures, a collision
 
 Scalars and events are logged every step; images, overlays and the 3D view every `every`-th.
 Offsets, errors and residuals are plotted in centimetres (the papers' unit; in metres a plot of
@@ -47,6 +55,7 @@ errors of a few centimetres showed a lone "0" tick), as reports use them.
 from __future__ import annotations
 
 import functools
+import math
 import queue
 import threading
 import uuid
@@ -82,8 +91,10 @@ from lanekeep.report.palette import (
     REFERENCE,
     ROAD_COLOUR,
     TRUTH,
+    VEHICLE_COLOUR,
     colour,
 )
+from lanekeep.scoring.safety import StepSafety
 from lanekeep.scoring.step_result import StepResult
 from lanekeep.scoring.truth import LanePolylines
 
@@ -93,6 +104,10 @@ ROAD_STEP_M = 1.0
 BATCH_FLUSH_S, BATCH_BYTES = 2.0, 8 << 20  # rerun's chunk batcher (default 0.2 s, 2 MiB)
 CM_PER_M = 100.0  # plots of offsets, errors and residuals are in cm
 PERCENT = 100.0  # steer and throttle (each in [-1, 1]) are plotted in %
+TTC_PLOT_MAX_S = 10.0  # a TTC above this (or none: not closing) is drawn here: the plot is
+# about the last few seconds before a collision, and an infinite TTC has no point to draw
+NO_SAFETY = StepSafety()  # a step made without safety truth (a tool's own steps)
+VEHICLE_HEIGHT_M = 1.5  # the other vehicles' boxes in the 3D view (their truth has no height)
 
 
 @dataclass(frozen=True)
@@ -231,8 +246,9 @@ class RerunRecorder:
         self._view: EpisodeInfo | None = None
         self._closed = False
         self._error: BaseException | None = None
-        # Writer-thread state: the path so far.
+        # Writer-thread state: the path so far, whether other vehicles were drawn last.
         self._path: list[tuple[float, float]] = []
+        self._vehicles_drawn = False
         self._selected: int | None = None
         self._valid: dict[str, bool] = {}
         self._queue: queue.Queue = queue.Queue(maxsize=self.QUEUE_STEPS)
@@ -362,7 +378,10 @@ class RerunRecorder:
         car_series = {"plots/car/offset_cm": ("offset (cm)", (0, 140, 230)),
                       "plots/steer/steer_pct": ("steer (%)", (220, 20, 20)),
                       "plots/throttle/throttle_pct": ("throttle (%)", (30, 170, 30)),
-                      "plots/speed/speed_mps": ("speed (m/s)", (190, 50, 190))}
+                      "plots/speed/speed_mps": ("speed (m/s)", (190, 50, 190)),
+                      "plots/gap/gap_m": ("gap to the vehicle ahead (m)", VEHICLE_COLOUR),
+                      "plots/ttc/ttc_s": ("time to collision (s)", (220, 20, 20)),
+                      "plots/accel/accel_mps2": ("acceleration (m/s^2)", (0, 140, 150))}
         for path, (label, rgb) in car_series.items():
             rec.log(path, rr.SeriesLines(colors=[rgb], names=[label], widths=[1.5]), static=True)
         names = key_names(view.models)
@@ -406,6 +425,16 @@ class RerunRecorder:
         rec.log("plots/sensors/yaw_rate_rps", rr.Scalars(float(signals.yaw_rate_rps)))
         rec.log("plots/sensors/accel_lat_mps2", rr.Scalars(float(signals.accel_lat_mps2)))
         rec.log("plots/throttle/throttle_pct", rr.Scalars(PERCENT * float(step.throttle)))
+        self._log_safety(getattr(step, "safety", None) or NO_SAFETY)
+
+    def _log_safety(self, safety) -> None:
+        """The gap and TTC to the vehicle ahead (while there is one), the car's acceleration."""
+        rr, rec = self._rr, self._rec
+        rec.log("plots/accel/accel_mps2", rr.Scalars(float(safety.accel_mps2)))
+        if safety.gap_m is not None:
+            rec.log("plots/gap/gap_m", rr.Scalars(float(safety.gap_m)))
+            ttc = safety.ttc_s if math.isfinite(safety.ttc_s) else TTC_PLOT_MAX_S
+            rec.log("plots/ttc/ttc_s", rr.Scalars(min(float(ttc), TTC_PLOT_MAX_S)))
 
     def _log_events(self, step) -> None:
         names = self._view.models
@@ -426,7 +455,8 @@ class RerunRecorder:
             self._valid[name] = estimate.valid
         for text in step.events:
             level = ("WARN" if "departure" in text else
-                     "ERROR" if "failed" in text or "returned" in text else "INFO")
+                     "ERROR" if "failed" in text or "returned" in text
+                     or text.startswith("collision") else "INFO")
             lines.append((level, text))
         for level, text in lines:
             self._rec.log("events", self._rr.TextLog(text, level=level))
@@ -501,6 +531,7 @@ class RerunRecorder:
                                            colors=[CAR_COLOUR], radii=0.25))
         rec.log("map/car/marker", rr.Points2D(map_xy(np.array([[x, y]])), colors=[CAR_COLOUR],
                                               radii=rr.Radius.ui_points(5.0)))
+        self._log_vehicles((getattr(step, "safety", None) or NO_SAFETY).vehicles)
         for name, _, lines in self._lanes(step):
             if lines is None:
                 rec.log(f"world/lanes/{name}", rr.Clear(recursive=False))
@@ -509,4 +540,25 @@ class RerunRecorder:
             rec.log(f"world/lanes/{name}", rr.LineStrips3D(strips, colors=[self._colour(name)],
                                                            radii=0.08))
 
-
+    def _log_vehicles(self, footprints) -> None:
+        """The other vehicles' true footprints on the map and as boxes in the 3D view; cleared
+        once none is left (a recording without traffic logs nothing)."""
+        rr, rec = self._rr, self._rec
+        if not footprints:
+            if self._vehicles_drawn:
+                rec.log("map/vehicles", rr.Clear(recursive=False))
+                rec.log("world/vehicles", rr.Clear(recursive=False))
+                self._vehicles_drawn = False
+            return
+        names = [f.name for f in footprints]
+        rec.log("map/vehicles", rr.LineStrips2D([map_xy(f.outline()) for f in footprints],
+                                                colors=[VEHICLE_COLOUR], radii=0.25,
+                                                labels=names))
+        rec.log("world/vehicles", rr.Boxes3D(
+            centers=[[f.x_m, f.y_m, VEHICLE_HEIGHT_M / 2] for f in footprints],
+            half_sizes=[[f.length_m / 2, f.width_m / 2, VEHICLE_HEIGHT_M / 2]
+                        for f in footprints],
+            rotation_axis_angles=[rr.RotationAxisAngle(axis=[0, 0, 1], radians=f.yaw_rad)
+                                  for f in footprints],
+            colors=[VEHICLE_COLOUR], labels=names))
+        self._vehicles_drawn = True

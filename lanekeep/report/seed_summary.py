@@ -36,6 +36,14 @@ bench --json: one document per label (a scenario, or "SCENARIO@MODEL" for a mode
   departure_rate, departure_rate_ci95, departed_episodes
                                   share of episodes with >= 1 lane departure, its
                                   Clopper-Pearson 95% interval, the count
+  collided_episodes, collision_rate, collision_rate_ci95
+                                  episodes that ended in a collision, their share and its
+                                  Clopper-Pearson 95% interval
+  min_ttc_s, min_gap_m            the lowest over the seeds of each episode's smallest time
+                                  to collision and gap to the vehicle ahead in the car's path
+                                  (null: never closing on / never having one)
+  hard_braking_events             mean per episode, with _sd and _ci95 (decelerations of
+                                  0.4 g or more, one per braking)
   completed, passed               every episode completed / met its criteria
   completed_episodes, passed_episodes
   wall_s                          the episodes' wall time, summed
@@ -53,7 +61,7 @@ bench --json: one document per label (a scenario, or "SCENARIO@MODEL" for a mode
 SOURCE_KEYS = tuple(f.name for f in dataclasses.fields(SourceReport))
 EPISODE_KEYS = EPISODE_METRICS
 LOOP_KEYS = ("car_rms_cm", "car_max_cm", "lane_departures")  # MMAE loop vs a model alone
-HIGHER_IS_BETTER = frozenset({"valid_share"})
+HIGHER_IS_BETTER = frozenset({"valid_share", "min_ttc_s", "min_gap_m"})
 
 
 def _spread_keys(key: str, values: Sequence[float]) -> dict[str, Any]:
@@ -92,6 +100,7 @@ def summarise(label: str, reports: Sequence[EpisodeReport], scenario,
         "departure_rate": departed / len(reports),
         "departure_rate_ci95": list(stats.rate_interval(departed, len(reports))),
         "departed_episodes": departed,
+        **safety_keys(reports),
         "completed": all(r.completed for r in reports),
         "completed_episodes": sum(1 for r in reports if r.completed),
         "passed": all(r.passed for r in reports),
@@ -102,6 +111,18 @@ def summarise(label: str, reports: Sequence[EpisodeReport], scenario,
     })
     return strict(with_metadata(doc, scenario, seed=seeds[0] if len(seeds) == 1 else None)
                   | ({"seed": None} if len(seeds) > 1 else {}))
+
+
+def safety_keys(reports: Sequence[EpisodeReport]) -> dict[str, Any]:
+    """Collisions as a rate with its exact interval, the lowest minimum TTC and gap over the
+    seeds (the worst episode is what safety asks about), hard braking events' mean."""
+    collided = sum(1 for r in reports if r.collisions > 0)
+    gaps = [r.min_gap_m for r in reports if r.min_gap_m is not None]
+    return {"collided_episodes": collided, "collision_rate": collided / len(reports),
+            "collision_rate_ci95": list(stats.rate_interval(collided, len(reports))),
+            "min_ttc_s": min(r.min_ttc_s for r in reports),
+            "min_gap_m": min(gaps) if gaps else None,
+            **_spread_keys("hard_braking_events", [r.hard_braking_events for r in reports])}
 
 
 def paired_block(reports: Sequence[EpisodeReport],

@@ -294,6 +294,41 @@ def _compact_interval_table(docs: list[dict]) -> str:
     return "\n".join(lines)
 
 
+def _has_safety(doc: dict) -> bool:
+    """Whether a scenario's document has anything to say about safety: a collision, a
+    vehicle ahead in the car's path or a hard braking (a document from before these: no)."""
+    return bool(doc.get("collided_episodes") or doc.get("min_gap_m") is not None
+                or (doc.get("hard_braking_events") or 0) > 0)
+
+
+def safety_table(docs: list[dict]) -> str:
+    """One line per scenario over its seeds (lanekeep/report/seed_summary.py documents): the
+    episodes that hit another vehicle, the lowest minimum time to collision and gap to the
+    vehicle ahead in the car's path, hard braking events per episode. "" when no scenario had
+    a vehicle ahead, a hard braking or a collision (lane keeping alone: nothing to say)."""
+    if not any(_has_safety(d) for d in docs):
+        return ""
+    scen_w = max([10, *(len(d["label"]) + 2 for d in docs)])
+    header = (f"{'scenario':<{scen_w}}{'n':>3}  {'collided':<10}{'min TTC s':>11}"
+              f"{'min gap m':>11}{'hard brake':>12}")
+    lines = ["safety among other vehicles", header, "-" * len(header)]
+    def number(value: float | None) -> str:
+        return "-" if value is None else f"{value:.1f}"
+
+    for d in docs:
+        collided = d.get("collided_episodes")
+        collided_text = "-" if collided is None else f"{collided}/{d['n']}"
+        lines.append(f"{d['label']:<{scen_w}}{d['n']:>3}  {collided_text:<10}"
+                     f"{number(d.get('min_ttc_s')):>11}{number(d.get('min_gap_m')):>11}"
+                     f"{number(d.get('hard_braking_events')):>12}")
+    lines.extend(textwrap.wrap(
+        "(collided = episodes that hit another vehicle (each ends there and fails); min TTC, "
+        "min gap: the lowest over the seeds, to the vehicle ahead in the car's path, - = never "
+        "closing on one / never one ahead; hard brake = decelerations of 0.4 g or more, one "
+        "per braking, mean per episode)", WIDTH))
+    return "\n".join(lines)
+
+
 def paired_table(docs: list[dict]) -> str:
     """Each paired comparison of the bench: fused minus each model's own track (RMSE), and,
     with --single-model, the MMAE loop minus each model-only loop (car RMS, max, departures)."""

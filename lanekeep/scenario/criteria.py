@@ -17,7 +17,8 @@ _MARGIN_TEXT = re.compile(r"[a-z_:]+(\.[a-z_]+)?=\d+(\.\d*)?(,\d+(\.\d*)?%)?")
 @dataclass(frozen=True)
 class CriteriaConfig:
     """Pass/fail limits of an episode (`[criteria]`, judged by lanekeep/scoring/criteria.py); None =
-    not checked. An episode that leaves the road or stops early fails whatever these say."""
+    not checked. An episode that leaves the road, hits another vehicle or stops early fails
+    whatever these say."""
 
     max_lane_departures: int | None = setting(None, "Pass limit: times a wheel crossed an "
                                               "ego-lane boundary.",

@@ -3,9 +3,9 @@
 overridden by `run` / `bench` options, against its report.
 
 Why: a CI job needs an exit code, not a table to read. Each limit is optional (None = not
-checked) except one: an episode that did not complete (the car left the road, the physics blew
-up, it was stopped) fails, whatever its numbers say, since a partial episode's metrics describe
-only the part that was driven.
+checked) except one: an episode that did not complete (the car left the road, it hit another
+vehicle, the physics blew up, it was stopped) fails, whatever its numbers say, since a partial
+episode's metrics describe only the part that was driven; so a collision always fails.
 
 Verdicts are in SI units (m), like the scenario's keys; the report's table shows cm elsewhere.
 """
@@ -43,7 +43,8 @@ def add_options(parser: argparse.ArgumentParser) -> None:
     """The criteria options of `run` and `bench`; each overrides the scenario's [criteria]."""
     group = parser.add_argument_group(
         "pass/fail criteria", "override the scenario's [criteria] table; exit code 1 when one "
-                              "is not met (an episode that left the road always fails)")
+                              "is not met (an episode that left the road or hit another "
+                              "vehicle always fails)")
     for option, key in OPTIONS.items():
         metavar, kind, text = _HELP[key]
         group.add_argument(option, dest=key, metavar=metavar, type=kind, default=None, help=text)

@@ -22,6 +22,7 @@ if TYPE_CHECKING:
 
     from lanekeep.geometry.road import Road
     from lanekeep.scenario.schema import Scenario
+    from lanekeep.scoring.safety import VehicleTruth
     from lanekeep.world.build import World
     from lanekeep.world.parts import ConditionsInfo, WorldLayout
     from lanekeep.world.vehicle import Car
@@ -66,6 +67,13 @@ class Truth:
     def lane(self) -> int:
         """The index of the lane the car is meant to keep (the scenario's ego lane)."""
         return self.scenario.road.ego_lane
+
+    def vehicles(self) -> tuple[VehicleTruth, ...]:
+        """The other vehicles now (lanekeep/traffic/state.py's VehicleState each, after the
+        world's last step): `World.traffic`'s states, none when the scenario has no other
+        vehicles (`World.traffic` None, or a world built before traffic drove)."""
+        traffic = getattr(self.world, "traffic", None)
+        return () if traffic is None else tuple(traffic.states)
 
     def pose(self) -> tuple[float, float, float]:
         """The car's true world pose (x, y, yaw)."""

@@ -27,11 +27,17 @@ Definitions (all against ground truth from the road, never from images):
   - the car's own lateral error: RMS and max of the true offset at x = 0;
   - lane departures: times a wheel's contact point crosses an ego-lane boundary (counted on
     entry, not per step);
-  - MMAE switches: changes of the selected model.
+  - MMAE switches: changes of the selected model;
+  - safety among other vehicles (lanekeep/scoring/safety.py): `min_ttc_s`, the smallest time to
+    collision with the vehicle ahead in the car's path (inf when the car never closed on one;
+    JSON null), `min_gap_m`, the smallest bumper-to-bumper gap to it (None when there never
+    was one; JSON null), `hard_braking_events` (decelerations of 0.4 g or more, one per
+    braking) and `collisions` (contacts with another vehicle: 0 or 1, the episode ends there).
 
 An episode ends with a status (STATUSES): "completed" (all its steps), "off_road" (the car left
 the road: lanekeep/loop/episode.py; the step on which it left is scored, the ones it never drove are
-not), "interrupted" (Ctrl-C, SIGTERM) or "unstable" (the physics blew up). `criteria` holds the
+not), "collision" (the car touched another vehicle; likewise its step is scored),
+"interrupted" (Ctrl-C, SIGTERM) or "unstable" (the physics blew up). `criteria` holds the
 pass/fail verdicts of lanekeep/scoring/criteria.py once a report has been judged.
 """
 
@@ -43,10 +49,11 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 
 from lanekeep.geometry.lane_poly import LanePoly
+from lanekeep.scoring.safety import SafetyTally, StepSafety
 
 # Look-ahead points (m) of ADE / FDE: the front detectors' window, 4-20 m, every 2 m.
 ADE_POINTS_M = (4.0, 6.0, 8.0, 10.0, 12.0, 14.0, 16.0, 18.0, 20.0)
-STATUSES = ("completed", "off_road", "interrupted", "unstable")
+STATUSES = ("completed", "off_road", "collision", "interrupted", "unstable")
 
 
 @dataclass(frozen=True)
@@ -107,6 +114,10 @@ class CommonSteps:
 # one list the seed summaries, the sweeps and the comparisons name.
 EPISODE_METRICS = ("car_rms_cm", "car_max_cm", "lane_departures", "mmae_switches",
                    "reference_repairs", "no_estimate_s")
+# The car's safety among other vehicles (EpisodeReport fields, lanekeep/scoring/safety.py).
+# Apart from EPISODE_METRICS: reports written before them lack the keys, and the minima have
+# no mean over seeds (inf / None when the car never had a vehicle ahead).
+SAFETY_METRICS = ("min_ttc_s", "min_gap_m", "hard_braking_events", "collisions")
 
 
 @dataclass(frozen=True)
@@ -132,6 +143,13 @@ class EpisodeReport:
     ade_range_m: tuple[float, float] = (ADE_POINTS_M[0], ADE_POINTS_M[-1])
     # The fused output against each model's track ("hough:track") on their common steps.
     fused_vs_track: dict[str, CommonSteps] = field(default_factory=dict)
+    # Safety among other vehicles (SAFETY_METRICS; the module docstring): the smallest time to
+    # collision with the vehicle ahead in the car's path (inf: never closing on one; JSON
+    # null), the smallest gap to it (None: never one), hard braking events, collisions.
+    min_ttc_s: float = math.inf
+    min_gap_m: float | None = None
+    hard_braking_events: int = 0
+    collisions: int = 0
 
     def __post_init__(self) -> None:
         # A report read back from JSON carries a list; keep reports equal after a round trip.
@@ -141,10 +159,25 @@ class EpisodeReport:
         if self.status == "completed" and not self.completed:  # a document from before `status`
             object.__setattr__(self, "status", "interrupted" if self.stop_reason in
                                ("", "interrupted") else "unstable")
+        if self.min_ttc_s is None or math.isnan(self.min_ttc_s):  # JSON null: never closing
+            object.__setattr__(self, "min_ttc_s", math.inf)
         if self.status not in STATUSES:
             raise ValueError(f"status must be one of {STATUSES}, got {self.status!r}")
         if self.completed != (self.status == "completed"):
             raise ValueError(f"completed = {self.completed} contradicts status {self.status!r}")
+
+    def safety_line(self) -> str:
+        """"safety: min TTC 3.1 s, min gap 12.4 m (vehicle ahead in the car's path); hard
+        braking 0 (>= 0.4 g); collisions 0": the table's line below the car's."""
+        if self.min_gap_m is None:
+            ahead = "no vehicle ahead in the car's path"
+        else:
+            ttc = (f"{self.min_ttc_s:.1f} s" if math.isfinite(self.min_ttc_s)
+                   else "- (never closing)")
+            ahead = (f"min TTC {ttc}, min gap {self.min_gap_m:.1f} m (vehicle ahead in the "
+                     "car's path)")
+        return (f"safety: {ahead}; hard braking {self.hard_braking_events} (>= 0.4 g); "
+                f"collisions {self.collisions}")
 
     @property
     def passed(self) -> bool:
@@ -178,6 +211,7 @@ class EpisodeReport:
             + ("" if self.completed else f"  [STOPPED ({self.status.replace('_', ' ')}): "
                f"partial episode: {self.stop_reason or self.status}]")
         )
+        lines.append(self.safety_line())
         near, far = self.ade_range_m
         lines.append(f"ADE/FDE: lane centre vs exact road geometry at x = {near:g}-{far:g} m "
                      f"ahead; FDE at {far:g} m; drift: RMS of the offset's change between "
@@ -289,6 +323,7 @@ class Metrics:
                              f"sources, got fused={fused!r}, tracks={tracks}")
         self._fused = fused
         self._common = {track: _CommonAccumulator() for track in tracks}
+        self.safety = SafetyTally()
 
     def add_offset(self, name: str, estimate_m: float | None, truth_m: float) -> None:
         acc = self._sources[name]
@@ -346,6 +381,10 @@ class Metrics:
         self._last_selected = selected
         self.reference_repairs += int(reference_repaired)
 
+    def add_safety(self, step: StepSafety) -> None:
+        """A step's gap, TTC, contact and the car's acceleration (lanekeep/scoring/safety.py)."""
+        self.safety.add(step)
+
     def add_no_estimate(self) -> None:
         self._no_estimate_steps += 1
 
@@ -389,4 +428,8 @@ class Metrics:
             status=status or ("completed" if completed else "interrupted"),
             ade_range_m=(float(self.ade_points_m[0]), float(self.ade_points_m[-1])),
             fused_vs_track=fused_vs_track,
+            min_ttc_s=self.safety.min_ttc_s,
+            min_gap_m=self.safety.min_gap_m,
+            hard_braking_events=self.safety.hard_braking_events,
+            collisions=self.safety.collisions,
         )

@@ -14,6 +14,7 @@ from lanekeep.core.signals import VehicleSignals
 from lanekeep.core.steps import Observation
 from lanekeep.detectors.base import LaneEstimate
 from lanekeep.driver.driver import Belief
+from lanekeep.scoring.safety import StepSafety
 from lanekeep.scoring.step_truth import StepTruth
 
 
@@ -55,6 +56,12 @@ class StepResult:
     marking_masks_after: dict[str, np.ndarray] | None = None
     # Why the car is off the road after this period ("" while on it): `run()` ends there.
     off_road: str = ""
+    # Among other vehicles after this period (lanekeep/scoring/safety.py): the vehicle ahead in
+    # the car's path, the gap and TTC to it, contact, the car's acceleration, the footprints.
+    safety: StepSafety = field(default_factory=StepSafety)
+    # Why the car is in contact with another vehicle after this period ("collision with
+    # vehicle_3 at t = 12.4 s"; "" while it is not): `run()` ends there.
+    collision: str = ""
 
     @property
     def truth_offset_m(self) -> float:

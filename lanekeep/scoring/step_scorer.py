@@ -1,7 +1,8 @@
 """Scoring one control period: the truth once (lanekeep/scoring/step_truth.py), every estimate
 against it (step_score.py), the car's own lateral error, lane departures and leaving the road
-from where its tyres truly are (departures.py), into the episode's metrics and one
-`StepResult`. The only part of an episode besides the recorder that reads the world."""
+from where its tyres truly are (departures.py), its safety among other vehicles (gap, TTC,
+contact, braking: safety.py), into the episode's metrics and one `StepResult`. The only part
+of an episode besides the recorder that reads the world."""
 
 from __future__ import annotations
 
@@ -15,9 +16,11 @@ from lanekeep.driver.driver import Belief
 from lanekeep.scoring.departures import off_road_reason, wheels_outside_lane
 from lanekeep.scoring.gate import Truth
 from lanekeep.scoring.metrics import EpisodeReport
+from lanekeep.scoring.safety import StepSafety, collision_reason, step_safety
 from lanekeep.scoring.step_result import StepResult
 from lanekeep.scoring.step_score import loop_metrics, score_estimates
 from lanekeep.scoring.step_truth import step_truth
+from lanekeep.scoring.truth import frenet
 
 TYRES = ("front_left_tyre", "front_right_tyre", "rear_left_tyre", "rear_right_tyre")
 
@@ -35,6 +38,11 @@ class StepScorer:
         self.centre_of = centre_of
         self.metrics = loop_metrics(self.models)
         self.tyre_geoms = [truth.model.geom(n).id for n in TYRES]
+        geometry = truth.car.geometry
+        self.car_size_m = (geometry.length_m, geometry.width_m)
+        # The car's true forward speed at the end of the last scored period (at the start,
+        # before the first): its change over a period is the car's acceleration.
+        self._speed_then = (truth.time_s(), truth.car.speed_mps())
 
     def pose(self) -> tuple[float, float, float]:
         """The car's true pose now: where the next frames are taken from."""
@@ -69,10 +77,16 @@ class StepScorer:
         if outside:
             events.append("lane departure: a wheel crossed a lane boundary")
         self.metrics.add_car(truth.car_offset_m, outside)
+        time_s, speed = float(world.data.time), world.car.speed_mps()
+        safety = self._safety(pose_after, speed, time_s)
+        self.metrics.add_safety(safety)
+        collision = collision_reason(safety.collided_with, time_s)
+        if collision:
+            events.append(collision)
         selection = estimate.selection
         self.metrics.add_selection(estimate.selected, selection.reference_repaired)
         return StepResult(
-            index=index, time_s=float(world.data.time), frames=dict(observation.frames),
+            index=index, time_s=time_s, frames=dict(observation.frames),
             estimates=dict(estimates), tracked=estimate.tracked, track_offsets_m=track_offsets,
             probabilities=np.asarray(selection.probabilities),
             selected=int(estimate.selected), output_offset_m=estimate.offset_m,
@@ -81,10 +95,23 @@ class StepScorer:
             reference_repaired=selection.reference_repaired,
             mmae_residuals_m=np.asarray(selection.residuals_m, dtype=float),
             steer=command.steer, throttle=command.throttle, truth=truth, pose=pose_after,
-            sensed_pose=sensed_pose, speed_mps=world.car.speed_mps(),
+            sensed_pose=sensed_pose, speed_mps=speed,
             signals=observation.signals, events=events,
             tracker_status=dict(estimate.tracker_status), off_road=off_road,
+            safety=safety, collision=collision,
         )
+
+    def _safety(self, pose: tuple[float, float, float], speed_mps: float, time_s: float
+                ) -> StepSafety:
+        """The car among the other vehicles at `pose`, and its acceleration over the period
+        (its forward speed's change since the last scored period)."""
+        then_s, speed_then = self._speed_then
+        self._speed_then = (time_s, speed_mps)
+        accel = (speed_mps - speed_then) / (time_s - then_s) if time_s > then_s else 0.0
+        road = self.truth.road
+        s, r = frenet(road, pose[:2])
+        return step_safety(road, pose, s, r, speed_mps, self.car_size_m, accel,
+                           self.truth.vehicles())
 
     def report(self, dt_s: float, completed: bool, wall_s: float, stop_reason: str = "",
                status: str | None = None) -> EpisodeReport:

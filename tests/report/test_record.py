@@ -1,6 +1,8 @@
 """The rerun recording: it verifies, reads back with rerun's own reader, lines up with the images,
 stores its blueprint and scenario, survives Ctrl-C, and costs nothing when off."""
 
+import dataclasses
+import math
 import os
 import signal
 import subprocess
@@ -17,9 +19,11 @@ import pytest
 import lanekeep  # noqa: F401 - EGL before mujoco
 from lanekeep.core.signals import VehicleSignals
 from lanekeep.detectors.base import LaneEstimate
-from lanekeep.report.record import EpisodeInfo, RerunRecorder
+from lanekeep.report.blueprint import blueprint, has_other_vehicles
+from lanekeep.report.record import TTC_PLOT_MAX_S, EpisodeInfo, RerunRecorder
 from lanekeep.scenario.schema import load_scenario
 from lanekeep.scoring.metrics import ADE_POINTS_M
+from lanekeep.scoring.safety import Footprint, StepSafety
 from lanekeep.scoring.step_truth import step_truth
 from lanekeep.sensing.cameras import CameraRig, RenderSettings
 from lanekeep.world.build import build
@@ -384,6 +388,50 @@ def test_map_shows_the_road_the_lane_the_car_and_its_path(fake, tmp_path):
     assert len(path) == 4
     x, y, _ = steps[3].sensed_pose
     assert np.asarray(outline)[:4].mean(axis=0) == pytest.approx([x, -y], abs=1e-3)
+
+
+def test_gap_ttc_and_the_other_vehicles_are_recorded(fake, tmp_path):
+    """Among other vehicles: the gap and TTC to the vehicle ahead each step (a TTC that is not
+    closing drawn at the plot's top), the car's acceleration, the vehicles' footprints on the
+    map and as boxes, a collision as an error in the events."""
+    x, y, yaw = fake.scenario.start_pose(fake.world.road)
+    ahead = Footprint("vehicle_1", x + 20.0 * np.cos(yaw), y + 20.0 * np.sin(yaw), yaw, 4.6,
+                      1.85)
+    safety = [StepSafety(-1.0, "vehicle_1", 15.4, 5.0, 3.08, vehicles=(ahead,)),
+              StepSafety(-4.5, "vehicle_1", 15.0, -1.0, math.inf, vehicles=(ahead,)),
+              StepSafety(0.0), StepSafety(0.0, collided_with="vehicle_1", vehicles=(ahead,))]
+    steps = [make_step(fake, i, safety=s) for i, s in enumerate(safety)]
+    steps[3].events.append("collision with vehicle_1 at t = 0.4 s")
+    data = read_back(record(fake, tmp_path / "x.rrd", steps))
+    assert [v for _, v in sorted(data["/plots/gap/gap_m"]["Scalars:scalars"])] == [[15.4],
+                                                                                    [15.0]]
+    assert [v for _, v in sorted(data["/plots/ttc/ttc_s"]["Scalars:scalars"])] == [
+        pytest.approx([3.08]), [TTC_PLOT_MAX_S]]
+    assert steps_of(data, "/plots/accel/accel_mps2", "Scalars:scalars") == [0, 1, 2, 3]
+    (outline,) = value_at(data, "/map/vehicles", "LineStrips2D:strips", 0)
+    assert np.asarray(outline)[:4].mean(axis=0) == pytest.approx(
+        [ahead.x_m, -ahead.y_m], abs=1e-3)
+    assert value_at(data, "/map/vehicles", "LineStrips2D:labels", 0) == ["vehicle_1"]
+    assert steps_of(data, "/world/vehicles", "Boxes3D:half_sizes") == [0, 1, 3]
+    assert "collision with vehicle_1 at t = 0.4 s" in texts(data)
+
+
+def test_the_layout_shows_the_safety_plots_only_with_other_vehicles():
+    def origins(item) -> list[str]:
+        if hasattr(item, "origin"):  # a view
+            return [str(item.origin)]
+        return [o for child in getattr(item, "contents", ()) for o in origins(child)]
+
+    scenario = load_scenario("clear_curve")
+    busy = dataclasses.replace(scenario, traffic=dataclasses.replace(scenario.traffic,
+                                                                     vehicles_per_km=10.0))
+    quiet = dataclasses.replace(
+        scenario, traffic=dataclasses.replace(scenario.traffic, vehicles_per_km=0.0),
+        conditions=dataclasses.replace(scenario.conditions, vehicles=()))
+    assert has_other_vehicles(busy) and not has_other_vehicles(quiet)
+    shown = origins(blueprint(busy).root_container)
+    assert {"plots/gap", "plots/ttc", "plots/accel", "plots/speed"} <= set(shown)
+    assert not {"plots/gap", "plots/ttc"} & set(origins(blueprint(quiet).root_container))
 
 
 @pytest.mark.parametrize("content", [None, b"", b"not a recording"])
