@@ -155,6 +155,7 @@ def truth_objects(episode: Episode) -> dict[int, str]:
              "world.layout": world.layout, "the scenario": scenario,
              "scenario.road": scenario.road, "scenario.conditions": scenario.conditions,
              "the renderer": episode.simulator.rig, "the sensors": episode.simulator.sensors,
+             "the radar": episode.simulator.radar, "the traffic": world.traffic,
              "the metrics": episode.scorer.metrics, "the recorder": episode.recorder}
     named |= {f"road.segments[{i}]": s for i, s in enumerate(world.road.segments)}
     named |= {f"the {camera} effects": fx for camera, fx in episode.simulator.effects.items()}

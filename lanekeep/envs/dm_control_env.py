@@ -74,7 +74,8 @@ class LaneKeepTask(control.Task):
         """0 (a terminal state) once a wheel crossed a lane boundary or the car left the road;
         the scenario's duration is the Environment's time limit."""
         result = self.last_result
-        if result is not None and (agent_view.departed(result) or result.off_road):
+        if result is not None and (agent_view.departed(result) or result.off_road
+                                   or result.collision):
             return 0.0
         return None
 

@@ -119,7 +119,7 @@ class LaneKeepEnv(dm_env.Environment):
         # The next period's percept: the agent acts on the frames of the period it acts in.
         observation = self._observation(episode.observe())
         reward, _ = agent_view.reward(episode, result)
-        if agent_view.departed(result) or result.off_road:
+        if agent_view.departed(result) or result.off_road or result.collision:
             self._reset_next = True
             return dm_env.termination(reward, observation)
         if episode.index >= episode.total_steps:

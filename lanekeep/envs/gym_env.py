@@ -209,7 +209,7 @@ class LaneKeepGymEnv(gym.Env):
         except SimulationError as err:  # the physics blew up: the episode ends here
             return self._last_obs, 0.0, True, False, {"status": "unstable", "events": [str(err)]}
         reward, progress = agent_view.reward(episode, result)
-        terminated = agent_view.departed(result) or bool(result.off_road)
+        terminated = agent_view.departed(result) or bool(result.off_road or result.collision)
         truncated = not terminated and episode.index >= episode.total_steps
         return self._observe(percept), float(reward), terminated, truncated, \
             self._info(result, progress)
@@ -264,5 +264,6 @@ class LaneKeepGymEnv(gym.Env):
         """Truth, for scoring and logging only (never an input to the agent's policy)."""
         return {"time_s": result.time_s, "truth_offset_m": result.truth_offset_m,
                 "progress_m": progress, "events": list(result.events),
-                "lookahead_m": result.output_x_m, "status": result.off_road or "running"}
+                "lookahead_m": result.output_x_m,
+                "status": result.off_road or result.collision or "running"}
 

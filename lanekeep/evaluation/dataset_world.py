@@ -29,6 +29,7 @@ from lanekeep.scenario.conditions import Conditions, ShadowZone, VehicleSpec
 from lanekeep.scenario.road import RoadConfig, StartConfig
 from lanekeep.scenario.roadside import Roadside
 from lanekeep.scenario.schema import Scenario, ScenarioError
+from lanekeep.scenario.traffic import Traffic
 from lanekeep.world.camera_mount import DASHCAM_HFOV_DEG
 
 NOMINAL_FRONT_PITCH_DEG = 10.0  # mjcf/car.xml: the front camera looks 10 deg up
@@ -254,6 +255,9 @@ def random_scenario(seed: int, tag: str | None = None, attempts: int = 20) -> Sc
                 camera=_camera(rng, dashcam),
                 conditions=_conditions(rng, tag, n_lanes, ego),
                 roadside=_roadside(rng),
+                # The sets' vehicles drift at 0-3 m/s over a second of frames: the traffic
+                # model of the sets as first rendered (no IDM), so the sets stay the same.
+                traffic=Traffic(model="constant"),
             )
             from lanekeep.world.build import check_buildable  # the builder's cross-field checks
             check_buildable(scenario)

@@ -19,6 +19,7 @@ import time
 from collections.abc import Callable
 from dataclasses import replace
 
+from lanekeep.control.acc import acc_settings
 from lanekeep.core.interrupts import stop_point, stop_requested
 from lanekeep.core.steps import Command
 from lanekeep.core.timing import StageClock
@@ -43,7 +44,8 @@ def driver_config(scenario: Scenario, simulator: Simulator) -> DriverConfig:
     return DriverConfig(estimation=scenario.estimation, controller=scenario.control.controller,
                         period_s=scenario.control_period_s,
                         target_speed_mps=scenario.target_speed_mps, car=simulator.car,
-                        cameras=simulator.cameras, distortions=simulator.distortions)
+                        cameras=simulator.cameras, distortions=simulator.distortions,
+                        acc=acc_settings(scenario.control, scenario.estimation.mode))
 
 
 class Episode:
@@ -119,8 +121,7 @@ class Episode:
         command = (self.driver.command(percept.belief, percept.signals) if action is None
                    else Command(*action))
         clock.lap("control")
-        self.simulator.actuate(command)
-        clock.lap("physics")
+        self.simulator.actuate(command)  # laps "physics" and "traffic"
         return self.conclude(percept, command)
 
     def forget_percept(self) -> None:
@@ -158,9 +159,11 @@ class Episode:
         `on_step(result, total_steps)` sees every step as it is made (a trace for plots, a
         progress bar); the report says `completed = False`, its `status` and why
         (`stop_reason`) after Ctrl-C ("interrupted"), when the physics went unstable
-        (lanekeep.world.build.SimulationError: "unstable") or once the car left the road
+        (lanekeep.world.build.SimulationError: "unstable"), once the car left the road
         ("off_road": the step on which it left is scored, since its frames were taken on the
-        road and its end pose is the failure the criteria must see; no later step is).
+        road and its end pose is the failure the criteria must see; no later step is) or once
+        it touched another vehicle ("collision", likewise; the stop reason names the vehicle
+        and the time). A step that ends both ways ends as a collision.
         """
         steps = self.total_steps if seconds is None else int(round(seconds / self.dt_s))
         status, reason = "completed", ""
@@ -173,6 +176,9 @@ class Episode:
                     result = self.step()
                     if on_step is not None:
                         on_step(result, steps)
+                    if result.collision:
+                        status, reason = "collision", result.collision
+                        break
                     if result.off_road:
                         status, reason = "off_road", result.off_road
                         break

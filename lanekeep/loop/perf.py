@@ -18,7 +18,9 @@ JSON keys (stable; times are wall-clock on this machine; strict JSON, null for n
                                use two cores or more (lanekeep/driver/detection.py), else 1
   stage_ms                     mean ms per control step of each stage, recording off:
                                render_<camera>, effects_<camera>, detect_<detector>,
-                               detect_reference, track, mmae, control, physics, score, record;
+                               sensors (the vehicle signals and the radar), detect_reference,
+                               track, mmae, control, physics (the car), traffic (the other
+                               vehicles' model and poses, the lamps' pools), score, record;
                                with detect_threads 2 the detections' wall time is shared out
                                in proportion to each detector's own time
   step_ms                      mean ms per control step, recording off

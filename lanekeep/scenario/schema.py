@@ -26,7 +26,7 @@ from importlib import resources
 from pathlib import Path
 
 from lanekeep.core.config_io import ConfigError, InvalidValue, from_dict
-from lanekeep.core.setting import setting
+from lanekeep.core.setting import check_settings, setting
 from lanekeep.geometry.road import Road
 from lanekeep.scenario.camera import CAMERA_PRESETS, CameraConfig
 from lanekeep.scenario.conditions import (
@@ -74,10 +74,27 @@ class ControlConfig:
     controller: str = setting("pid", "Controller turning the estimated lane into steer and "
                               "throttle.", allowed='"pid", "stanley", package.module:Class, '
                               "entry points")
+    # Adaptive cruise (lanekeep/control/acc.py, which gives the sources of the defaults): the
+    # built-in controllers' throttle from the forward radar ([sensors.radar]) and the car's own
+    # signals; the steering is the same either way.
+    acc: bool = setting(False, "Adaptive cruise: follow the vehicle ahead by the forward radar "
+                        "(IDM, ISO 15622 limits, emergency braking) up to target_speed_mps; off "
+                        "= hold target_speed_mps. Ignored in paper mode (the paper's constant "
+                        "speed).", allowed="true, false")
+    acc_time_gap_s: float = setting(1.8, "Time gap the adaptive cruise keeps to the vehicle "
+                                    "ahead.", bounds=(0.8, 4.0))
+    acc_min_gap_m: float = setting(4.0, "Gap the adaptive cruise keeps when standing behind a "
+                                   "vehicle.", bounds=(1.0, 20.0))
+    acc_corridor_half_width_m: float = setting(
+        1.2, "A radar object within this of the car's predicted path is a target.",
+        bounds=(0.3, 3.0))
+    acc_emergency_ttc_s: float = setting(1.5, "Time to collision below which the adaptive "
+                                         "cruise brakes fully (0 = never).", bounds=(0.0, 5.0))
 
     def __post_init__(self):
         if not self.controller.strip():
             raise InvalidValue("controller", "must name a controller, got an empty string")
+        check_settings(self)
 
 
 @dataclass(frozen=True)
@@ -101,17 +118,20 @@ class Scenario:
     estimation: EstimationConfig = setting(
         factory=EstimationConfig,
         doc="Which detectors run, the MMAE's reference, how the output is formed.")
-    control: ControlConfig = setting(factory=ControlConfig, doc="The controller, by name.")
+    control: ControlConfig = setting(factory=ControlConfig,
+                                     doc="The controller, by name, and the adaptive cruise.")
     sensors: SensorsConfig = setting(
         factory=SensorsConfig,
-        doc="Error magnitudes of the car's own sensors (sources: lanekeep/scenario/sensors.py).")
+        doc="Error magnitudes of the car's own sensors and its forward radar (sources: "
+            "lanekeep/scenario/sensors.py).")
     roadside: Roadside = setting(  # placed by lanekeep/world/props.py
         factory=Roadside,
         doc="Props beside and over the road; all off by default, placed from the seed.")
     traffic: Traffic = setting(  # drawn by lanekeep/world/traffic_flow.py
         factory=Traffic,
-        doc="Other vehicles drawn from the seed in the lanes beside the car's, never in its own; "
-            "off by default.")
+        doc="Other vehicles drawn from the seed, how all other vehicles drive (IDM car-following, "
+            "MOBIL lane changes) and scripted events (cut-ins, braking leads, stopped vehicles); "
+            "no drawn traffic by default.")
     criteria: CriteriaConfig = setting(  # judged by lanekeep/scoring/criteria.py
         factory=CriteriaConfig,
         doc="Pass/fail limits of an episode; an episode that leaves the road or stops early fails "

@@ -23,7 +23,7 @@ from lanekeep.sweep.spec import Cell
 OnResult = Callable[["CellResult"], None]
 # Statuses of a cell that ran: an episode's own (lanekeep/scoring/metrics.py STATUSES), or "failed"
 # (it raised). Resuming skips FINISHED cells and runs the others again.
-FINISHED = ("completed", "off_road", "unstable")
+FINISHED = ("completed", "off_road", "unstable", "collision")
 
 
 @dataclass(frozen=True)

@@ -29,6 +29,8 @@ from lanekeep.geometry.road import Road
 from lanekeep.geometry.road_mesh import Ribbon, ribbon
 from lanekeep.mjcf import CAR_XML
 from lanekeep.scenario.schema import Scenario, ScenarioError
+from lanekeep.traffic.constant import ConstantFlow
+from lanekeep.traffic.flow import TrafficFlow
 from lanekeep.world import paint as paint_filter
 from lanekeep.world import pavement, textures
 from lanekeep.world.appearance import MODEL_EXTENT_M, Lighting, appearance_of
@@ -53,7 +55,7 @@ from lanekeep.world.parts import (
 from lanekeep.world.pavement import LANE_U, SLAB_M
 from lanekeep.world.sky import SKY_SEED, sky_texture
 from lanekeep.world.street_lights import update_pools
-from lanekeep.world.traffic import update_dynamic
+from lanekeep.world.traffic import make_flow, update_dynamic
 from lanekeep.world.vehicle import Car
 
 # The ground plane's rendering grid (a plane geom's third size). MuJoCo lights per vertex and
@@ -84,18 +86,23 @@ class World:
     marking_boundary: np.ndarray  # geom id -> boundary index, -1 for non-marking geoms
     conditions: ConditionsInfo | None = None  # conditions hook: what world_conditions added
     layout: WorldLayout = field(default_factory=WorldLayout)  # what build() laid beside the lanes
+    traffic: TrafficFlow | ConstantFlow | None = None  # drives the other vehicles (None: none)
 
     def reset(self) -> None:
         """Put the car at the scenario's start pose and speed, everything else at rest."""
         mujoco.mj_resetData(self.model, self.data)
+        if self.traffic is not None:
+            self.traffic.reset()
         x, y, yaw = self.scenario.start_pose(self.road)
         self.car.place(x, y, yaw, self.scenario.start.speed_mps)
         self.car.apply(0.0, 0.0)
         update_pools(self)
 
-    def step(self, steer: float, throttle: float, seconds: float) -> None:
-        """Apply the command and advance the world by `seconds`: the car's physics, then the
-        other vehicles to their poses at the new time (so the next render sees them).
+    def step(self, steer: float, throttle: float, seconds: float, move_scene: bool = True
+             ) -> None:
+        """Apply the command and advance the world by `seconds`: the car's physics, then (with
+        `move_scene`; the caller does it otherwise) the other vehicles to their state at the
+        new time (so the next render sees them).
 
         Raises SimulationError when MuJoCo found the state unstable (NaN, inf or huge
         positions, velocities or accelerations): it then resets the data to the model's
@@ -108,7 +115,8 @@ class World:
             raise SimulationError(
                 f"MuJoCo found the simulation unstable by t = {self.data.time:.2f} s "
                 f"(bad position, velocity or acceleration) and reset it")
-        self.move_scene()
+        if move_scene:
+            self.move_scene()
 
     def move_scene(self) -> None:
         """The other vehicles and the lamps' pools to their state at the data's time (after
@@ -500,6 +508,7 @@ def build(scenario: Scenario, layout: WorldLayout | None = None) -> World:
             if is_distorted(coefficients):  # a folding lens, named before any render
                 lens_zoom(cameras[name], coefficients)
         _check_control_period(scenario, model.opt.timestep)
+        traffic = make_flow(conditions.traffic_plan if conditions else None, road)
     except ScenarioError:
         raise
     except ValueError as err:
@@ -509,7 +518,7 @@ def build(scenario: Scenario, layout: WorldLayout | None = None) -> World:
         marking_boundary[model.geom(name).id] = boundary
     data = mujoco.MjData(model)
     world = World(scenario, road, model, data, Car(model, data), marking_boundary, conditions,
-                  laid_layout(road, layout))
+                  laid_layout(road, layout), traffic)
     world.reset()
     return world
 

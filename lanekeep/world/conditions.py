@@ -51,7 +51,7 @@ from lanekeep.world.roadside import add_bumps, add_shadow_zone, add_snow, add_we
 from lanekeep.world.shade import add_shadow_overlay, shade_transmission
 from lanekeep.world.street_lights import add_street_lights
 from lanekeep.world.traffic import add_vehicle
-from lanekeep.world.traffic_flow import traffic_vehicles
+from lanekeep.world.traffic_flow import traffic_plan
 
 DAPPLE_SEED = 0xDA9  # a tree zone's sunflecks: their own generator [seed, this, zone]
 
@@ -90,6 +90,7 @@ def add_conditions(spec: mujoco.MjSpec, scenario: Scenario, road: Road,
         add_wet(spec, road, cond, rng, info, layout)
     if cond.snow > 0.0:
         add_snow(spec, road, cond, rng, layout)
-    for i, vehicle in enumerate(cond.vehicles + traffic_vehicles(scenario, road)):
+    info.traffic_plan = traffic_plan(scenario, road)
+    for i, vehicle in enumerate(info.traffic_plan.vehicles):
         info.vehicles.append(add_vehicle(spec, road, vehicle, i))
     return info

@@ -6,11 +6,15 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import mujoco
 import numpy as np
 
 from lanekeep.geometry.road_mesh import Ribbon
+
+if TYPE_CHECKING:
+    from lanekeep.world.traffic_flow import TrafficPlan
 
 # Heights of the visual layers above the contact plane (m); 1 cm apart avoids z-fighting with
 # the depth-buffer resolution at 100 m (about 3 mm with znear 0.2 m).
@@ -100,6 +104,7 @@ class ConditionsInfo:
     fog_visibility_m: float = math.inf
     headlights: bool = False
     street_lamps_xy: np.ndarray | None = None  # lit lamp heads, world XY (n, 2), at night
+    traffic_plan: TrafficPlan | None = None  # the other vehicles and how they drive
 
     def shaded(self, xy: np.ndarray) -> np.ndarray:
         """Whether world points (..., 2) lie in any cast shadow."""

@@ -22,6 +22,7 @@ the mocap body so they drive along:
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
 import mujoco
 import numpy as np
@@ -29,6 +30,9 @@ import numpy as np
 from lanekeep.geometry.road import Road
 from lanekeep.geometry.road_mesh import Ribbon
 from lanekeep.scenario.conditions import VehicleSpec
+from lanekeep.traffic.constant import ConstantFlow
+from lanekeep.traffic.flow import TrafficFlow
+from lanekeep.traffic.state import EgoState
 from lanekeep.world.groups import GROUP_SHADOW, GROUP_WORLD
 from lanekeep.world.parts import (
     OVERLAY_Z_M,
@@ -42,6 +46,9 @@ from lanekeep.world.prop_meshes import ellipsoid
 from lanekeep.world.roadside import cast_shadow, overlay_alpha
 from lanekeep.world.vehicle_assets import Part, vehicle_parts
 from lanekeep.world.vehicle_textures import textured_box, trailer_texture
+
+if TYPE_CHECKING:
+    from lanekeep.world.traffic_flow import TrafficPlan
 
 SUN_SHADOW_DARKNESS = 0.55  # as a ShadowZone's default, under the full day sun
 DAY_SUN_DIFFUSE = 0.75  # world_lighting.LIGHTING["day"]: the sun of SUN_SHADOW_DARKNESS
@@ -213,23 +220,60 @@ def _add_polygon(spec: mujoco.MjSpec, body, name: str, poly: np.ndarray, z_m: fl
                   group=GROUP_SHADOW, contype=0, conaffinity=0, mass=1.0)
 
 
+def make_flow(plan: TrafficPlan | None, road: Road) -> TrafficFlow | ConstantFlow | None:
+    """The traffic model that drives the plan's vehicles (None without vehicles)."""
+    if plan is None or not plan.vehicles:
+        return None
+    centres = [road.lane_center_r(k) for k in range(road.n_lanes)]
+    if plan.model == "constant":
+        return ConstantFlow(centres, road.length_m, road.closed, plan.setups)
+    return TrafficFlow(lane_centres_m=centres, lane_directions=plan.lane_directions,
+                       road_length_m=road.length_m, closed=road.closed, vehicles=plan.setups,
+                       events=plan.events, lane_width_m=road.lane_width_m,
+                       no_entry_lanes=(plan.ego_lane,))
+
+
 def update_dynamic(world, t_s: float) -> None:
     """Move the other vehicles to their poses at sim time t_s (call every control step).
 
-    Sets the mocap poses and runs mj_kinematics, so a render straight after sees them.
+    Advances the traffic model (`world.traffic`) to t_s, the car as it now is among them,
+    sets the mocap poses and runs mj_kinematics, so a render straight after sees them.
     """
     info: ConditionsInfo | None = getattr(world, "conditions", None)
-    if info is None or not info.vehicles:
+    flow = getattr(world, "traffic", None)
+    if info is None or not info.vehicles or flow is None:
         return
     road, data = world.road, world.data
+    _advance(world, flow, t_s)
+    states = {state.name: state for state in flow.states}
     for v in info.vehicles:
         if v.mocap_id < 0:
             v.mocap_id = int(world.model.body(v.name).mocapid[0])
-        s = v.s_m + v.speed_mps * t_s
-        data.mocap_pos[v.mocap_id, :2] = road.position(s, v.r_m)
-        yaw = float(road.heading_at(s)) + (math.pi if v.speed_mps < 0 else 0.0)
+        state = states[v.name]
+        s, r = state.s_m, state.r_m
+        yaw = float(road.heading_at(s)) + (math.pi if state.direction < 0 else 0.0)
+        yaw += state.heading_offset_rad
+        data.mocap_pos[v.mocap_id, :2] = road.position(s, r)
         data.mocap_quat[v.mocap_id] = yaw_quat(yaw)
     mujoco.mj_kinematics(world.model, data)
+
+
+def _advance(world, flow: TrafficFlow | ConstantFlow, t_s: float) -> None:
+    """Step the traffic model from its time to t_s with the car's present state (the car
+    moved over the same period: the others see where it is now, as a driver's glance does)."""
+    dt = t_s - flow.time_s
+    if dt < -1e-9:  # the physics went back in time without a reset: replay from the start
+        flow.reset()
+        dt = t_s
+    if dt <= 1e-12:
+        return
+    car = world.car
+    x, y, _ = car.pose()
+    s, r = world.road.local_coordinates(np.array([x, y]))
+    geometry = car.geometry
+    ego = EgoState(s_m=float(s), r_m=float(r), speed_mps=max(0.0, car.speed_mps()),
+                   length_m=geometry.length_m, width_m=geometry.width_m)
+    flow.step(dt, ego)
 
 
 def occluded_marking_share(world, rig, camera: str = "front") -> float:

@@ -12,7 +12,7 @@ from lanekeep.loop.runner import BenchJob, longest_first, run_bench, run_episode
 
 STAGES = {"render_front", "render_rear", "effects_front", "effects_rear", "detect_hough",
           "detect_sliding_window", "detect_lanenet", "detect_reference", "track", "mmae",
-          "control", "physics", "score", "record"}
+          "control", "physics", "traffic", "sensors", "score", "record"}
 
 
 def test_perf_json_holds_every_documented_figure(tmp_path, capsys):

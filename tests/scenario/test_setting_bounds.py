@@ -14,7 +14,9 @@ from lanekeep.scenario.reference import walk
 from lanekeep.scenario.schema import Scenario, ScenarioError, load_scenario, scenario_from_dict
 
 BASE = load_scenario("case1_building_shadows")  # conditions.shadows[0] exists
-ARRAYS = {"conditions.shadows[]": "conditions.shadows[0]", "road.segments[]": "road.segments[0]"}
+ARRAYS = {"conditions.shadows[]": "conditions.shadows[0]", "road.segments[]": "road.segments[0]",
+          "traffic.events[]": "traffic.events[0]"}
+EVENT = {"kind": "lead_brake", "at_time_s": 1.0}  # a valid event for the traffic.events keys
 CHECKED = [(path, f) for path, f, _ in walk(Scenario)
            if (BOUNDS in f.metadata or CHOICES in f.metadata)
            and not path.startswith(("conditions.vehicles[]", "road.markings[]"))]
@@ -30,6 +32,8 @@ def _key(path: str) -> str:
 
 def _table(key: str, value) -> dict:
     table = scenario_table(BASE)
+    if key.startswith("traffic.events[0]"):
+        table.setdefault("traffic", {})["events"] = [dict(EVENT)]
     path: list = []
     for part in key.split("."):
         name, _, index = part.partition("[")
