@@ -50,7 +50,9 @@ class TrafficEventSpec:
       first) changes into the car's lane at `at_time_s`, or once its rear is `at_gap_m` ahead
       of the car's front; the change takes `duration_s` and is forced (no safety check).
     - "lead_brake": a vehicle in the car's lane brakes at `decel_mps2` from `at_time_s` to
-      `to_speed_mps`, and with `resume_after_s` drives on again that long after (stop-and-go).
+      `to_speed_mps`, and with `resume_after_s` drives on again that long after (stop-and-go);
+      with `of_event` it is that earlier event's vehicle (a cut-in that then brakes) and brings
+      none of its own.
     - "stopped": a vehicle standing on the `side` shoulder, `shoulder_gap_m` from the edge
       line to its side (negative: it stands that far into the lane).
     """
@@ -77,6 +79,9 @@ class TrafficEventSpec:
     resume_after_s: float | None = setting(None, "lead_brake: drives on at its speed this long "
                                            "after reaching to_speed_mps (stop-and-go).",
                                            allowed=">= 0 or absent")
+    of_event: int | None = setting(None, "lead_brake: brake the vehicle of this earlier event "
+                                   "(its index) instead of bringing one.",
+                                   allowed="0..this event's index - 1, or absent")
     side: str = setting("right", "stopped: the shoulder it stands on.", choices=SIDES)
     shoulder_gap_m: float = setting(0.5, "stopped: from the edge line to its side; negative = "
                                     "into the lane.", bounds=(-2.0, 5.0))
@@ -95,6 +100,8 @@ class TrafficEventSpec:
             raise InvalidValue("at_time_s", "a cut_in needs exactly one of at_time_s, at_gap_m")
         if self.kind == "lead_brake" and self.at_time_s is None:
             raise InvalidValue("at_time_s", "a lead_brake needs at_time_s")
+        if self.of_event is not None and (self.kind != "lead_brake" or self.of_event < 0):
+            raise InvalidValue("of_event", "only a lead_brake names an earlier event (>= 0)")
 
 
 @dataclass(frozen=True)
@@ -154,6 +161,13 @@ class Traffic:
                                    f"must be in 0..{MAX_VEHICLES_PER_KM:g}, got {d}")
         if self.van_share + self.truck_share > 1.0:
             raise InvalidValue("truck_share", "van_share + truck_share must be at most 1")
+        for i, event in enumerate(self.events):
+            if event.of_event is not None and not event.of_event < i:
+                raise InvalidValue(f"events[{i}].of_event",
+                                   f"must name an earlier event (0..{i - 1}), got {event.of_event}")
+            if event.of_event is not None and self.events[event.of_event].of_event is not None:
+                raise InvalidValue(f"events[{i}].of_event",
+                                   "must name an event that brings its own vehicle")
 
     def direction(self, lane: int) -> str:
         """"same" or "oncoming" for a lane (all "same" when `directions` is empty)."""

@@ -14,7 +14,9 @@ from lanekeep.scoring import metrics as scoring_metrics
 from lanekeep.scoring.metrics import SourceReport
 
 SOURCE_METRICS = tuple(f.name for f in fields(SourceReport))  # one column per source each
-EPISODE_METRICS = (*scoring_metrics.EPISODE_METRICS, "duration_s", "steps")  # and its length
+# and its length, and its safety among other vehicles (min_ttc_s, min_gap_m, ...)
+EPISODE_METRICS = (*scoring_metrics.EPISODE_METRICS, "duration_s", "steps",
+                   *scoring_metrics.SAFETY_METRICS)
 
 
 class SweepError(ConfigError):

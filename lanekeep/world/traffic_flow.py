@@ -85,8 +85,8 @@ def traffic_plan(scenario: Scenario, road: Road) -> TrafficPlan:
     directions = lane_directions(scenario, road)
     listed = scenario.conditions.vehicles
     drawn = drawn_vehicles(scenario, road)
-    events = tuple(_event_vehicle(scenario, road, e, i, directions)
-                   for i, e in enumerate(cfg.events))
+    own = [i for i, e in enumerate(cfg.events) if e.of_event is None]  # bring a vehicle
+    events = tuple(_event_vehicle(scenario, road, cfg.events[i], i, directions) for i in own)
     vehicles = listed + drawn + tuple(v for v, _ in events)
     rng = np.random.default_rng(stream_entropy(scenario, DRIVING_STREAM))
     setups = []
@@ -94,9 +94,11 @@ def traffic_plan(scenario: Scenario, road: Road) -> TrafficPlan:
         source = "listed" if i < len(listed) else "drawn" if i < len(listed) + len(drawn) \
             else "event"
         setups.append(_setup(cfg, v, i, source, rng, road, directions[v.lane]))
-    flow_events = tuple(_flow_event(spec, vehicle_name(len(listed) + len(drawn) + i), road,
-                                    scenario)
-                        for i, (_, spec) in enumerate(events) if spec.kind != "stopped")
+    first = len(listed) + len(drawn)
+    name_of = {i: vehicle_name(first + k) for k, i in enumerate(own)}  # event -> its vehicle
+    flow_events = tuple(
+        _flow_event(spec, name_of[i if spec.of_event is None else spec.of_event], road, scenario)
+        for i, spec in enumerate(cfg.events) if spec.kind != "stopped")
     return TrafficPlan(vehicles, tuple(setups), flow_events, directions, cfg.model,
                        scenario.road.ego_lane)
 

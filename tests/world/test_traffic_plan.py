@@ -117,3 +117,16 @@ def test_the_constant_model_drives_through_as_before():
     np.testing.assert_allclose(world.data.mocap_pos[track.mocap_id, :2], expected, atol=1e-9)
     state = world.traffic.state(track.name)  # scoring reads these as it reads the IDM's
     assert state.speed_mps == abs(track.speed_mps) and state.r_m == pytest.approx(track.r_m)
+
+
+def test_a_lead_brake_of_an_earlier_event_brakes_that_events_vehicle():
+    sc = with_settings(parse_scenario(THREE_LANES), (("traffic.events", [
+        {"kind": "cut_in", "ahead_m": 30.0, "at_gap_m": 10.0},
+        {"kind": "lead_brake", "of_event": 0, "at_time_s": 9.0, "decel_mps2": 6.0}]),))
+    road = sc.build_road()
+    plan = traffic_plan(sc, road)
+    assert len(plan.vehicles) == len(drawn_vehicles(sc, road)) + 1  # one vehicle, two events
+    cut_in, brake = plan.events
+    assert cut_in.vehicle == brake.vehicle == plan.setups[-1].name
+    with pytest.raises(ConfigError, match=r"traffic.events\[1\].of_event"):
+        with_settings(sc, (("traffic.events[1].of_event", 1),))
