@@ -42,6 +42,8 @@ bench --json: one document per label (a scenario, or "SCENARIO@MODEL" for a mode
   min_ttc_s, min_gap_m            the lowest over the seeds of each episode's smallest time
                                   to collision and gap to the vehicle ahead in the car's path
                                   (null: never closing on / never having one)
+  min_ttc_s_mean, _ci95, _n       the mean over the episodes that closed on a vehicle of
+  min_gap_m_mean, _ci95, _n       their smallest TTC (gap), its 95% t interval and how many
   hard_braking_events             mean per episode, with _sd and _ci95 (decelerations of
                                   0.4 g or more, one per braking)
   completed, passed               every episode completed / met its criteria
@@ -118,11 +120,20 @@ def safety_keys(reports: Sequence[EpisodeReport]) -> dict[str, Any]:
     seeds (the worst episode is what safety asks about), hard braking events' mean."""
     collided = sum(1 for r in reports if r.collisions > 0)
     gaps = [r.min_gap_m for r in reports if r.min_gap_m is not None]
+    ttcs = [r.min_ttc_s for r in reports if math.isfinite(r.min_ttc_s)]
     return {"collided_episodes": collided, "collision_rate": collided / len(reports),
             "collision_rate_ci95": list(stats.rate_interval(collided, len(reports))),
             "min_ttc_s": min(r.min_ttc_s for r in reports),
             "min_gap_m": min(gaps) if gaps else None,
+            **_mean_keys("min_ttc_s", ttcs), **_mean_keys("min_gap_m", gaps),
             **_spread_keys("hard_braking_events", [r.hard_braking_events for r in reports])}
+
+
+def _mean_keys(key: str, values: Sequence[float]) -> dict[str, Any]:
+    """A per-episode minimum's mean over the episodes that had one, with its t interval."""
+    s = stats.spread([float(v) for v in values])
+    return {f"{key}_mean": s.mean if values else None,
+            f"{key}_mean_ci95": list(s.ci95) if values else None, f"{key}_n": len(values)}
 
 
 def paired_block(reports: Sequence[EpisodeReport],

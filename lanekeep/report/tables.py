@@ -310,22 +310,30 @@ def safety_table(docs: list[dict]) -> str:
         return ""
     scen_w = max([10, *(len(d["label"]) + 2 for d in docs)])
     header = (f"{'scenario':<{scen_w}}{'n':>3}  {'collided':<10}{'min TTC s':>11}"
-              f"{'min gap m':>11}{'hard brake':>12}")
+              f"{'mean [95% CI]':>19}{'min gap m':>11}{'mean [95% CI]':>19}{'hard brake':>11}")
     lines = ["safety among other vehicles", header, "-" * len(header)]
     def number(value: float | None) -> str:
         return "-" if value is None else f"{value:.1f}"
+
+    def mean(d: dict, key: str) -> str:
+        value, ci = d.get(f"{key}_mean"), d.get(f"{key}_mean_ci95")
+        if value is None or ci is None:
+            return "-"
+        return f"{value:.1f} [{ci[0]:.1f}, {ci[1]:.1f}]".replace("nan", "-")
 
     for d in docs:
         collided = d.get("collided_episodes")
         collided_text = "-" if collided is None else f"{collided}/{d['n']}"
         lines.append(f"{d['label']:<{scen_w}}{d['n']:>3}  {collided_text:<10}"
-                     f"{number(d.get('min_ttc_s')):>11}{number(d.get('min_gap_m')):>11}"
-                     f"{number(d.get('hard_braking_events')):>12}")
+                     f"{number(d.get('min_ttc_s')):>11}{mean(d, 'min_ttc_s'):>19}"
+                     f"{number(d.get('min_gap_m')):>11}{mean(d, 'min_gap_m'):>19}"
+                     f"{number(d.get('hard_braking_events')):>11}")
     lines.extend(textwrap.wrap(
         "(collided = episodes that hit another vehicle (each ends there and fails); min TTC, "
-        "min gap: the lowest over the seeds, to the vehicle ahead in the car's path, - = never "
-        "closing on one / never one ahead; hard brake = decelerations of 0.4 g or more, one "
-        "per braking, mean per episode)", WIDTH))
+        "min gap: the lowest over the seeds, to the vehicle ahead in the car's path, then the "
+        "mean of each episode's smallest over the episodes that had one, with its 95% t "
+        "interval; - = never closing on one / never one ahead; hard brake = decelerations of "
+        "0.4 g or more, one per braking, mean per episode)", WIDTH))
     return "\n".join(lines)
 
 

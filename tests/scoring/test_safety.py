@@ -9,6 +9,7 @@ import dataclasses
 import json
 import math
 
+import numpy as np
 import pytest
 from helpers import small_scenario_text
 
@@ -252,6 +253,10 @@ def test_the_bench_summarises_collisions_and_minima_over_seeds():
     assert doc["collided_episodes"] == 1 and doc["collision_rate"] == pytest.approx(1 / 3)
     assert doc["min_ttc_s"] == 0.0 and doc["min_gap_m"] == 0.0
     assert doc["hard_braking_events"] == pytest.approx(1 / 3)
+    # the mean of the episodes' minima, (3 + 1.5 + 0) / 3, with its t interval over three
+    assert doc["min_ttc_s_mean"] == pytest.approx(1.5) and doc["min_ttc_s_n"] == 3
+    half = 4.302653 * np.std([3.0, 1.5, 0.0], ddof=1) / np.sqrt(3)  # t(0.975, 2)
+    assert doc["min_ttc_s_mean_ci95"] == pytest.approx([1.5 - half, 1.5 + half], rel=1e-4)
     table = safety_table([doc])
     assert "min TTC s" in table and "1/3" in table
     assert max(len(line) for line in table.splitlines()) <= 100
