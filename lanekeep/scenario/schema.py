@@ -80,7 +80,8 @@ class ControlConfig:
     acc: bool = setting(False, "Adaptive cruise: follow the vehicle ahead by the forward radar "
                         "(IDM, ISO 15622 limits, emergency braking) up to target_speed_mps; off "
                         "= hold target_speed_mps. Ignored in paper mode (the paper's constant "
-                        "speed).", allowed="true, false")
+                        "speed). The forward radar is read only when it is on.",
+                        allowed="true, false")
     acc_time_gap_s: float = setting(1.8, "Time gap the adaptive cruise keeps to the vehicle "
                                     "ahead.", bounds=(0.8, 4.0))
     acc_min_gap_m: float = setting(4.0, "Gap the adaptive cruise keeps when standing behind a "

@@ -246,7 +246,10 @@ def step_safety(road: Road, pose: tuple[float, float, float], s_m: float, r_m: f
     lead = lead_vehicle(road, car, direction, boxes)
     footprints = vehicle_footprints(road, vehicles)
     own = Footprint("car", x, y, yaw, length, width)
-    hit = next((f.name for f in footprints if footprints_overlap(own, f)), "")
+    reach = math.hypot(length, width) / 2.0  # no rectangle farther than the half diagonals
+    near = [f for f in footprints                # apart can touch: the test runs on these
+            if math.hypot(f.x_m - x, f.y_m - y) <= reach + math.hypot(f.length_m, f.width_m) / 2]
+    hit = next((f.name for f in near if footprints_overlap(own, f)), "")
     return StepSafety(accel_mps2=accel_mps2, lead=lead.name if lead else "",
                       gap_m=lead.gap_m if lead else None,
                       closing_speed_mps=lead.closing_speed_mps if lead else None,

@@ -56,6 +56,10 @@ class Simulator:
         self.sensors = VehicleSensors(scenario.sensors, self.period_s, self.rng.spawn(1)[0])
         self.radar = Radar(self.world.model, scenario.sensors.radar, scenario.sensors.perfect,
                            self.rng.spawn(1)[0])
+        # The radar serves the adaptive cruise (lanekeep/control/acc.py) and casts 145 rays a
+        # period (about 1.5 ms): a car without the cruise (or in paper mode, which ignores it)
+        # gets no readings (`radar` None in its signals).
+        self.radar_on = scenario.control.acc and scenario.estimation.mode != "paper"
 
     def restart(self) -> None:
         """The same drive from its start: the car back at its start pose and speed, the other
@@ -97,7 +101,8 @@ class Simulator:
                                               depth_m=depth)
             self.clock.lap(f"effects_{name}")
         signals = self.sensors.sample(car)
-        signals = replace(signals, radar=self.radar.sample(data))
+        if self.radar_on:
+            signals = replace(signals, radar=self.radar.sample(data))
         self.clock.lap("sensors")
         return Observation(time_s=float(data.time), frames=frames, signals=signals)
 

@@ -142,3 +142,23 @@ def test_a_radar_key_out_of_range_is_refused_naming_it():
         scenario_from_dict({"name": "x", "description": "x",
                             "road": {"segments": [{"kind": "straight", "length_m": 100}]},
                             "sensors": {"radar": {"far_half_fov_deg": 120.0}}})
+
+
+def test_the_radar_is_read_only_for_the_adaptive_cruise():
+    """The cruise is the radar's only reader: without it (or in paper mode, which ignores it)
+    the signals carry no radar and its rays are not cast."""
+    from lanekeep.scenario.keys import with_settings
+    from lanekeep.sensing.simulator import Simulator
+
+    scenario = load_scenario("stop_and_go_truck")  # [control] acc = true
+    for settings, expect in (((), True), ((("control.acc", False),), False),
+                             ((("estimation.mode", "paper"),), False)):
+        simulator = Simulator(with_settings(scenario, settings), render_size=(64, 36))
+        try:
+            assert simulator.radar_on is expect, settings
+            simulator.sense()  # the first cycle has no Doppler yet: None either way
+            simulator.world.step(0.0, 0.0, PERIOD_S)
+            reading = simulator.sense().signals.radar
+            assert (reading is not None) is expect, settings
+        finally:
+            simulator.close()
