@@ -13,6 +13,7 @@ whole carriageway; r is lateral, positive to the left of the direction of travel
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
@@ -154,10 +155,10 @@ class Road:
         th = self._theta(sc, self._seg_index(sc))
         return float(th) if th.ndim == 0 else th
 
-    @property
+    @functools.cached_property
     def closed(self) -> bool:
         """The road ends where it starts, in the same direction (a track to lap): within
-        1 mm and 1 mrad."""
+        1 mm and 1 mrad. Computed once (the road never changes; scoring asks every step)."""
         gap = np.hypot(*(self.position(self.length_m) - self.position(0.0)))
         turn = (self.heading_at(self.length_m) - self.heading_at(0.0) + math.pi) % (2 * math.pi)
         return bool(gap < 1e-3 and abs(turn - math.pi) < 1e-3)
