@@ -21,40 +21,21 @@ import json
 import math
 import sys
 
-import mujoco
 import numpy as np
 
 import lanekeep  # noqa: F401  (the GL backend and kernel pins before MuJoCo loads)
 from lanekeep.loop.episode import Episode
 from lanekeep.scenario.schema import load_scenario
 from lanekeep.scoring.statistics import rate_interval, spread
+from lanekeep.world.traffic import occluded_marking_share
 
 
 def ego_paint_hidden(episode: Episode) -> float:
-    """Share of the ego lane's paint in the front view that other vehicles hide (NaN when
-    none is in view): the segmentation with the vehicles, then with them 1 km under ground."""
-    world, rig = episode.world, episode.simulator.rig
-    info = world.conditions
-    lane = world.scenario.road.ego_lane
-    boundaries = (lane, lane + 1)
-
-    def paint() -> int:
-        seg = rig.render_segmentation(world.data, "front")
-        return sum(int(world.marking_mask(seg, b).sum()) for b in boundaries)
-
-    seen = paint()
-    if info is None or not info.vehicles:
-        return 0.0 if seen else math.nan
-    ids = [int(world.model.body(v.name).mocapid[0]) for v in info.vehicles]
-    saved = world.data.mocap_pos.copy()
-    try:
-        world.data.mocap_pos[ids, 2] -= 1000.0
-        mujoco.mj_kinematics(world.model, world.data)
-        total = paint()
-    finally:
-        world.data.mocap_pos[:] = saved
-        mujoco.mj_kinematics(world.model, world.data)
-    return math.nan if total == 0 else 1.0 - seen / total
+    """Share of the ego lane's paint (its two boundaries) in the front view that the other
+    vehicles hide (NaN when none is in view)."""
+    lane = episode.world.scenario.road.ego_lane
+    return occluded_marking_share(episode.world, episode.simulator.rig, "front",
+                                  boundaries=(lane, lane + 1))
 
 
 def run_seed(name: str, seed: int, threshold: float, size: tuple[int, int]) -> dict:

@@ -19,6 +19,7 @@ class ConstantFlow:
         self._closed = closed
         self._setups = tuple(vehicles)
         self._time_s = 0.0
+        self._snapshot: tuple[float, tuple[VehicleState, ...]] | None = None  # (time, states)
 
     def reset(self) -> None:
         self._time_s = 0.0
@@ -35,12 +36,15 @@ class ConstantFlow:
 
     @property
     def states(self) -> tuple[VehicleState, ...]:
-        return tuple(self._state(v) for v in self._setups)
+        """Every vehicle now (made once per time: the world and scoring both read them)."""
+        if self._snapshot is None or self._snapshot[0] != self._time_s:
+            self._snapshot = (self._time_s, tuple(self._state(v) for v in self._setups))
+        return self._snapshot[1]
 
     def state(self, name: str) -> VehicleState:
-        for v in self._setups:
+        for v, state in zip(self._setups, self.states, strict=True):
             if v.name == name:
-                return self._state(v)
+                return state
         raise KeyError(name)
 
     def _state(self, v: VehicleSetup) -> VehicleState:

@@ -279,14 +279,22 @@ def _advance(world, flow: TrafficFlow | ConstantFlow, t_s: float) -> None:
     flow.step(dt, ego)
 
 
-def occluded_marking_share(world, rig, camera: str = "front") -> float:
-    """Share of the marking pixels that the other vehicles hide in one camera (0..1).
+def occluded_marking_share(world, rig, camera: str = "front",
+                           boundaries: tuple[int, ...] | None = None) -> float:
+    """Share of the marking pixels (of `boundaries` only, if given) that the other vehicles
+    hide in one camera (0..1).
 
     Renders the segmentation twice, with the vehicles in place and with them lowered 1 km
     under the ground; NaN when no marking is in view.
     """
+    def paint() -> int:
+        seg = rig.render_segmentation(world.data, camera)
+        if boundaries is None:
+            return int(world.marking_mask(seg).sum())
+        return sum(int(world.marking_mask(seg, b).sum()) for b in boundaries)
+
     info: ConditionsInfo | None = getattr(world, "conditions", None)
-    seen = int(world.marking_mask(rig.render_segmentation(world.data, camera)).sum())
+    seen = paint()
     if info is None or not info.vehicles:
         return 0.0
     ids = [v.mocap_id if v.mocap_id >= 0 else int(world.model.body(v.name).mocapid[0])
@@ -295,7 +303,7 @@ def occluded_marking_share(world, rig, camera: str = "front") -> float:
     try:
         world.data.mocap_pos[ids, 2] -= 1000.0
         mujoco.mj_kinematics(world.model, world.data)
-        total = int(world.marking_mask(rig.render_segmentation(world.data, camera)).sum())
+        total = paint()
     finally:
         world.data.mocap_pos[:] = saved
         mujoco.mj_kinematics(world.model, world.data)
