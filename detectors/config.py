@@ -181,7 +181,8 @@ class HoughConfig:
     # to the asphalt (1.5-1.8), not its level; faint sunlit paint is only ~1.2-1.35 of it. A
     # shoulder's edge is bright on one side only, so it is no ridge.
     # "ridge": paint found in the bird's-eye view as a ridge averaged along the line ([ridge]
-    # settings, detectors/ridge.py); "image": the per-pixel ridge test below, in the image.
+    # settings, detectors/ridge.py); "image": the per-pixel ridge test below, in the image;
+    # "paper": the paper's fixed thresholds (detectors/paper_thresholds.py; paper mode's).
     # "image" stays the default until the closed loop with "ridge" passes its tests: open
     # loop "ridge" scores better (docs/experiments.md#2026-11-29), but with both models on it
     # the default loop's fused-vs-LaneNet verdict on case 3 turned inconclusive, the bench
@@ -206,8 +207,8 @@ class HoughConfig:
     sample_m: float = 0.5  # spacing of the points taken along each segment
 
     def __post_init__(self) -> None:
-        if self.binarisation not in ("ridge", "image"):
-            raise InvalidValue("binarisation", f"must be 'ridge' or 'image', got "
+        if self.binarisation not in ("ridge", "image", "paper"):
+            raise InvalidValue("binarisation", f"must be 'ridge', 'image' or 'paper', got "
                                                f"{self.binarisation!r}")
         if self.adaptive_ratio < 0 or self.adaptive_c < 0:
             raise InvalidValue("adaptive_ratio", "adaptive_ratio and adaptive_c must be >= 0")
@@ -218,7 +219,8 @@ class SlidingWindowConfig:
     """Model #2: Sobel-x + HLS saturation/hue thresholds, histogram, sliding windows."""
 
     # "edges": the cues read in the bird's-eye view, averaged along lines (detectors/
-    # edge_pairs.py, the edge_* settings and the yellow ones); "image": per pixel in the image.
+    # edge_pairs.py, the edge_* settings and the yellow ones); "image": per pixel in the image;
+    # "paper": the paper's fixed thresholds (detectors/paper_thresholds.py; paper mode's).
     # "image" stays the default for the reasons given at HoughConfig.binarisation (and the
     # dashcam test's 11.3 cm at one offset, against its 10 cm).
     binarisation: str = "image"
@@ -262,8 +264,8 @@ class SlidingWindowConfig:
     min_fit_pixels: int = 40  # pixels a boundary's fit needs (else it is not found)
 
     def __post_init__(self) -> None:
-        if self.binarisation not in ("edges", "image"):
-            raise InvalidValue("binarisation", f"must be 'edges' or 'image', got "
+        if self.binarisation not in ("edges", "image", "paper"):
+            raise InvalidValue("binarisation", f"must be 'edges', 'image' or 'paper', got "
                                                f"{self.binarisation!r}")
         if self.edge_leans < 1 or min(self.edge_half_width_m, self.edge_length_m,
                                       self.edge_dark_floor) <= 0:
@@ -288,6 +290,33 @@ class DashcamDefaults:
     max_horizon_fraction: float = 0.75  # ... and at most this
 
 
+@dataclass(frozen=True)
+class PaperThresholds:
+    """The fixed levels of the paper's binarisations (paper mode's `binarisation = "paper"`,
+    detectors/paper_thresholds.py; 8-bit levels, OpenCV HLS with hue 0..180)."""
+
+    # White paint: HLS lightness (model #1) and grey (model #2) at least this. The paper gives
+    # no value; the authors' code has 200, for AirSim's paint. In this world's light 200 passes
+    # no paint (case 1's paint lightness p50 108, case 2's 139; on real TuSimple frames 5.7% of
+    # the labelled lanes' pixels reach it). 105 is the level that best separates sunlit paint
+    # from asphalt (Youden's J) on a tuning scenario in sun, tune_gentle_s_curve_r700_r500:
+    # paint 100% above it, asphalt 0.01%: a fixed threshold set in good light, as the authors
+    # set theirs (docs/paper_mode.md, 2026-11-29).
+    white_level: int = 105
+    model1_saturation: int = 80  # model #1's yellow: HLS saturation at least ... (authors' code)
+    model1_red: int = 120  # ... with the red channel at least
+    model2_sobel_share: float = 30.0 / 255.0  # |Sobel-x| share of the image's largest (Gaskey)
+    model2_saturation: int = 90  # model #2: HLS saturation above (Gaskey)
+    model2_hue: tuple[int, int] = (10, 25)  # model #2's yellow: hue above the first, at most
+    # the second (Gaskey)
+
+    def __post_init__(self) -> None:
+        if not 0 <= self.white_level <= 255:
+            raise InvalidValue("white_level", f"must be in [0, 255], got {self.white_level}")
+        if not 0.0 < self.model2_sobel_share <= 1.0:
+            raise InvalidValue("model2_sobel_share", "must be in (0, 1]")
+
+
 # Top-level tables that belong to detectors registered with their own settings class
 # (detectors.registry.register_detector); their contents are checked when such a detector is
 # made, against its class.
@@ -308,6 +337,7 @@ class DetectorsConfig:
     hough: HoughConfig = HoughConfig()
     sliding_window: SlidingWindowConfig = SlidingWindowConfig()
     dashcam: DashcamDefaults = DashcamDefaults()
+    paper: PaperThresholds = PaperThresholds()
     # Raw tables of registered detectors, by name (not part of the strict schema above).
     tables: dict[str, dict] = field(default_factory=dict, metadata={"toml": False})
 

@@ -21,6 +21,7 @@ import numpy as np
 from lanekeep.detectors.boundaries import Boundary, fit_boundary, parallel
 from lanekeep.detectors.classical import ClassicalDetector
 from lanekeep.detectors.image_stage import RegionOfInterest
+from lanekeep.detectors.paper_thresholds import model1_paint
 from lanekeep.detectors.ridge import paint_ridges
 from lanekeep.geometry.lane_poly import LanePoly
 
@@ -41,7 +42,7 @@ class HoughDetector(ClassicalDetector):
     # -- stages -------------------------------------------------------------------------------
     def bird_eye_mask(self, roi: RegionOfInterest, seen: np.ndarray) -> np.ndarray:
         """Ridges found in the bird's-eye view (`binarisation = "ridge"`, detectors/ridge.py);
-        `"image"` (the default) uses `binarise` below instead."""
+        `"image"` (the default) and `"paper"` use `binarise` below instead."""
         w = self.view.window
         return paint_ridges(self.view.warp(roi.grey), seen, w.m_per_col, w.m_per_row,
                             self.config.ridge)
@@ -58,8 +59,13 @@ class HoughDetector(ClassicalDetector):
         the pixel, not a block mean: a mean over the paint and a bright gravel shoulder next
         to it rises above faint sunlit paint, and the sunlit edge of a shoulder (brighter than
         the asphalt on one side only) passes a mean but is no ridge.
+
+        `binarisation = "paper"` (paper mode): the paper's fixed thresholds instead
+        (detectors/paper_thresholds.py).
         """
         cfg = self.config.hough
+        if cfg.binarisation == "paper":  # paper mode's fixed thresholds
+            return model1_paint(roi.rgb, self.config.paper)
         grey = cv2.blur(roi.grey, (3, 3))  # a pixel's neighbours, not single grains
         side = self._ridge_reach(grey.shape[0])
         w = grey.shape[1]

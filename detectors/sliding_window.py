@@ -22,6 +22,7 @@ from lanekeep.detectors.boundaries import Boundary, fit_boundary, parallel
 from lanekeep.detectors.classical import ClassicalDetector
 from lanekeep.detectors.edge_pairs import edge_pair_paint
 from lanekeep.detectors.image_stage import RegionOfInterest
+from lanekeep.detectors.paper_thresholds import model2_paint
 from lanekeep.geometry.lane_poly import LanePoly
 
 _KERNEL_3X3 = np.ones((3, 3), np.uint8)  # the ridge's dilation
@@ -58,8 +59,12 @@ class SlidingWindowDetector(ClassicalDetector):
         return edge_pair_paint(hls, seen, w.m_per_col, w.m_per_row, self.config.sliding_window)
 
     def binarise(self, roi: RegionOfInterest) -> np.ndarray:
-        """Sobel-x on lightness | white lightness (both on a bright ridge) | yellow hue+sat."""
+        """Sobel-x on lightness | white lightness (both on a bright ridge) | yellow hue+sat;
+        with `binarisation = "paper"` (paper mode) the paper's fixed thresholds instead
+        (detectors/paper_thresholds.py)."""
         cfg = self.config.sliding_window
+        if cfg.binarisation == "paper":
+            return model2_paint(roi.rgb, self.config.paper)
         # Contiguous planes: every test below reads them, and a strided view costs each one.
         hue, raw, sat = cv2.split(cv2.cvtColor(roi.rgb, cv2.COLOR_RGB2HLS))
         row = np.ones((1, cfg.local_block_px), np.uint8)

@@ -38,6 +38,12 @@ ACCEPTED = (UpdateStatus.UPDATED.value, UpdateStatus.INITIALIZED.value,
             UpdateStatus.RESTARTED.value)
 
 TRACKER_TOML = "closed_loop_tracker.toml"
+# Paper 001 eq. 8 with its own numbers (§2.3): R = 1e-6 and the final P of model #1 (hough)
+# and model #2 (sliding_window), of which C = [1 0] keeps P[0, 0]. The paper gives no unit;
+# read as metres (ours) the density's width is 1 mm, read as its tables' cm 10 um: either way
+# far below any camera's error. A model the paper does not have takes the larger P[0, 0].
+PAPER_R_M2 = 1e-6
+PAPER_OFFSET_VARIANCE_M2 = {"hough": 6.25e-13, "sliding_window": 8.14e-13}
 BY_DETECTOR = "measured_coefficient_covariance_by_detector"
 
 
@@ -159,9 +165,18 @@ class LaneEstimator:
         # The alignment is done here, once: the MMAE compares what it is given ("same_step").
         self.aligned = OdometryAlignedHistory(len(self.names))
         mode = "same_step" if settings.residual_mode == "distance_aligned" else "one_step_delay"
-        self.mmae = MMAE(len(self.names), MMAEConfig(residual_mode=mode,
-                                                     reference_std_m=settings.reference_std_m),
+        paper_psi = settings.residual_covariance == "paper"
+        self._paper_variances = [
+            PAPER_OFFSET_VARIANCE_M2.get(families.get(n, n), max(PAPER_OFFSET_VARIANCE_M2.values()))
+            for n in self.names] if paper_psi else None
+        reference_std = float(np.sqrt(PAPER_R_M2)) if paper_psi else settings.reference_std_m
+        self.mmae = MMAE(len(self.names),
+                         MMAEConfig(residual_mode=mode, reference_std_m=reference_std,
+                                    probability_floor=settings.probability_floor),
                          prior=self._prior(settings))
+        # missing_model = "hold": each model's last valid detection, standing in while it has
+        # none (the paper's loop has a value for every model at every step).
+        self._held: dict[str, LaneEstimate] = {}
 
     def _prior(self, settings: EstimatorSettings) -> np.ndarray | None:
         """The MMAE's starting probabilities (`EstimatorSettings.mmae_prior`)."""
@@ -178,6 +193,7 @@ class LaneEstimator:
             tracker.reset()
         self.aligned.reset()
         self.mmae.reset()
+        self._held.clear()
 
     def update(self, detections: dict[str, LaneEstimate], reference: LaneEstimate,
                ego: EgoMotion, lap: Callable[[str], None] = _no_lap) -> EstimatorOutput:
@@ -197,6 +213,17 @@ class LaneEstimator:
         lap("mmae")
         return EstimatorOutput(tracked, status, selection, selected, centre, offset, x_m,
                                reference_x, events)
+
+    def _carried(self, name: str, detection: LaneEstimate) -> LaneEstimate:
+        """The detection a model hands the MMAE and the paper's PID input: its own, or with
+        `missing_model = "hold"` its last valid one while it has none (the paper's loop
+        carries a value for every model at every step). The trackers see only real ones."""
+        if self.settings.missing_model != "hold":
+            return detection
+        if detection.valid:
+            self._held[name] = detection
+            return detection
+        return self._held.get(name, detection)
 
     def _measure_lane_width(self, detections) -> None:
         """Update the running lane width from this step's two-boundary detections."""
@@ -249,13 +276,16 @@ class LaneEstimator:
         offsets, variances = [], []
         for name, tracker in self.trackers.items():
             if self.settings.mmae_input == "detection":
-                detection = detections[name]
+                detection = self._carried(name, detections[name])
                 x_m = 0.0 if at_car else detection.x_m
                 offsets.append(self._offset_of(detection, x_m))
                 variances.append(tracker.offset_variance_m2(x_m))
             else:
                 offsets.append(tracker.offset_m(x_eval))
                 variances.append(tracker.offset_variance_m2(x_eval))
+        if self._paper_variances is not None:  # eq. 8 with the paper's P
+            variances = [v if o is not None else None
+                         for o, v in zip(offsets, self._paper_variances, strict=True)]
         if self.settings.residual_mode == "distance_aligned":
             self.aligned.push(ego.pose, list(tracked.values()), variances, x_eval)
             offsets, variances = self.aligned.offsets_at(ego.pose, self.reference_x_m)
@@ -330,7 +360,7 @@ class LaneEstimator:
         x_m = self.settings.offset_lookahead_m
         if self.settings.output_at == "nearest_row":
             name = self.names[selected]
-            detection = detections[name]
+            detection = self._carried(name, detections[name])
             x_m = float(detection.x_m)
             if detection.valid:  # the paper's PID reads the detection, gate or not
                 return float(detection.offset_m), x_m

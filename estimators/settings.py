@@ -20,6 +20,8 @@ MODEL_LANES = ("track", "detection")
 MMAE_PRIORS = ("uniform", "precision")
 OUTPUT_AT = ("lookahead", "nearest_row")  # paper mode sets nearest_row
 MMAE_INPUTS = ("track", "detection")  # paper mode sets detection
+RESIDUAL_COVARIANCES = ("tracker", "paper")  # paper mode sets paper
+MISSING_MODELS = ("penalty", "hold")  # paper mode sets hold
 
 
 @dataclass(frozen=True)
@@ -84,6 +86,24 @@ class EstimatorSettings:
                                      "residual density (eq. 8's R): smaller moves the "
                                      "probabilities faster, and with the reference's own errors.",
                                      bounds=(0.001, 1.0))
+    # The paper's eq. 8 with its own numbers: R = 1e-6 and P1, P2 "tuned via trial and error"
+    # (§2.3), a residual density far narrower than any camera's error: each step's
+    # likelihoods then all but pick the model with the smaller |residual|.
+    residual_covariance: str = setting(
+        "tracker", "Eq. 8's Psi = C P C' + R: tracker = each model's tracker's offset variance "
+        "plus reference_std_m squared (ours); paper = the paper's fixed P1, P2 and R = 1e-6 "
+        "(m^2; paper mode sets it).", choices=RESIDUAL_COVARIANCES)
+    # Every model keeps this much probability so that a failed one can recover; the paper
+    # has no floor (paper mode: the smallest normal double, the floor finite arithmetic has).
+    probability_floor: float = setting(1e-3, "Least probability every model keeps after each "
+                                       "MMAE update.", bounds=(0.0, 0.2))
+    # penalty: a model without an offset this step loses probability against every model
+    # compared (MMAEConfig.missing_model_log_penalty); hold: its last detection stands in,
+    # as the paper's loop carries a value for every model at every step (paper mode).
+    missing_model: str = setting(
+        "penalty", "A front model without a detection this step: penalty = it loses "
+        "probability against the compared ones; hold = its last detection stands in, in the "
+        "MMAE and (output_at = nearest_row) as the controller's input.", choices=MISSING_MODELS)
     # On the tuning scenarios the rear pair stays within 16 cm of the running width except
     # where it follows a passing car's edge (the lead van: 4.8% of steps beyond 30 cm).
     # Alone, no check was indistinguishable from 0.2 over tuning seeds (identical but for

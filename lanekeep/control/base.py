@@ -37,10 +37,10 @@ class ControlContext:
 
     @classmethod
     def of(cls, scenario: Scenario, geometry: CarGeometry) -> ControlContext:
-        mode = scenario.estimation.mode
+        mode = "paper" if scenario.estimation.runs_paper("controller") else "default"
         return cls(scenario.control_period_s, scenario.target_speed_mps, geometry.wheelbase_m,
                    geometry.max_steer_rad, scenario.estimation.control_lookahead_m, mode,
-                   acc_settings(scenario.control, mode))
+                   acc_settings(scenario.control, scenario.estimation.mode))
 
     def adaptive_cruise(self) -> AdaptiveCruise | None:
         """The ACC this context asks for (lanekeep/control/acc.py), None when it is off."""

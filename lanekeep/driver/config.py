@@ -55,7 +55,8 @@ class DriverConfig:
 
     def front_detector_config(self, label: str) -> DetectorsConfig | None:
         """The detectors config front model `label` runs with (None: the shipped one)."""
-        return front_detector_config(self.families[label], self.estimation.mode)
+        return front_detector_config(self.families[label], self.estimation.mode,
+                                     keeps=self.estimation.paper_keeps)
 
     @property
     def estimator(self) -> EstimatorSettings:
@@ -69,8 +70,9 @@ class DriverConfig:
     def control(self) -> ControlContext:
         """What the controller is built from."""
         est = self.estimation
+        mode = "paper" if est.runs_paper("controller") else "default"
         return ControlContext(self.period_s, self.target_speed_mps, self.car.wheelbase_m,
-                              self.car.max_steer_rad, est.control_lookahead_m, est.mode,
+                              self.car.max_steer_rad, est.control_lookahead_m, mode,
                               self.acc)
 
     @property

@@ -18,6 +18,29 @@ CAMERAS = ("front", "rear")
 # keeps its two.
 DEFAULT_FRONT_DETECTORS = {"default": ("hough", "sliding_window", "lanenet"),
                            "paper": ("hough", "sliding_window")}
+# Where our loop departs from the paper's, one name each: paper mode takes the paper's choice
+# for all of them unless `paper_keeps` names one (lanekeep/driver/paper_mode.py applies them).
+PAPER_DEVIATIONS: dict[str, str] = {
+    "residuals": "ours: each model's track carried by odometry to the road point the rear "
+                 "camera sees; paper: each detection one step earlier, at the car (eq. 2)",
+    "residual_covariance": "ours: each tracker's C P C' plus (5 cm)^2; paper: its fixed P1, "
+                           "P2 and R = 1e-6 (eq. 8)",
+    "probability_floor": "ours: every model keeps 1e-3 and a missing model is penalised; "
+                         "paper: no floor beyond finite arithmetic, a missing model's last "
+                         "detection stands in",
+    "mmae_prior": "ours: probabilities start by each model's measured precision; paper: equal",
+    "reference_width_check": "ours: a rear reading of the wrong lane width is ignored; "
+                             "paper: every reading counts",
+    "output": "ours: the tracks fused by precision and probability; paper: the likeliest model",
+    "pid_input": "ours: the output lane at the control look-ahead with its heading; paper: the "
+                 "selected model's detection at its nearest row",
+    "controller": "ours: gains from a time constant, curvature feed-forward; paper: eq. 9 "
+                  "with Table 2's gains",
+    "roll_compensation": "ours: body roll taken out of each camera's lane; paper: none",
+    "windows": "ours: both front models 4-20 m; paper: model #1 4-30 m, model #2 4-12 m x +-3 m",
+    "binarisation": "ours: paint against the road beside it, vehicles masked, rain removed; "
+                    "paper: fixed thresholds (detectors/paper_thresholds.py)",
+}
 
 
 @dataclass(frozen=True)
@@ -49,6 +72,10 @@ class EstimationConfig(EstimatorSettings):
                                       allowed="as front_detectors")
     reference_camera: str = setting("rear", "Camera the reference detector looks through.",
                                     choices=CAMERAS)
+    paper_keeps: tuple[str, ...] = setting(
+        (), "In paper mode, the deviations of ours to keep (each runs the paper's choice "
+        "otherwise): " + ", ".join(PAPER_DEVIATIONS) + ". See docs/paper_mode.md.",
+        allowed="names from the list")
     control_lookahead_m: float = setting(8.0, "Where the controller reads the chosen lane.",
                                          bounds=(0.0, 40.0))
     # Body roll compensation (estimators/roll.py; default mode only): the car's roll per m/s^2
@@ -71,6 +98,17 @@ class EstimationConfig(EstimatorSettings):
             object.__setattr__(self, "front_detectors", DEFAULT_FRONT_DETECTORS[self.mode])
         if not self.front_detectors:
             raise InvalidValue("front_detectors", "at least one front detector is needed")
+        unknown = [name for name in self.paper_keeps if name not in PAPER_DEVIATIONS]
+        if unknown:
+            raise InvalidValue("paper_keeps", f"unknown deviation {unknown[0]!r}; one of "
+                                              f"{', '.join(PAPER_DEVIATIONS)}")
+
+    def runs_paper(self, deviation: str) -> bool:
+        """Whether the paper's choice is taken for `deviation` (a `PAPER_DEVIATIONS` name): in
+        paper mode, unless `paper_keeps` names it."""
+        if deviation not in PAPER_DEVIATIONS:
+            raise KeyError(f"unknown deviation {deviation!r}")
+        return self.mode == "paper" and deviation not in self.paper_keeps
 
     def estimator_settings(self) -> EstimatorSettings:
         """The estimator's part of this table, as the estimator's own type."""

@@ -1,0 +1,182 @@
+"""Paper 001's Tables 3-4 and its two patterns, reproduced in paper mode over seeds (#58).
+
+    MUJOCO_GL=egl .venv/bin/python tools/paper_tables.py --seeds 10 --json out/paper_tables.json
+    MUJOCO_GL=egl .venv/bin/python tools/paper_tables.py --read out/paper_tables.json
+    MUJOCO_GL=egl .venv/bin/python tools/paper_tables.py case2_sharp_turn --seeds 3 \\
+        --keep binarisation          # one of our deviations kept (docs/paper_mode.md)
+
+Each paper case runs in paper mode (`[estimation] mode = "paper"`) at seeds file + 1 .. + N (as
+`lanekeep bench --seeds N`). Scored as the paper scores (lanekeep/scoring/paper_tables.py):
+every offset at the car, RMSE over every step with the value the loop carries. Printed per
+case: model #1, model #2, the final offset and the observer, mean over seeds with its 95%
+interval, beside the paper's Table 3 (case 2) and Table 4 (case 4); and the patterns as paired
+verdicts over the seeds (lanekeep/scoring/statistics.py):
+
+* case 1 (building shadows): in the shaded steps model #1 worse than model #2, and the share of
+  those steps the MMAE is on model #2;
+* case 2 (sharp turn): model #2 worse than model #1, their ratio, and the share of the turn's
+  steps the MMAE is on model #1 (the paper: model #1 "between time step 10 and 70").
+
+Event steps: the point 4 m ahead in a cast shadow (cases 1, 3, 4), or the road's curvature there
+above 0.01 1/m (cases 2, 5). Truth is read here, on the scoring side only.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import multiprocessing
+import sys
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+
+from lanekeep.geometry.lane_poly import LanePoly
+from lanekeep.scoring import statistics as stats
+from lanekeep.scoring.paper_tables import COLUMNS, PAPER_TABLES, PaperTrace, paper_row
+
+PAPER_CASES = ("case1_building_shadows", "case2_sharp_turn", "case3_mild_turn_shade_bumps",
+               "case4_half_shade_straight", "case5_wet_rain_turn")
+EVENTS = {"case1_building_shadows": "shade", "case2_sharp_turn": "turn",
+          "case3_mild_turn_shade_bumps": "shade", "case4_half_shade_straight": "shade",
+          "case5_wet_rain_turn": "turn"}
+TURN_CURVATURE = 0.01  # 1/m: the 40 m arc of case 2 and the steep ends of its clothoids
+
+
+def run_one(name: str, seed: int, keeps: tuple[str, ...]) -> dict:
+    """One paper-mode episode of a paper case, scored as the paper scores."""
+    from lanekeep.loop.episode import Episode
+    from lanekeep.loop.paper_mode import with_mode
+    from lanekeep.scenario.schema import load_scenario
+
+    scenario = with_mode(load_scenario(name), "paper")
+    scenario = replace(scenario, seed=seed,
+                       estimation=replace(scenario.estimation, paper_keeps=keeps))
+    trace = PaperTrace()
+    with Episode(scenario) as episode:
+        road, conditions = episode.world.road, episode.world.conditions
+        estimator = episode.driver.estimator
+        labels = list(episode.driver.front)
+        held: list[float | None] = [None] * len(labels)
+
+        def on_step(step, total):
+            x, y, yaw = step.sensed_pose
+            s, _ = road.local_coordinates(np.array([x, y]))
+            if EVENTS[name] == "shade":
+                ahead = np.array([x + 4.0 * np.cos(yaw), y + 4.0 * np.sin(yaw)])
+                in_event = bool(conditions.shaded(ahead))
+            else:
+                in_event = abs(float(road.curvature_at(float(s) + 4.0))) > TURN_CURVATURE
+            offsets: dict[str, float | None] = {}
+            for i, label in enumerate(labels[:2]):
+                centre = estimator.centre_of(step.estimates[label])
+                value = None if centre is None else float(LanePoly.of(centre).offset_m(0.0))
+                offsets[f"model{i + 1}"] = value
+                if value is not None:
+                    held[i] = value
+            offsets["final"] = held[step.selected] if step.selected < 2 else None
+            offsets["observer"] = step.reference_m
+            trace.add(step.truth.offset_at(0.0), offsets, step.selected, in_event)
+
+        report = episode.run(on_step=on_step)
+    row = paper_row(trace).to_dict()
+    row.update(case=name, seed=seed, departures=report.lane_departures,
+               completed=report.completed)
+    return row
+
+
+def _interval(spread: stats.Spread, fmt: str) -> str:
+    lo, hi = spread.ci95
+    return f"{spread.center:{fmt}} [{lo:{fmt}}, {hi:{fmt}}]"
+
+
+def _verdict(a: list[float], b: list[float]) -> str:
+    """a - b paired over the seeds, with the RMSE margin (lanekeep/scoring/statistics.py)."""
+    p = stats.paired(a, b, metric="rmse_cm")
+    lo, hi = p.ci95
+    return (f"{p.diff:+.2f} cm [{lo:+.2f}, {hi:+.2f}] (margin {p.margin:.2f}, n {p.n}): "
+            f"{p.verdict}")
+
+
+def summarise(rows: list[dict]) -> str:
+    """The tables and the pattern verdicts, per case."""
+    lines = []
+    for name in PAPER_CASES:
+        case = [r for r in rows if r["case"] == name]
+        if not case:
+            continue
+        lines.append(f"\n{name}: {len(case)} seeds, departures "
+                     f"{sum(r['departures'] for r in case)}, event = {EVENTS[name]} "
+                     f"(mean {np.mean([r['event_steps'] for r in case]):.0f} of "
+                     f"{np.mean([r['steps'] for r in case]):.0f} steps)")
+        paper = PAPER_TABLES.get(name, {})
+        lines.append("| | " + " | ".join(COLUMNS) + " |")
+        lines.append("|---" * (len(COLUMNS) + 1) + "|")
+        for label, key in (("ours, RMSE cm", "rmse_cm"), ("ours in the event", "event_rmse_cm")):
+            cells = []
+            for column in COLUMNS:
+                cells.append(_interval(stats.spread([r[key][column] for r in case],
+                                                    log_scale=True), ".1f"))
+            lines.append(f"| {label} | " + " | ".join(cells) + " |")
+        if paper:
+            lines.append("| paper | " + " | ".join(f"{paper[c]:.2f}" for c in COLUMNS) + " |")
+        m1 = [r["rmse_cm"]["model1"] for r in case]
+        m2 = [r["rmse_cm"]["model2"] for r in case]
+        e1 = [r["event_rmse_cm"]["model1"] for r in case]
+        e2 = [r["event_rmse_cm"]["model2"] for r in case]
+        on1 = stats.spread([r["selected_share_in_event"][0] for r in case])
+        on2 = stats.spread([r["selected_share_in_event"][1] for r in case])
+        lines.append(f"model #2 - model #1 over the drive: {_verdict(m2, m1)}")
+        lines.append(f"model #2 - model #1 in the event:  {_verdict(e2, e1)}")
+        ratio = stats.spread([b / a for a, b in zip(m1, m2, strict=True) if a > 0],
+                             log_scale=True)
+        lines.append(f"model #2 / model #1 (geometric mean): {_interval(ratio, '.2f')}; MMAE on "
+                     f"model #1 in the event {_interval(on1, '.2f')}, on model #2 "
+                     f"{_interval(on2, '.2f')}")
+    return "\n".join(lines)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("cases", nargs="*", default=list(PAPER_CASES))
+    parser.add_argument("--seeds", type=int, default=10)
+    parser.add_argument("--keep", action="append", default=[],
+                        help="a deviation of ours to keep in paper mode (repeatable)")
+    parser.add_argument("--workers", type=int, default=1)
+    parser.add_argument("--json", type=Path, help="write the rows here")
+    parser.add_argument("--read", type=Path, help="print the rows of an earlier --json")
+    args = parser.parse_args(argv)
+    if args.read:
+        print(summarise(json.loads(args.read.read_text())["rows"]))
+        return 0
+    unknown = [c for c in args.cases if c not in PAPER_CASES]
+    if unknown:
+        print(f"error: not a paper case: {unknown[0]} (one of {', '.join(PAPER_CASES)})",
+              file=sys.stderr)
+        return 2
+    from lanekeep.scenario.schema import load_scenario
+
+    jobs = [(name, load_scenario(name).seed + k, tuple(args.keep))
+            for name in args.cases for k in range(1, args.seeds + 1)]
+    if args.workers > 1:
+        context = multiprocessing.get_context("spawn")
+        with ProcessPoolExecutor(args.workers, mp_context=context) as pool:
+            rows = list(pool.map(run_one, *zip(*jobs, strict=True)))
+    else:
+        rows = []
+        for job in jobs:
+            rows.append(run_one(*job))
+            print(f"{job[0]} seed {job[1]}: " + ", ".join(
+                f"{c} {rows[-1]['rmse_cm'][c]:.1f}" for c in COLUMNS), flush=True)
+            if args.json:  # kept as it grows: an interrupted run loses only its last episode
+                args.json.write_text(json.dumps({"keeps": args.keep, "rows": rows}, indent=1))
+    if args.json:
+        args.json.write_text(json.dumps({"keeps": args.keep, "rows": rows}, indent=1))
+    print(summarise(rows))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
