@@ -10,7 +10,7 @@ lanekeep/world/traffic.py (other vehicles).
   - Sun and time of day: the sun's direction comes from `Conditions.sun_*`; dawn, dusk and night
     dim the sun, the ambient light and the sky (decided before the build, appearance.py)
     and switch on the car's headlights (two white spot lights, lit road ~35 m ahead) and a dim
-    red tail light (the rear camera sees ~8 m of road). MuJoCo lights per vertex, so with
+    red light from the tail lamps on the road just behind the car. MuJoCo lights per vertex, so with
     headlights build.py meshes the asphalt as a 0.5 m grid (lighting.py's GRID_STEP_M).
   - Cast shadows: shadow maps double the render cost on a CPU, so a building's or tree's shadow
     is its silhouette cast along the sun onto the ground: convex polygons drawn as black
