@@ -24,8 +24,8 @@ contact sheet make them) and prints its statistics:
                than 6 DN of luma.
   snow_props   snow, front camera at the start and mid-drive: tree crowns (their mean HSV
                saturation and share of snow-white pixels) and the guard rail with its posts
-               (share of snow-white pixels); snow-white = saturation below 0.12 and luma at
-               least 0.9 of the snowy verge's median in the same frame.
+               (share of snow-white pixels); snow-white = saturation below 0.1 and luma at
+               least the snowy verge's median in the same frame.
 
 `--out DIR` writes the frames and crops looked at (PNG). The numbers hold for this checkout;
 run the same file with PYTHONPATH pointing at another checkout to measure that one.
@@ -221,7 +221,7 @@ def snow_props(out: Path | None) -> None:
             hsv = cv2.cvtColor(rgb, cv2.COLOR_RGB2HSV_FULL).astype(np.float32)
             sat, y = hsv[..., 1] / 255.0, luma(rgb)
             verge = geom_mask(world, ids, lambda n: n.startswith("ground"))
-            white = (sat < 0.12) & (y >= 0.9 * float(np.median(y[verge])))
+            white = (sat < 0.1) & (y >= float(np.median(y[verge])))
             crowns = geom_mask(world, ids, lambda n: n.startswith(("props_foliage",
                                                                     "props_conifer")))
             rails = geom_mask(world, ids, lambda n: n in ("props_steel", "props_pole")
