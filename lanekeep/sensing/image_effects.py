@@ -42,13 +42,14 @@ class ImageEffects:
 
     `camera_model` places the weather (focus of expansion, depth rays; default: a front camera),
     `airlight_rgb` is the fog colour in 0..255 (default: the time of day's sky horizon),
-    `frame_period_s` the auto-exposure's clock.
+    `frame_period_s` the auto-exposure's and the lens drops' clock, `start_time_s` the
+    drive's time of the first frame (the lens drops are those of that time).
     """
 
     def __init__(self, conditions: Conditions, height: int, width: int,
                  rng: np.random.Generator, camera: CameraConfig | None = None,
                  camera_model: CameraModel | None = None, airlight_rgb=None,
-                 frame_period_s: float = 0.1) -> None:
+                 frame_period_s: float = 0.1, start_time_s: float = 0.0) -> None:
         self.conditions = conditions
         self.height, self.width = height, width
         self.needs_depth = needs_depth(conditions)
@@ -57,7 +58,8 @@ class ImageEffects:
             model = model.scaled(width, height)
         if airlight_rgb is None:
             airlight_rgb = 255.0 * np.asarray(LIGHTING[conditions.time_of_day][3][1])
-        self.weather = Weather(conditions, model, airlight_rgb, rng)
+        self.weather = Weather(conditions, model, airlight_rgb, rng, frame_period_s,
+                               start_time_s)
         self.sensor = CameraSensor(camera or CameraConfig(), conditions.noise, height, width,
                                    frame_period_s, rng)
 

@@ -25,13 +25,23 @@ from lanekeep.world.parts import WorldLayout
 from lanekeep.world.street_lights import update_pools
 
 
+def drive_time_s(scenario: Scenario, s_m: float) -> float:
+    """When the scenario's drive reaches arc length s at its target speed (0 before its
+    start): the time a snapshot there shows (what changes with time: the lens drops)."""
+    ahead = s_m - scenario.start.s_m
+    return max(ahead, 0.0) / scenario.target_speed_mps if scenario.target_speed_mps > 0 else 0.0
+
+
 def place_on_road(world: World, s_m: float, offset_m: float = 0.0, heading_deg: float = 0.0,
                   speed_mps: float = 0.0) -> tuple[float, float, float]:
-    """Put the car in the ego lane at arc length s with an offset and heading error."""
+    """Put the car in the ego lane at arc length s with an offset and heading error, and the
+    world's clock at the time its drive gets there (`drive_time_s`; the traffic stays where
+    it is until the world moves it)."""
     road, lane = world.road, world.scenario.road.ego_lane
     x, y = road.position(s_m, road.lane_center_r(lane) + offset_m)
     yaw = float(road.heading_at(s_m)) + math.radians(heading_deg)
     world.car.place(float(x), float(y), yaw, speed_mps)
+    world.data.time = drive_time_s(world.scenario, s_m)
     update_pools(world)  # the street lamps' pools of light near the car
     return float(x), float(y), yaw
 
@@ -52,12 +62,13 @@ def colourise_segmentation(world: World, geom_ids: np.ndarray) -> np.ndarray:
 
 def make_effects(scenario: Scenario, world: World, rig: CameraRig,
                  rng: np.random.Generator) -> dict[str, ImageEffects]:
-    """The image effects of each camera, as `Episode` makes them (same draws from `rng`)."""
+    """The image effects of each camera, as `Episode` makes them (same draws from `rng`),
+    their first frame at the world's time."""
     airlight = 255.0 * world.model.vis.rgba.fog[:3]
     settings = rig.settings
     return {cam: ImageEffects(scenario.conditions, settings.height, settings.width, rng,
                               scenario.camera, rig.cameras[cam], airlight,
-                              scenario.control_period_s)
+                              scenario.control_period_s, float(world.data.time))
             for cam in rig.CAMERA_NAMES}
 
 

@@ -25,7 +25,8 @@ pass as the colour) so that they sit in the scene, not on top of it.
   - Motion blur: a zoom blur about the focus of expansion (the image flow of forward motion
     grows with the distance from it), scaled by the speed.
   - Lens drops: each a small ball lens that shows a wider, inverted, defocused view of the
-    scene around it under a darker rim and a glint; they stay on the lens and slide down.
+    scene around it under a darker rim and a glint; they land, cling for seconds (big ones
+    creep down) and go, as a function of the drive's time (lanekeep/sensing/lens_drops.py).
   - Snowflakes in depth layers: far ones small, dim and sharp, near ones large, brighter and
     out of focus (drawn and blurred at a reduced size), each flake of its own brightness.
 
@@ -43,6 +44,7 @@ import numpy as np
 
 from lanekeep.geometry.camera_model import CameraModel
 from lanekeep.scenario.conditions import Conditions
+from lanekeep.sensing.lens_drops import LensDrops, drop_streams
 from lanekeep.world.lighting import fog_visibility_m
 
 DEPTH_STEP_PX = 4  # the depth map is read at a quarter of the image resolution
@@ -107,7 +109,8 @@ class Weather:
     """The weather of one scenario for one camera (`camera`: its model at the frame size)."""
 
     def __init__(self, conditions: Conditions, camera: CameraModel, airlight_rgb,
-                 rng: np.random.Generator) -> None:
+                 rng: np.random.Generator, frame_period_s: float = 0.1,
+                 start_time_s: float = 0.0) -> None:
         self.conditions = c = conditions
         self.camera = camera
         self.height, self.width = h, w = camera.height, camera.width
@@ -128,10 +131,15 @@ class Weather:
         self._init_reflection(camera, v, u)
         lit = c.fog > 0.0 and c.time_of_day != "day" and self.forward
         self.beam = self._beam(camera, v, u) if lit else None
-        # Lens drops: centre (x, y), radius in pixels; they stay and slide down.
+        # Lens drops: those at time 0 from `rng`, the later ones from streams of their own
+        # (lanekeep/sensing/lens_drops.py); the frames' clock starts at `start_time_s`.
         n_drops = int(round(14 * c.rain))
         r = rng.uniform(8.0, 30.0, n_drops) * self.scale
-        self.drops = np.c_[rng.uniform(0, w, n_drops), rng.uniform(0, h, n_drops), r]
+        first = np.c_[rng.uniform(0, w, n_drops), rng.uniform(0, h, n_drops), r]
+        self.lens = LensDrops(first, drop_streams(rng, 0 if self.forward else 1, n_drops), w, h)
+        self.frame_period_s = frame_period_s
+        self.time_s = start_time_s  # the drive's time of the next frame
+        self.drops = self.lens.at(start_time_s)  # centre (x, y), radius (px) of the drops
 
     @staticmethod
     def _blend(image: np.ndarray, other: np.ndarray, alpha: np.ndarray) -> np.ndarray:
@@ -255,11 +263,11 @@ class Weather:
         DROP_VIEW times wider than the drop, turned upside down (a ball lens inverts),
         out of focus, under a darker rim (the drop's edge bends light away) with a small
         highlight; the scene outside is untouched. Work is done only around each drop."""
-        if len(self.drops) == 0:
+        n = len(self.lens.slots)
+        if n == 0:
             return image
-        self.drops[:, 1] += rng.uniform(0.0, 1.5, len(self.drops)) * self.scale  # slide down
-        gone = self.drops[:, 1] - self.drops[:, 2] > self.height
-        self.drops[gone, 1] = -self.drops[gone, 2]
+        wobble = rng.uniform(0.0, 1.5, n) / 1.5  # the airflow's shiver this frame
+        self.drops = self.lens.at(self.time_s, wobble)
         out = image.copy()
         for x, y, r in self.drops:
             side = 2 * int(math.ceil(r)) + 1
@@ -327,4 +335,5 @@ class Weather:
             out = self.snow(out, rng)
         if c.rain > 0.0:
             out = self.lens_drops(out, rng)
+        self.time_s += self.frame_period_s
         return out
