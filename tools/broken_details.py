@@ -35,6 +35,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import inspect
 import sys
 from collections.abc import Callable
 from pathlib import Path
@@ -200,7 +201,9 @@ def reflection(out: Path | None) -> None:
             for sc in (scenario, dry):
                 rng = np.random.default_rng(stream_entropy(scenario))
                 weather = make_effects(sc, world, rig, rng)["front"].weather
-                out_frames.append(weather(rgb, depth, rng, scenario.start.speed_mps))
+                where = {"pose": world.car.pose()} if "pose" in inspect.signature(
+                    weather.__call__).parameters else {}  # a checkout before the fix has none
+                out_frames.append(weather(rgb, depth, rng, scenario.start.speed_mps, **where))
             change = np.abs(luma(out_frames[0]) - luma(out_frames[1])) > 6.0
             rough = geom_mask(world, ids, lambda n: n.startswith(("ground", "shoulder_")))
             paved = geom_mask(world, ids, lambda n: n.startswith("road_"))

@@ -20,6 +20,7 @@ from lanekeep.scenario.schema import Scenario, ScenarioError
 from lanekeep.scenario.streams import stream_entropy
 from lanekeep.sensing.cameras import CameraRig, RenderSettings
 from lanekeep.sensing.image_effects import ImageEffects
+from lanekeep.sensing.road_water import RoadWater
 from lanekeep.world.build import World, build
 from lanekeep.world.parts import WorldLayout
 from lanekeep.world.street_lights import update_pools
@@ -66,10 +67,21 @@ def make_effects(scenario: Scenario, world: World, rig: CameraRig,
     their first frame at the world's time."""
     airlight = 255.0 * world.model.vis.rgba.fog[:3]
     settings = rig.settings
+    water = road_water(world) if scenario.conditions.wet > 0.0 else None
     return {cam: ImageEffects(scenario.conditions, settings.height, settings.width, rng,
                               scenario.camera, rig.cameras[cam], airlight,
-                              scenario.control_period_s, float(world.data.time))
+                              scenario.control_period_s, float(world.data.time), water)
             for cam in rig.CAMERA_NAMES}
+
+
+def road_water(world: World) -> RoadWater:
+    """Where a wet world's water lies: its paved surface (the lanes and asphalt shoulders,
+    along the road and its straight leads) and its puddles."""
+    road, layout = world.road, world.layout
+    paved = (road.boundary_r(0) - layout.shoulder_m,
+             road.boundary_r(road.n_lanes) + layout.shoulder_m)
+    puddles = tuple(world.conditions.puddle_polygons) if world.conditions is not None else ()
+    return RoadWater(road, paved, (-layout.lead_m, road.length_m + layout.lead_m), puddles)
 
 
 def camera_frame(rig: CameraRig, world: World, cam: str, effects: ImageEffects | None,
@@ -80,7 +92,8 @@ def camera_frame(rig: CameraRig, world: World, cam: str, effects: ImageEffects |
         rgb, depth = rig.render_rgb_depth(world.data, cam)
     else:
         rgb, depth = rig.render_rgb(world.data, cam), None
-    return rgb if effects is None else effects(rgb, rng, speed_mps=speed_mps, depth_m=depth)
+    return rgb if effects is None else effects(rgb, rng, speed_mps=speed_mps, depth_m=depth,
+                                               pose=world.car.pose())
 
 
 def paved_offsets(scenario: Scenario, layout: WorldLayout | None = None
