@@ -143,9 +143,14 @@ class Weather:
         r = rng.uniform(8.0, 30.0, n_drops) * self.scale
         first = np.c_[rng.uniform(0, w, n_drops), rng.uniform(0, h, n_drops), r]
         self.lens = LensDrops(first, drop_streams(rng, 0 if self.forward else 1, n_drops), w, h)
-        self.frame_period_s = frame_period_s
-        self.time_s = start_time_s  # the drive's time of the next frame
+        self.frame_period_s, self.start_time_s = frame_period_s, start_time_s
+        self.frames = 0  # frames made so far
         self.drops = self.lens.at(start_time_s)  # centre (x, y), radius (px) of the drops
+
+    @property
+    def time_s(self) -> float:
+        """The drive's time of the next frame (a count of frames: no drift)."""
+        return self.start_time_s + self.frames * self.frame_period_s
 
     @staticmethod
     def _blend(image: np.ndarray, other: np.ndarray, alpha: np.ndarray) -> np.ndarray:
@@ -357,5 +362,5 @@ class Weather:
             out = self.snow(out, rng)
         if c.rain > 0.0:
             out = self.lens_drops(out, rng)
-        self.time_s += self.frame_period_s
+        self.frames += 1
         return out
