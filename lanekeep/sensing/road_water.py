@@ -58,20 +58,20 @@ class RoadWater:
         puddles = np.zeros(shape, np.uint8)
         near = [p for p in self.puddles if np.hypot(*(p.mean(0) - (x, y))) < REACH_M]
         if near:
-            _fill(puddles, _camera_points(near, camera, pose), camera, step)
+            for k in sorted({len(p) for p in near}):  # polygons of one size at a time
+                same = [p for p in near if len(p) == k]
+                _fill(puddles, _camera_points(same, camera, pose), camera, step)
         return paved, puddles
 
 
-def _camera_points(polygons, camera: CameraModel, pose) -> list[np.ndarray]:
-    """World ground polygons -> OpenCV camera coordinates (k, 3) each."""
+def _camera_points(polygons, camera: CameraModel, pose) -> np.ndarray:
+    """World ground polygons (n, k, 2) -> OpenCV camera coordinates (n, k, 3), all at once."""
     x, y, yaw = pose
     c, s = np.cos(yaw), np.sin(yaw)
-    out = []
-    for poly in polygons:
-        d = np.asarray(poly, float) - (x, y)
-        vehicle = np.c_[c * d[:, 0] + s * d[:, 1], -s * d[:, 0] + c * d[:, 1], np.zeros(len(d))]
-        out.append(camera.to_opencv_frame(vehicle))
-    return out
+    d = np.asarray(polygons, float) - (x, y)
+    vehicle = np.stack([c * d[..., 0] + s * d[..., 1], -s * d[..., 0] + c * d[..., 1],
+                        np.zeros(d.shape[:-1])], -1)
+    return camera.to_opencv_frame(vehicle)
 
 
 def _clip_near(poly: np.ndarray) -> np.ndarray:
@@ -88,17 +88,30 @@ def _clip_near(poly: np.ndarray) -> np.ndarray:
     return np.array(out).reshape(-1, 3)
 
 
-def _fill(mask: np.ndarray, polygons: list[np.ndarray], camera: CameraModel,
-          step: int) -> None:
-    """Rasterise convex camera-frame polygons onto the grid (255 inside)."""
-    for poly in polygons:
-        if (poly[:, 2] < CLIP_Z_M).any():
-            poly = _clip_near(poly)
-            if len(poly) < 3:
-                continue
-        u = camera.fx * poly[:, 0] / poly[:, 2] + camera.cx
-        v = camera.fy * poly[:, 1] / poly[:, 2] + camera.cy
-        grid = np.c_[(u - step // 2) / step, (v - step // 2) / step]
-        grid = np.clip(grid, -1e5, 1e5)  # a corner just past the near plane lies far out
-        corners = np.round(grid * (1 << SHIFT)).astype(np.int32)
-        cv2.fillConvexPoly(mask, corners, 255, cv2.LINE_8, SHIFT)  # each convex: no even-odd
+def _grid_corners(poly: np.ndarray, camera: CameraModel, step: int) -> np.ndarray:
+    """Camera-frame points (..., 3) in front of the near plane -> fixed-point grid corners."""
+    u = camera.fx * poly[..., 0] / poly[..., 2] + camera.cx
+    v = camera.fy * poly[..., 1] / poly[..., 2] + camera.cy
+    grid = np.stack([(u - step // 2) / step, (v - step // 2) / step], -1)
+    grid = np.clip(grid, -1e5, 1e5)  # a corner just past the near plane lies far out
+    return np.round(grid * (1 << SHIFT)).astype(np.int32)
+
+
+def _fill(mask: np.ndarray, polygons: np.ndarray, camera: CameraModel, step: int) -> None:
+    """Rasterise convex camera-frame polygons (n, k, 3) onto the grid (255 inside); those
+    wholly behind the near plane or beside the frame are left out, those across the near
+    plane clipped."""
+    behind = polygons[..., 2] < CLIP_Z_M
+    keep = ~behind.all(1)
+    polygons, across = polygons[keep], behind[keep].any(1)
+    whole = _grid_corners(polygons[~across], camera, step)
+    rows, cols = mask.shape
+    limit = np.array([cols, rows]) << SHIFT
+    outside = ((whole < 0).all(1) | (whole >= limit).all(1)).any(-1)
+    corners = list(whole[~outside])
+    for poly in polygons[across]:
+        piece = _clip_near(poly)
+        if len(piece) >= 3:
+            corners.append(_grid_corners(piece, camera, step))
+    for c in corners:
+        cv2.fillConvexPoly(mask, c, 255, cv2.LINE_8, SHIFT)  # each convex: no even-odd
