@@ -22,6 +22,7 @@ from lanekeep.scenario.camera import CameraConfig
 from lanekeep.scenario.conditions import Conditions
 from lanekeep.sensing.camera_sensor import CameraSensor
 from lanekeep.sensing.paint_visibility import visible_paint
+from lanekeep.sensing.road_water import RoadWater
 from lanekeep.sensing.weather import DEPTH_STEP_PX, Weather, needs_depth
 from lanekeep.world.lighting import LIGHTING
 
@@ -42,13 +43,16 @@ class ImageEffects:
 
     `camera_model` places the weather (focus of expansion, depth rays; default: a front camera),
     `airlight_rgb` is the fog colour in 0..255 (default: the time of day's sky horizon),
-    `frame_period_s` the auto-exposure's clock.
+    `frame_period_s` the auto-exposure's and the lens drops' clock, `start_time_s` the
+    drive's time of the first frame (the lens drops are those of that time), `water` where a
+    wet road's water lies (lanekeep/sensing/road_water.py; None: on all flat ground).
     """
 
     def __init__(self, conditions: Conditions, height: int, width: int,
                  rng: np.random.Generator, camera: CameraConfig | None = None,
                  camera_model: CameraModel | None = None, airlight_rgb=None,
-                 frame_period_s: float = 0.1) -> None:
+                 frame_period_s: float = 0.1, start_time_s: float = 0.0,
+                 water: RoadWater | None = None) -> None:
         self.conditions = conditions
         self.height, self.width = height, width
         self.needs_depth = needs_depth(conditions)
@@ -57,15 +61,17 @@ class ImageEffects:
             model = model.scaled(width, height)
         if airlight_rgb is None:
             airlight_rgb = 255.0 * np.asarray(LIGHTING[conditions.time_of_day][3][1])
-        self.weather = Weather(conditions, model, airlight_rgb, rng)
+        self.weather = Weather(conditions, model, airlight_rgb, rng, frame_period_s,
+                               start_time_s, water)
         self.sensor = CameraSensor(camera or CameraConfig(), conditions.noise, height, width,
                                    frame_period_s, rng)
 
     def __call__(self, image: np.ndarray, rng: np.random.Generator, speed_mps: float = 0.0,
-                 depth_m: np.ndarray | None = None) -> np.ndarray:
+                 depth_m: np.ndarray | None = None, pose=None) -> np.ndarray:
         """All effects on one RGB uint8 frame (H, W, 3); returns a new array. `depth_m`: the
         render's z-depth at every DEPTH_STEP_PX-th pixel; without it the scene counts as far
-        (rain streaks everywhere) and there is no fog (MuJoCo's own fog may be in the frame)."""
+        (rain streaks everywhere) and there is no fog (MuJoCo's own fog may be in the frame).
+        `pose`: the car's world (x, y, yaw), where the wet road's water is seen."""
         if image.shape != (self.height, self.width, 3) or image.dtype != np.uint8:
             raise ValueError(f"expected uint8 ({self.height}, {self.width}, 3), got "
                              f"{image.dtype} {image.shape}")
@@ -76,7 +82,7 @@ class ImageEffects:
             depth_m = np.full(shape, FAR_M, np.float32)
             if conditions.fog > 0.0:  # no depth, no fog: the frame carries MuJoCo's
                 self.weather.extinction_per_m = 0.0
-        out = self.weather(image, depth_m, rng, speed_mps)
+        out = self.weather(image, depth_m, rng, speed_mps, pose)
         return self.sensor(out, rng)
 
     def visible_paint(self, paint: np.ndarray, bare_rgb: np.ndarray, depth_m: np.ndarray

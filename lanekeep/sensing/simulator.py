@@ -98,7 +98,7 @@ class Simulator:
                 rgb = self.rig.render_rgb(data, name)
             self.clock.lap(f"render_{name}")
             frames[name] = self.effects[name](rgb, self.rng, speed_mps=car.speed_mps(),
-                                              depth_m=depth)
+                                              depth_m=depth, pose=car.pose())
             self.clock.lap(f"effects_{name}")
         signals = self.sensors.sample(car)
         if self.radar_on:

@@ -20,18 +20,29 @@ from lanekeep.scenario.schema import Scenario, ScenarioError
 from lanekeep.scenario.streams import stream_entropy
 from lanekeep.sensing.cameras import CameraRig, RenderSettings
 from lanekeep.sensing.image_effects import ImageEffects
+from lanekeep.sensing.road_water import RoadWater
 from lanekeep.world.build import World, build
 from lanekeep.world.parts import WorldLayout
 from lanekeep.world.street_lights import update_pools
 
 
+def drive_time_s(scenario: Scenario, s_m: float) -> float:
+    """When the scenario's drive reaches arc length s at its target speed (0 before its
+    start): the time a snapshot there shows (what changes with time: the lens drops)."""
+    ahead = s_m - scenario.start.s_m
+    return max(ahead, 0.0) / scenario.target_speed_mps if scenario.target_speed_mps > 0 else 0.0
+
+
 def place_on_road(world: World, s_m: float, offset_m: float = 0.0, heading_deg: float = 0.0,
                   speed_mps: float = 0.0) -> tuple[float, float, float]:
-    """Put the car in the ego lane at arc length s with an offset and heading error."""
+    """Put the car in the ego lane at arc length s with an offset and heading error, and the
+    world's clock at the time its drive gets there (`drive_time_s`; the traffic stays where
+    it is until the world moves it)."""
     road, lane = world.road, world.scenario.road.ego_lane
     x, y = road.position(s_m, road.lane_center_r(lane) + offset_m)
     yaw = float(road.heading_at(s_m)) + math.radians(heading_deg)
     world.car.place(float(x), float(y), yaw, speed_mps)
+    world.data.time = drive_time_s(world.scenario, s_m)
     update_pools(world)  # the street lamps' pools of light near the car
     return float(x), float(y), yaw
 
@@ -52,13 +63,25 @@ def colourise_segmentation(world: World, geom_ids: np.ndarray) -> np.ndarray:
 
 def make_effects(scenario: Scenario, world: World, rig: CameraRig,
                  rng: np.random.Generator) -> dict[str, ImageEffects]:
-    """The image effects of each camera, as `Episode` makes them (same draws from `rng`)."""
+    """The image effects of each camera, as `Episode` makes them (same draws from `rng`),
+    their first frame at the world's time."""
     airlight = 255.0 * world.model.vis.rgba.fog[:3]
     settings = rig.settings
+    water = road_water(world) if scenario.conditions.wet > 0.0 else None
     return {cam: ImageEffects(scenario.conditions, settings.height, settings.width, rng,
                               scenario.camera, rig.cameras[cam], airlight,
-                              scenario.control_period_s)
+                              scenario.control_period_s, float(world.data.time), water)
             for cam in rig.CAMERA_NAMES}
+
+
+def road_water(world: World) -> RoadWater:
+    """Where a wet world's water lies: its paved surface (the lanes and asphalt shoulders,
+    along the road and its straight leads) and its puddles."""
+    road, layout = world.road, world.layout
+    paved = (road.boundary_r(0) - layout.shoulder_m,
+             road.boundary_r(road.n_lanes) + layout.shoulder_m)
+    puddles = tuple(world.conditions.puddle_polygons) if world.conditions is not None else ()
+    return RoadWater(road, paved, (-layout.lead_m, road.length_m + layout.lead_m), puddles)
 
 
 def camera_frame(rig: CameraRig, world: World, cam: str, effects: ImageEffects | None,
@@ -69,7 +92,8 @@ def camera_frame(rig: CameraRig, world: World, cam: str, effects: ImageEffects |
         rgb, depth = rig.render_rgb_depth(world.data, cam)
     else:
         rgb, depth = rig.render_rgb(world.data, cam), None
-    return rgb if effects is None else effects(rgb, rng, speed_mps=speed_mps, depth_m=depth)
+    return rgb if effects is None else effects(rgb, rng, speed_mps=speed_mps, depth_m=depth,
+                                               pose=world.car.pose())
 
 
 def paved_offsets(scenario: Scenario, layout: WorldLayout | None = None

@@ -12,11 +12,13 @@ pass as the colour) so that they sit in the scene, not on top of it.
     motion: away from the focus of expansion on the front camera, towards the focus of
     contraction on the rear one, longer the nearer the drop. A streak blends towards the
     airlight (a drop refracts the sky), so it shows on the road and hardly on the sky.
-  - Wet road: a screen-space reflection. On ground pixels (the depth matches the flat ground's)
-    the scene above the horizon is mirrored about the horizon row (distant objects reflect
-    there on a flat wet surface), blurred vertically (a rough water film), and blended with
-    Schlick's Fresnel reflectance of water (R0 = 0.02) at the ray's grazing angle, times
-    WET_FILM * wet (the share of the surface under a water film).
+  - Wet road: a screen-space reflection. On the paved surface and in the puddles
+    (lanekeep/sensing/road_water.py, where the depth matches the flat ground's; grass and
+    gravel are too rough to mirror) the scene above the horizon is mirrored about the horizon
+    row (distant objects reflect there on a flat wet surface), blurred vertically (a rough
+    water film), and blended with Schlick's Fresnel reflectance of water (R0 = 0.02) at the
+    ray's grazing angle, times the share of the surface under a water film: WET_FILM * wet on
+    the asphalt, all of it (PUDDLE_FILM) in a puddle.
   - Headlights in fog (dawn, dusk, night; front camera): the fog scatters the beams back to the
     camera, a veil over the lit cone that grows with the fog along the ray: HEADLIGHT_VEIL x
     the beam's strength along the ray x (1 - exp(-3 min(d, HEADLIGHT_REACH_M) / V)). A low
@@ -25,7 +27,8 @@ pass as the colour) so that they sit in the scene, not on top of it.
   - Motion blur: a zoom blur about the focus of expansion (the image flow of forward motion
     grows with the distance from it), scaled by the speed.
   - Lens drops: each a small ball lens that shows a wider, inverted, defocused view of the
-    scene around it under a darker rim and a glint; they stay on the lens and slide down.
+    scene around it under a darker rim and a glint; they land, cling for seconds (big ones
+    creep down) and go, as a function of the drive's time (lanekeep/sensing/lens_drops.py).
   - Snowflakes in depth layers: far ones small, dim and sharp, near ones large, brighter and
     out of focus (drawn and blurred at a reduced size), each flake of its own brightness.
 
@@ -43,6 +46,8 @@ import numpy as np
 
 from lanekeep.geometry.camera_model import CameraModel
 from lanekeep.scenario.conditions import Conditions
+from lanekeep.sensing.lens_drops import LensDrops, drop_streams
+from lanekeep.sensing.road_water import RoadWater
 from lanekeep.world.lighting import fog_visibility_m
 
 DEPTH_STEP_PX = 4  # the depth map is read at a quarter of the image resolution
@@ -53,6 +58,8 @@ EXPOSURE_S = 0.005  # the camera's exposure time: how long a drop's streak is
 WATER_R0 = 0.02  # Fresnel reflectance of water at normal incidence
 WET_FILM = 0.5  # share of the road under a mirror-like water film at wet = 1
 REFLECTION_BLUR = 15  # vertical blur of the reflection at 720 rows (a rough film)
+PUDDLE_FILM = 1.0  # a puddle is all water
+REFLECT_MIN = 5  # rows where even the deepest film reflects under 5/255 are left alone
 # The ego car's low beams (lanekeep/world_lighting.add_car_lights): their axis in the vehicle
 # frame, cone, and how far their light reaches into the fog; the veil's strength at full beam.
 HEADLIGHT_AXIS_DEG = -2.0  # elevation of the beams' axis
@@ -107,7 +114,8 @@ class Weather:
     """The weather of one scenario for one camera (`camera`: its model at the frame size)."""
 
     def __init__(self, conditions: Conditions, camera: CameraModel, airlight_rgb,
-                 rng: np.random.Generator) -> None:
+                 rng: np.random.Generator, frame_period_s: float = 0.1,
+                 start_time_s: float = 0.0, water: RoadWater | None = None) -> None:
         self.conditions = c = conditions
         self.camera = camera
         self.height, self.width = h, w = camera.height, camera.width
@@ -125,13 +133,24 @@ class Weather:
         self.air_image[:] = air
         veil = 0.35 * c.snow
         self.snow_veil = np.round(np.arange(256) * (1.0 - veil) + 235.0 * veil).astype(np.uint8)
+        self.water = water  # where the wet road's water lies (None: on all flat ground)
         self._init_reflection(camera, v, u)
         lit = c.fog > 0.0 and c.time_of_day != "day" and self.forward
         self.beam = self._beam(camera, v, u) if lit else None
-        # Lens drops: centre (x, y), radius in pixels; they stay and slide down.
+        # Lens drops: those at time 0 from `rng`, the later ones from streams of their own
+        # (lanekeep/sensing/lens_drops.py); the frames' clock starts at `start_time_s`.
         n_drops = int(round(14 * c.rain))
         r = rng.uniform(8.0, 30.0, n_drops) * self.scale
-        self.drops = np.c_[rng.uniform(0, w, n_drops), rng.uniform(0, h, n_drops), r]
+        first = np.c_[rng.uniform(0, w, n_drops), rng.uniform(0, h, n_drops), r]
+        self.lens = LensDrops(first, drop_streams(rng, 0 if self.forward else 1, n_drops), w, h)
+        self.frame_period_s, self.start_time_s = frame_period_s, start_time_s
+        self.frames = 0  # frames made so far
+        self.drops = self.lens.at(start_time_s)  # centre (x, y), radius (px) of the drops
+
+    @property
+    def time_s(self) -> float:
+        """The drive's time of the next frame (a count of frames: no drift)."""
+        return self.start_time_s + self.frames * self.frame_period_s
 
     @staticmethod
     def _blend(image: np.ndarray, other: np.ndarray, alpha: np.ndarray) -> np.ndarray:
@@ -144,8 +163,8 @@ class Weather:
         return cv2.resize(small, (self.width, self.height), interpolation=interpolation)
 
     def _init_reflection(self, camera: CameraModel, v: np.ndarray, u: np.ndarray) -> None:
-        """The flat ground's z-depth at the depth map's pixels, the horizon row, and the
-        reflection's strength per row below it."""
+        """The flat ground's z-depth at the depth map's pixels, the horizon row, the Fresnel
+        reflectance per row below it (uint8, 1/255) and how many rows a film can show."""
         xy, valid = camera.pixels_to_ground(np.stack([u, v], -1).astype(float))
         ground = np.concatenate([xy, np.zeros(xy.shape[:-1] + (1,))], -1)
         z = camera.to_opencv_frame(np.where(valid[..., None], ground, 0.0))[..., 2]
@@ -154,10 +173,12 @@ class Weather:
         rows = np.arange(self.height, dtype=float)
         below = np.arctan(np.maximum(rows - camera.horizon_row(), 0.0) / camera.fy)
         fresnel = WATER_R0 + (1 - WATER_R0) * (1.0 - np.sin(below)) ** 5
-        share = np.where(rows >= self.horizon, WET_FILM * self.conditions.wet * fresnel, 0.0)
-        self.reflect_alpha = np.round(255 * share).astype(np.uint8)[:, None]
-        self.reflect_rows = int(min(np.count_nonzero(self.reflect_alpha >= 5),
-                                    self.horizon, self.height - self.horizon))
+        self.fresnel = np.round(255 * np.where(rows >= self.horizon, fresnel, 0.0)
+                                ).astype(np.uint8)[:, None]
+        self.film = WET_FILM * self.conditions.wet  # the paved surface's share under water
+        deepest = max(self.film, PUDDLE_FILM if self.water and self.water.puddles else 0.0)
+        self.reflect_rows = int(min(np.count_nonzero(self.fresnel * deepest >= REFLECT_MIN),
+                                    self.height - self.horizon))
 
     @staticmethod
     def _beam(camera: CameraModel, v: np.ndarray, u: np.ndarray) -> np.ndarray:
@@ -178,17 +199,30 @@ class Weather:
         veil = self._full(share)[..., None] * np.asarray(HEADLIGHT_RGB, np.float32)
         return cv2.add(image, np.round(veil).astype(np.uint8))
 
-    def wet_reflection(self, image: np.ndarray, depth_m: np.ndarray) -> np.ndarray:
-        """Mirror the view above the horizon onto the wet ground below it (Fresnel-weighted)."""
+    def water_film(self, depth_m: np.ndarray, pose) -> np.ndarray:
+        """The share of each depth-map pixel under a mirror-smooth water film (uint8, 1/255):
+        flat ground (the depth matches the flat ground's) that is paved (`film`) or a puddle
+        (PUDDLE_FILM); every flat ground pixel counts as paved without `water` or `pose`."""
+        ground = (np.abs(depth_m - self.ground_z) < 0.04 * self.ground_z).astype(np.uint8)
+        if self.water is None or pose is None:
+            return ground * np.uint8(round(255 * self.film))
+        paved, puddles = self.water.masks(self.camera, pose, depth_m.shape, DEPTH_STEP_PX)
+        film = cv2.max(cv2.multiply(paved, self.film), cv2.multiply(puddles, PUDDLE_FILM))
+        return cv2.multiply(film, ground)
+
+    def wet_reflection(self, image: np.ndarray, depth_m: np.ndarray, pose=None) -> np.ndarray:
+        """Mirror the view above the horizon onto the wet road below it, Fresnel-weighted, on
+        the paved surface and the puddles (`water_film`) of the car at `pose` (world x, y,
+        yaw). Rows further below the horizon than it is from the top mirror the top row."""
         n, top = self.reflect_rows, self.horizon
         if n < 2:
             return image
-        ground = np.abs(depth_m - self.ground_z) < 0.04 * self.ground_z
-        mask = self._full(ground.astype(np.uint8) * 255, cv2.INTER_LINEAR)[top:top + n]
-        mirror = image[top - n:top][::-1]
+        film = self._full(self.water_film(depth_m, pose), cv2.INTER_LINEAR)[top:top + n]
+        source = np.maximum(top - 1 - np.arange(n), 0)
+        mirror = image[source] if n > top else image[top - n:top][::-1]
         k = max(3, int(REFLECTION_BLUR * self.scale) | 1)
         mirror = cv2.blur(mirror, (3, k))
-        alpha = cv2.multiply(mask, np.broadcast_to(self.reflect_alpha[top:top + n], mask.shape),
+        alpha = cv2.multiply(film, np.broadcast_to(self.fresnel[top:top + n], film.shape),
                              scale=1 / 255)
         out = image.copy()
         out[top:top + n] = self._blend(image[top:top + n], mirror, alpha)
@@ -255,11 +289,11 @@ class Weather:
         DROP_VIEW times wider than the drop, turned upside down (a ball lens inverts),
         out of focus, under a darker rim (the drop's edge bends light away) with a small
         highlight; the scene outside is untouched. Work is done only around each drop."""
-        if len(self.drops) == 0:
+        n = len(self.lens.slots)
+        if n == 0:
             return image
-        self.drops[:, 1] += rng.uniform(0.0, 1.5, len(self.drops)) * self.scale  # slide down
-        gone = self.drops[:, 1] - self.drops[:, 2] > self.height
-        self.drops[gone, 1] = -self.drops[gone, 2]
+        wobble = rng.uniform(0.0, 1.5, n) / 1.5  # the airflow's shiver this frame
+        self.drops = self.lens.at(self.time_s, wobble)
         out = image.copy()
         for x, y, r in self.drops:
             side = 2 * int(math.ceil(r)) + 1
@@ -304,15 +338,16 @@ class Weather:
         return cv2.LUT(out, self.snow_veil)  # falling snow whitens the whole view
 
     def __call__(self, image: np.ndarray, depth_m: np.ndarray | None,
-                 rng: np.random.Generator, speed_mps: float = 0.0) -> np.ndarray:
+                 rng: np.random.Generator, speed_mps: float = 0.0, pose=None) -> np.ndarray:
         """The weather on one RGB uint8 frame; `depth_m` is the z-depth at every
-        DEPTH_STEP_PX-th pixel (needed when `needs_depth`). Returns the input when no weather."""
+        DEPTH_STEP_PX-th pixel (needed when `needs_depth`), `pose` the car's world (x, y,
+        yaw) (where the wet road's water lies). Returns the input when no weather."""
         c = self.conditions
         out = image
         if c.motion_blur > 0.0:
             out = self.motion_blur(out, speed_mps)
         if c.wet > 0.0:
-            out = self.wet_reflection(out, depth_m)
+            out = self.wet_reflection(out, depth_m, pose)
         if c.fog > 0.0 or c.rain > 0.0:  # both veil the scene with the airlight: one blend
             alpha = self.fog_alpha(depth_m) if c.fog > 0.0 else None
             if c.rain > 0.0:
@@ -327,4 +362,5 @@ class Weather:
             out = self.snow(out, rng)
         if c.rain > 0.0:
             out = self.lens_drops(out, rng)
+        self.frames += 1
         return out

@@ -10,7 +10,7 @@ lanekeep/world/traffic.py (other vehicles).
   - Sun and time of day: the sun's direction comes from `Conditions.sun_*`; dawn, dusk and night
     dim the sun, the ambient light and the sky (decided before the build, appearance.py)
     and switch on the car's headlights (two white spot lights, lit road ~35 m ahead) and a dim
-    red tail light (the rear camera sees ~8 m of road). MuJoCo lights per vertex, so with
+    red light from the tail lamps on the road just behind the car. MuJoCo lights per vertex, so with
     headlights build.py meshes the asphalt as a 0.5 m grid (lighting.py's GRID_STEP_M).
   - Cast shadows: shadow maps double the render cost on a CPU, so a building's or tree's shadow
     is its silhouette cast along the sun onto the ground: convex polygons drawn as black
@@ -21,7 +21,8 @@ lanekeep/world/traffic.py (other vehicles).
   - Speed bumps: cylinders across the road sunk into the ground (a circular cap ~0.6 m long and
     `speed_bump_height_m` high) that the tyres collide with; yellow with black stripes.
   - Wet road: darker, glossier asphalt (a material tint, appearance.py) and puddles as
-    dark glossy overlays (group GROUP_SHADOW).
+    dark glossy overlays (group GROUP_SHADOW); the camera mirrors the scene in both
+    (lanekeep/sensing/weather.py, lanekeep/sensing/road_water.py).
   - Fog: MuJoCo's linear fog up to the visibility distance, in the sky's horizon colour.
     Scenes without fog put it beyond the far clip plane, so the render flag can stay on.
   - Snow: white verges (the grass and gravel materials use the snow texture made here) and snow
@@ -40,7 +41,6 @@ import numpy as np
 from lanekeep.geometry.road import Road
 from lanekeep.scenario.schema import Scenario
 from lanekeep.world.lighting import (
-    LIGHTING,
     add_car_lights,
     fog_visibility_m,
     sun_direction,
@@ -54,6 +54,8 @@ from lanekeep.world.traffic import add_vehicle
 from lanekeep.world.traffic_flow import traffic_plan
 
 DAPPLE_SEED = 0xDA9  # a tree zone's sunflecks: their own generator [seed, this, zone]
+PUDDLE_RGB = (0.05, 0.055, 0.06)  # what the water's depth and the submerged asphalt give back
+PUDDLE_DARKENING = 0.3  # how far a puddle darkens the wet asphalt towards it
 
 
 def add_conditions(spec: mujoco.MjSpec, scenario: Scenario, road: Road,
@@ -82,11 +84,13 @@ def add_conditions(spec: mujoco.MjSpec, scenario: Scenario, road: Road,
         spec.add_material(name="cond_bump", rgba=[0.95, 0.75, 0.1, 1.0], specular=0.2)
         add_bumps(spec, road, cond, info, layout)
     if cond.wet > 0.0:
-        # At a camera's grazing angle water mirrors the sky: sky-coloured, self-lit, glossy.
-        horizon = LIGHTING[cond.time_of_day][3][1]
-        spec.add_material(name="cond_puddle",
-                          rgba=[*(0.4 * np.array(horizon)), overlay_alpha(0.55)],
-                          emission=0.3, specular=0.9, shininess=1.0)
+        # Standing water: the asphalt under it looks darker and smoother (PUDDLE_DARKENING);
+        # what it mirrors depends on the view (Fresnel: little seen steeply near the car, much
+        # at a grazing angle), so the camera adds it in image space
+        # (lanekeep/sensing/weather.py). A sky-coloured, self-lit overlay was a flat grey
+        # spindle a third of heavy_rain's rear frame high.
+        spec.add_material(name="cond_puddle", rgba=[*PUDDLE_RGB, overlay_alpha(PUDDLE_DARKENING)],
+                          specular=0.9, shininess=1.0)
         add_wet(spec, road, cond, rng, info, layout)
     if cond.snow > 0.0:
         add_snow(spec, road, cond, rng, layout)

@@ -2,8 +2,9 @@
 sun's direction, and the car's own lights.
 
 Dawn, dusk and night dim the sun, the ambient light and the sky and switch on the car's
-headlights (two white spot lights, lit road ~35 m ahead) and a dim red tail light (the rear
-camera sees ~8 m of road). MuJoCo lights per vertex, so with headlights the asphalt ribbons are
+headlights (two white spot lights, lit road ~35 m ahead) and the tail lamps' faint red light
+on the road just behind the car (a tenth of the headlit road's light, falling off with the
+square of the distance). MuJoCo lights per vertex, so with headlights the asphalt ribbons are
 meshed as a 0.5 m grid. Fog: MuJoCo's linear fog up to the visibility distance, in the sky's
 horizon colour. Rain and snow: an overcast (`cloud_cover`), no direct sun, a grey sky.
 lanekeep/world/appearance.py turns these into one scenario's values.
@@ -87,6 +88,18 @@ def sun_direction(conditions: Conditions, road: Road) -> np.ndarray:
     return np.array([math.cos(el) * math.cos(az), math.cos(el) * math.sin(az), math.sin(el)])
 
 
+# The two rear position lamps as one light. A lamp gives 4-17 cd along its axis (UN ECE R7),
+# a few cd down at the road behind, against 1,000-10,000 cd of a low beam towards the road
+# ahead: 1.5-3 m behind the car they light the road about a tenth as much as the low beams
+# light it 10-25 m ahead (0.2-0.4 lux against ~2 lux), and the light falls off with the
+# square of the distance. TAIL_RGB is set so that the render agrees (night, the near road
+# 0.5-3.5 m behind the rear camera: +6 DN of red over a headlit road of 64 DN luma;
+# tools/broken_details.py). Deep red: a tail lamp's filter passes almost no green or blue.
+TAIL_RGB = (0.45, 0.02, 0.015)
+TAIL_DIR = (-1.0, 0.0, -0.1)  # the lamps' axis: backwards, slightly down
+TAIL_EXPONENT = 4.0  # their beam narrows to about +-15 deg in elevation
+
+
 def add_car_lights(spec: mujoco.MjSpec) -> None:
     """Low-beam headlights (forward, 2 deg down) and a dim red tail light on the body 'car'."""
     car = spec.body("car")
@@ -97,7 +110,7 @@ def add_car_lights(spec: mujoco.MjSpec) -> None:
                       diffuse=[1.0, 0.97, 0.9], ambient=[0.0, 0.0, 0.0],
                       specular=[0.4, 0.4, 0.4], attenuation=[0.25, 0.02, 0.0],
                       castshadow=False)
-    car.add_light(name="tail_light", type=spot, pos=[-2.4, 0.0, 0.8], dir=[-1.0, 0.0, -0.45],
-                  cutoff=70.0, exponent=2.0, diffuse=[0.55, 0.08, 0.06],
+    car.add_light(name="tail_light", type=spot, pos=[-2.4, 0.0, 0.8], dir=list(TAIL_DIR),
+                  cutoff=80.0, exponent=TAIL_EXPONENT, diffuse=list(TAIL_RGB),
                   ambient=[0.0, 0.0, 0.0], specular=[0.0, 0.0, 0.0],
-                  attenuation=[0.3, 0.1, 0.0], castshadow=False)
+                  attenuation=[0.0, 0.0, 1.0], castshadow=False)

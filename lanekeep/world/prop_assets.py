@@ -11,6 +11,7 @@ that casts a shadow is registered as a convex point set (`Props.casters`).
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import mujoco
@@ -18,6 +19,7 @@ import numpy as np
 
 from lanekeep.geometry.road import Road
 from lanekeep.geometry.road_mesh import Ribbon
+from lanekeep.world import prop_snow as snow_on
 from lanekeep.world import prop_textures as tex
 from lanekeep.world.parts import WorldLayout, add_material, add_texture
 from lanekeep.world.prop_meshes import box, cone, ellipsoid, extrude, prism
@@ -25,6 +27,7 @@ from lanekeep.world.prop_meshes import box, cone, ellipsoid, extrude, prism
 FACADE_WALLS = ((0.72, 0.68, 0.6), (0.55, 0.4, 0.32), (0.8, 0.8, 0.78), (0.45, 0.47, 0.5))
 SIGN_COLOURS = ((0.05, 0.38, 0.18), (0.06, 0.2, 0.55))
 FOLIAGE_TINTS = ((1.0, 1.0, 1.0, 1.0), (0.78, 0.88, 0.7, 1.0), (0.9, 0.85, 0.6, 1.0))
+CONIFER_TINT = (0.5, 0.62, 0.55, 1.0)
 RAIL_PROFILE = np.array([[0.0, 0.45], [-0.08, 0.53], [-0.08, 0.67], [0.0, 0.75],
                          [0.03, 0.75], [0.03, 0.45]])  # (outwards, up) m: W-beam, closed
 JERSEY_PROFILE = np.array([[0.0, 0.0], [0.0, 0.075], [0.165, 0.33], [0.23, 0.81],
@@ -55,9 +58,11 @@ class Props:
             self.casters.append(mesh.vertices)
 
 
-def add_prop_materials(spec: mujoco.MjSpec, seed: int, night: bool = False) -> None:
+def add_prop_materials(spec: mujoco.MjSpec, seed: int, night: bool = False,
+                       snow: float = 0.0) -> None:
     """Textures and materials of the props (also used by the shadow zones' casters); at
-    night the far hills lose the glow that stands for daylight haze."""
+    night the far hills lose the glow that stands for daylight haze; in a snowfall the crowns
+    carry snow and the snow on the rails gets its material (lanekeep/world/prop_snow.py)."""
     rng = np.random.default_rng([seed, 0x9209])
     for k, wall in enumerate(FACADE_WALLS):
         add_texture(spec, f"prop_facade_{k}", tex.facade(rng, wall))
@@ -67,12 +72,19 @@ def add_prop_materials(spec: mujoco.MjSpec, seed: int, night: bool = False) -> N
         add_material(spec, f"prop_sign_{k}", f"prop_sign_{k}", specular=0.3, emission=0.1)
     add_texture(spec, "prop_concrete", tex.concrete(rng))
     add_material(spec, "prop_concrete", "prop_concrete", specular=0.05)
-    add_texture(spec, "prop_foliage", tex.foliage(rng))
-    for k, tint in enumerate(FOLIAGE_TINTS):
-        add_material(spec, f"prop_foliage_{k}", "prop_foliage", rgba=list(tint), specular=0.0)
+    leaves = tex.foliage(rng)
+    tint: Callable[[tuple[float, ...]], list[float]] = list
+    if snow > 0.0:
+        leaves = snow_on.snowy_foliage(leaves, np.random.default_rng(
+            [seed, snow_on.PROP_SNOW_SEED]), snow)
+        tint = snow_on.snowy_tint
+        add_material(spec, snow_on.SNOW_MATERIAL, None, rgba=[*snow_on.SNOW_RGB, 1.0],
+                     specular=0.15, shininess=0.2)
+    add_texture(spec, "prop_foliage", leaves)
+    for k, rgba in enumerate(FOLIAGE_TINTS):
+        add_material(spec, f"prop_foliage_{k}", "prop_foliage", rgba=tint(rgba), specular=0.0)
     # Conifers: darker and bluer than the broadleaf crowns, on the same leaf texture.
-    add_material(spec, "prop_conifer", "prop_foliage", rgba=[0.5, 0.62, 0.55, 1.0],
-                 specular=0.0)
+    add_material(spec, "prop_conifer", "prop_foliage", rgba=tint(CONIFER_TINT), specular=0.0)
     add_material(spec, "prop_steel", None, rgba=[0.68, 0.7, 0.72, 1.0], specular=0.5,
                  shininess=0.4)
     add_material(spec, "prop_pole", None, rgba=[0.5, 0.52, 0.55, 1.0], specular=0.3)
@@ -156,8 +168,10 @@ def _barrier(props: Props, road: Road, r0: float, side: str, profile: np.ndarray
     props.casters.extend(slices)
 
 
-def guard_rail(props: Props, road: Road, side: str, layout: WorldLayout) -> None:
-    """W-beam on posts every 4 m, its face 0.5 m beyond the gravel."""
+def guard_rail(props: Props, road: Road, side: str, layout: WorldLayout,
+               snow_rng: np.random.Generator | None = None) -> None:
+    """W-beam on posts every 4 m, its face 0.5 m beyond the gravel; with `snow_rng` (in a
+    snowfall) snow on its top fold and on the posts."""
     sign = _sign_of(side)
     face = verge_r(road, side, layout) + sign * 0.5
     _barrier(props, road, face, side, RAIL_PROFILE, "prop_steel", 1.0, layout)
@@ -166,13 +180,23 @@ def guard_rail(props: Props, road: Road, side: str, layout: WorldLayout) -> None
     for xy, th in zip(posts, np.asarray(road.heading_at(s), float), strict=True):
         props.add("prop_pole", box(np.r_[xy, 0.4], float(th), (0.04, 0.06, 0.4), bottom=False),
                   cast=False)
+    if snow_rng is not None:
+        for mesh in (snow_on.ridge(road, face, sign, snow_on.RAIL_RIDGE, snow_rng, layout)
+                     + snow_on.post_caps(road, s, face + sign * 0.12, 0.8)):
+            props.add(snow_on.SNOW_MATERIAL, mesh, cast=False)
 
 
-def jersey_barrier(props: Props, road: Road, side: str, layout: WorldLayout) -> None:
-    """A concrete barrier (jersey profile, 0.81 m high) 0.3 m beyond the gravel."""
-    r0 = verge_r(road, side, layout) + _sign_of(side) * 0.3
+def jersey_barrier(props: Props, road: Road, side: str, layout: WorldLayout,
+                   snow_rng: np.random.Generator | None = None) -> None:
+    """A concrete barrier (jersey profile, 0.81 m high) 0.3 m beyond the gravel; with
+    `snow_rng` (in a snowfall) snow on its top."""
+    sign = _sign_of(side)
+    r0 = verge_r(road, side, layout) + sign * 0.3
     _barrier(props, road, r0, side, JERSEY_PROFILE, "prop_concrete", tex.CONCRETE_TILE_M,
              layout)
+    if snow_rng is not None:
+        for mesh in snow_on.ridge(road, r0, sign, snow_on.BARRIER_RIDGE, snow_rng, layout):
+            props.add(snow_on.SNOW_MATERIAL, mesh, cast=False)
 
 
 def pole_s(road: Road, spacing_m: float) -> np.ndarray:

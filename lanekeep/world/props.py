@@ -27,6 +27,7 @@ from lanekeep.world import prop_assets as assets
 from lanekeep.world.groups import GROUP_WORLD
 from lanekeep.world.parts import ConditionsInfo, WorldLayout, add_mesh_geom
 from lanekeep.world.prop_meshes import hill_ring, tree_belt
+from lanekeep.world.prop_snow import PROP_SNOW_SEED
 from lanekeep.world.roadside import cast_shadow, disjoint_pieces
 from lanekeep.world.shade import add_shadow_overlay, shade_transmission
 
@@ -41,15 +42,20 @@ def add_props(spec: mujoco.MjSpec, scenario: Scenario, road: Road, to_sun: np.nd
     """Add the scenario's roadside props and their shadows (after the shadow zones, whose
     casters use the props' materials and whose shadows the props' shadows leave out)."""
     cfg = scenario.roadside
-    assets.add_prop_materials(spec, scenario.seed, scenario.conditions.time_of_day == "night")
+    snow = scenario.conditions.snow
+    assets.add_prop_materials(spec, scenario.seed, scenario.conditions.time_of_day == "night",
+                              snow)
     for key in ("signs_m", "gantries_m", "overpasses_m"):
         assets.check_s(road, key, getattr(cfg, key))
     rng = np.random.default_rng([scenario.seed, 0x9205])
+    # Snow on the rails and barriers: its own generator, so no other draw moves.
+    snow_rng = (np.random.default_rng([scenario.seed, PROP_SNOW_SEED, 1]) if snow > 0.0
+                else None)
     props = assets.Props()
     for side in cfg.guard_rail_sides:
-        assets.guard_rail(props, road, side, layout)
+        assets.guard_rail(props, road, side, layout, snow_rng)
     for side in cfg.barrier_sides:
-        assets.jersey_barrier(props, road, side, layout)
+        assets.jersey_barrier(props, road, side, layout, snow_rng)
     for side in cfg.pole_sides if cfg.pole_spacing_m > 0.0 else ():
         assets.light_poles(props, road, side, cfg.pole_spacing_m, layout)
     for s in cfg.signs_m:

@@ -12,6 +12,7 @@ import pytest
 from lanekeep.scenario.schema import CameraConfig, Conditions, load_scenario
 from lanekeep.sensing.camera_sensor import CameraSensor
 from lanekeep.sensing.image_effects import default_camera
+from lanekeep.sensing.lens_drops import WOBBLE_PX, LensDrops, drop_streams
 from lanekeep.sensing.weather import Weather
 from lanekeep.world.appearance import lighting_of
 from lanekeep.world.lighting import OVERCAST_DIRECT, direct_sun_share
@@ -72,12 +73,13 @@ def test_lens_drops_show_the_scene_through_them_upside_down():
     conditions = Conditions(rain=1.0)
     weather = Weather(conditions, default_camera(360, 640), (200.0, 200.0, 200.0),
                       np.random.default_rng(0))
-    weather.drops = np.array([[320.0, 180.0, 30.0]])
+    weather.lens = LensDrops(np.array([[320.0, 180.0, 30.0]]),
+                             drop_streams(np.random.default_rng(0), 0, 1), 640, 360)
     ramp = np.repeat(np.linspace(20, 230, 360)[:, None], 640, 1).astype(np.uint8)  # bright below
     image = np.stack([ramp] * 3, -1)
     image[:, (np.arange(640) // 24) % 2 == 1] //= 2  # stripes: must survive inside the drop
     rng = np.random.default_rng(1)
-    rng_y = weather.drops[0, 1] + rng.uniform(0.0, 1.5) * weather.scale
+    rng_y = 180.0 + (2.0 * rng.uniform(0.0, 1.5) / 1.5 - 1.0) * WOBBLE_PX * weather.scale
     out = weather.lens_drops(image, np.random.default_rng(1))
     y = int(round(rng_y))
     inside = out[y - 12:y + 13, 308:333, 1].astype(float)

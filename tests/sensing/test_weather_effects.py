@@ -8,6 +8,7 @@ import pytest
 
 from lanekeep.scenario.schema import Conditions, load_scenario
 from lanekeep.sensing.cameras import CameraRig, RenderSettings
+from lanekeep.sensing.lens_drops import LensDrops
 from lanekeep.sensing.snapshot import place_on_road
 from lanekeep.sensing.weather import DEPTH_STEP_PX, Weather
 from lanekeep.world.lighting import fog_visibility_m
@@ -57,7 +58,7 @@ def test_fog_follows_koschmieder(cameras):
 
 def test_rain_is_hidden_behind_near_objects_and_faint_on_the_sky(cameras):
     weather = Weather(Conditions(rain=1.0), cameras["front"], AIR, np.random.default_rng(0))
-    weather.drops = weather.drops[:0]  # no lens drops: the streaks alone
+    weather.lens = LensDrops(np.zeros((0, 3)), [], W, H)  # no lens drops: the streaks alone
     frame = np.zeros((H, W, 3), np.uint8)
     frame[: H // 2] = np.round(AIR).astype(np.uint8)  # sky of the airlight's colour above
     frame[H // 2:] = 50  # dark road below
