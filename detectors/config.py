@@ -297,11 +297,11 @@ class PaperThresholds:
 
     # White paint: HLS lightness (model #1) and grey (model #2) at least this. The paper gives
     # no value; the authors' code has 200, for AirSim's paint. In this world's light 200 passes
-    # no paint (case 1's paint lightness p50 108, case 2's 139; on real TuSimple frames 5.7% of
+    # no paint (case 1's paint lightness p50 110, case 2's 141; on real TuSimple frames 5.7% of
     # the labelled lanes' pixels reach it). 105 is the level that best separates sunlit paint
     # from asphalt (Youden's J) on a tuning scenario in sun, tune_gentle_s_curve_r700_r500:
     # paint 100% above it, asphalt 0.01%: a fixed threshold set in good light, as the authors
-    # set theirs (docs/paper_mode.md, 2026-11-29).
+    # set theirs (tools/paper_levels.py; docs/paper_mode.md, 2026-11-29).
     white_level: int = 105
     model1_saturation: int = 80  # model #1's yellow: HLS saturation at least ... (authors' code)
     model1_red: int = 120  # ... with the red channel at least
