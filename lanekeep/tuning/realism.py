@@ -77,6 +77,33 @@ def camera_horizon_row(camera) -> float:
 
 
 # -- statistics ------------------------------------------------------------------------------
+def canny_edges(rgb: np.ndarray) -> np.ndarray:
+    """Canny(50, 150, L2 norm) edge pixels of the luma after a 5x5 Gaussian of sigma 1: one
+    edge definition for every edge statistic, so that their numbers compare."""
+    y = np.clip(luma(rgb), 0, 255).astype(np.uint8)
+    y = cv2.GaussianBlur(y, (5, 5), CANNY_BLUR_SIGMA)
+    return cv2.Canny(y, CANNY_LOW, CANNY_HIGH, L2gradient=True) > 0
+
+
+def road_area_mask(shape: tuple[int, int], horizon_row: float) -> np.ndarray:
+    """The road area below the horizon, the same for renders and photos (like for like).
+
+    A trapezoid from 15% of the way down from the horizon to 92% of the frame's height (clear
+    of a hood), 8% of the width either side of the centre at its top and 40% at its bottom.
+    """
+    h, w = shape
+    top = split_row(horizon_row, h)
+    top = int(top + ROAD_TOP_SHARE * (h - top))
+    bottom = int(ROAD_BOTTOM_SHARE * h)
+    mask = np.zeros((h, w), bool)
+    if bottom - top < 2:
+        return mask
+    t = (np.arange(top, bottom) - top) / max(bottom - top - 1, 1)
+    half = w * (ROAD_HALF_WIDTH_TOP + (ROAD_HALF_WIDTH_BOTTOM - ROAD_HALF_WIDTH_TOP) * t)
+    mask[top:bottom] = np.abs(np.arange(w)[None, :] - 0.5 * (w - 1)) <= half[:, None]
+    return mask
+
+
 def edge_density(rgb: np.ndarray, horizon_row: float) -> tuple[float, float]:
     """(above, below): share of Canny edge pixels in the rows above / at-and-below the horizon.
 
@@ -84,9 +111,7 @@ def edge_density(rgb: np.ndarray, horizon_row: float) -> tuple[float, float]:
     is not counted as structure); NaN for an empty region. Texture-poor renders show up as a
     low density below the horizon (road) and above it (roadside, sky).
     """
-    y = np.clip(luma(rgb), 0, 255).astype(np.uint8)
-    y = cv2.GaussianBlur(y, (5, 5), CANNY_BLUR_SIGMA)
-    edges = cv2.Canny(y, CANNY_LOW, CANNY_HIGH, L2gradient=True) > 0
+    edges = canny_edges(rgb)
     h = split_row(horizon_row, edges.shape[0])
     above = float(edges[:h].mean()) if h > 0 else math.nan
     below = float(edges[h:].mean()) if h < edges.shape[0] else math.nan
@@ -232,24 +257,11 @@ def shade_sun_ratio(rgb: np.ndarray, horizon_row: float) -> float:
     """Luma of the shade over that of the sunlit road: the means of the darker and the brighter
     class of an Otsu split of the road area's luma, when the darker covers >= 10% of it.
 
-    Road area: a trapezoid from 15% of the way down from the horizon to 92% of the frame's
-    height (clear of a hood), 8% of the width either side of the centre at its top and 40% at
-    its bottom. The same definition for renders and photos (like for like). Without shade
+    Road area: `road_area_mask`, the same for renders and photos. Without shade
     Otsu still splits the asphalt's texture and wheel paths (0.7-0.9); dark cars and their
     shadows count as shade. NaN when the darker class is smaller or the area empty.
     """
-    y = luma(rgb)
-    h, w = y.shape
-    top = split_row(horizon_row, h)
-    top = int(top + ROAD_TOP_SHARE * (h - top))
-    bottom = int(ROAD_BOTTOM_SHARE * h)
-    if bottom - top < 2:
-        return math.nan
-    rows = np.arange(top, bottom)
-    t = (rows - top) / max(bottom - top - 1, 1)
-    half = w * (ROAD_HALF_WIDTH_TOP + (ROAD_HALF_WIDTH_BOTTOM - ROAD_HALF_WIDTH_TOP) * t)
-    cols = np.abs(np.arange(w)[None, :] - 0.5 * (w - 1)) <= half[:, None]
-    area = y[top:bottom][cols]
+    area = luma(rgb)[road_area_mask(rgb.shape[:2], horizon_row)]
     if area.size < MIN_PIXELS:
         return math.nan
     area8 = np.clip(area, 0, 255).astype(np.uint8)
