@@ -77,12 +77,13 @@ def camera_horizon_row(camera) -> float:
 
 
 # -- statistics ------------------------------------------------------------------------------
-def canny_edges(rgb: np.ndarray) -> np.ndarray:
-    """Canny(50, 150, L2 norm) edge pixels of the luma after a 5x5 Gaussian of sigma 1: one
-    edge definition for every edge statistic, so that their numbers compare."""
+def canny_edges(rgb: np.ndarray, low: float = CANNY_LOW, high: float = CANNY_HIGH
+                ) -> np.ndarray:
+    """Canny(low, high, L2 norm) edge pixels of the luma after a 5x5 Gaussian of sigma 1 (by
+    default 50/150, the edge statistics' thresholds)."""
     y = np.clip(luma(rgb), 0, 255).astype(np.uint8)
     y = cv2.GaussianBlur(y, (5, 5), CANNY_BLUR_SIGMA)
-    return cv2.Canny(y, CANNY_LOW, CANNY_HIGH, L2gradient=True) > 0
+    return cv2.Canny(y, low, high, L2gradient=True) > 0
 
 
 def road_area_mask(shape: tuple[int, int], horizon_row: float) -> np.ndarray:
