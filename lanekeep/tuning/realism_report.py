@@ -10,7 +10,9 @@ the segmentation render's marking mask for the paint contrast. Real side: every
 *.jpg/*.jpeg/*.png in each image folder under `--real` (or `--real` itself); the photos are only
 read, never copied. Known folders have a horizon row given here; TuSimple label files
 (labels/N.txt) give the paint pixels. Renders only, nothing scored: the shipped scenarios are
-the default. The report is a Markdown table and a JSON document.
+the default. The report is a Markdown table and a JSON document; a second table puts issue
+#59's statistics (tone, green, open sky, road structure: `lanekeep.tuning.realism_gaps`) side
+by side, ours' median and range over the scenarios against each real set's median.
 
 Every statistic is a small pure function of an RGB uint8 image and a horizon row, defined in
 its docstring (`lanekeep.tuning.realism`). The table is for SEEING the gap between renders and
@@ -41,6 +43,7 @@ from lanekeep.tuning.realism import (
     mean_stats,
     read_label_lanes,
 )
+from lanekeep.tuning.realism_gaps import gap_stats
 from lanekeep.tuning.scenarios import TuningInputError
 
 
@@ -94,6 +97,12 @@ def render_front(scenario, at_s: float | None = None
     return rgb, paint, horizon
 
 
+def all_stats(rgb: np.ndarray, horizon_row: float, paint: np.ndarray | None
+              ) -> dict[str, float]:
+    """Every statistic of one frame: `realism.frame_stats` and #59's `realism_gaps.gap_stats`."""
+    return {**frame_stats(rgb, horizon_row, paint), **gap_stats(rgb, horizon_row, paint)}
+
+
 # -- real frames -------------------------------------------------------------------------------
 def image_folders(root: Path) -> list[Path]:
     """Folders holding images: `root` itself if it does, else its subfolders that do, sorted."""
@@ -133,7 +142,7 @@ def real_folder_stats(folder: Path, info: RealSet) -> list[dict[str, float]]:
         label = folder / "labels" / f"{path.stem}.txt"
         paint = (label_paint_mask(read_label_lanes(label), rgb.shape[:2])
                  if label.is_file() else None)
-        rows.append({"image": path.name, **frame_stats(rgb, horizon, paint)})
+        rows.append({"image": path.name, **all_stats(rgb, horizon, paint)})
     return rows
 
 
@@ -174,6 +183,32 @@ luma of the darker over the brighter class of an Otsu split of a road trapezoid 
 horizon, "-" when the darker covers < 10% (unshaded asphalt still reads 0.7-0.9: texture,
 wheel paths). Real rows are means over their frames; all values at 1280 px wide."""
 
+# #59's statistics, one row each: (key, label, scale to the shown unit, decimals).
+GAP_ROWS = (
+    ("dark_share", "dark share (luma < 40 DN), % of frame", 100.0, 1),
+    ("dark_p1", "darkest 1% (luma p1), DN", 1.0, 0),
+    ("green_share", "saturated green, % of frame", 100.0, 2),
+    ("green_v", "green: mean V (HSV, 0-255)", 1.0, 0),
+    ("green_texture", "green: mean abs Laplacian, DN", 1.0, 1),
+    ("open_sky_share", "open sky, share above horizon", 1.0, 2),
+    ("road_edges", "road-structure edges, % (paint: mask/labels)", 100.0, 2),
+    ("road_edges_guess", "road-structure edges, % (paint guessed)", 100.0, 2),
+)
+
+GAP_LEGEND = """\
+#59's statistics (lanekeep/tuning/realism_gaps.py; ours: median and range over the scenarios'
+frames; real: median over each set's frames; "n/a": not defined for that source, "-": no
+value). Dark share and darkest 1%: luma (Rec. 601) of the whole frame. Saturated green: HSV hue
+70-170 deg, S >= 0.25, V >= 20, on the frame shrunk to 320 px wide; its mean V and mean
+|Laplacian| of the luma there (texture of clumps and tufts). Open sky: smooth, bright (luma >=
+100), blue-ish or grey pixels above the horizon (ours: camera model; real: the set's constant
+row), closed 5x5, connected to the top edge, holes (clouds) filled. Road-structure edges:
+Canny(20, 60) pixels in the road trapezoid above 88% of the height, outside paint and a margin
+of 3 px + 0.06 px per row below the horizon; paint from the segmentation (ours), the label
+polylines (TuSimple), none (n/a) for an unlabelled set; "paint guessed" uses a two-sided ridge
+(>= 20 DN) or yellow as paint for every source alike (approximate: it misses raised dots and
+faint dashes, whose edges then count)."""
+
 FOOTER = ("This table is for seeing the gap between the renders and real photos, not a target "
           "to fit: matching these numbers on a handful of photos would overfit the renderer "
           "to them without making it realistic.")
@@ -190,6 +225,45 @@ def markdown_table(rows: list[tuple[str, dict[str, float]]]) -> str:
     rule = "|---|" + "---:|" * len(COLUMNS)
     body = ["| " + label + " | " + " | ".join(f(s) for _, f in COLUMNS) + " |"
             for label, s in rows]
+    return "\n".join([head, rule, *body])
+
+
+def spread(rows: list[dict[str, float]], key: str) -> dict[str, float]:
+    """Median, min and max of one statistic over frames, NaN ignored; n: the finite values."""
+    values = np.array([r[key] for r in rows], dtype=float)
+    values = values[np.isfinite(values)]
+    if values.size == 0:
+        return {"median": math.nan, "min": math.nan, "max": math.nan, "n": 0}
+    return {"median": float(np.median(values)), "min": float(values.min()),
+            "max": float(values.max()), "n": int(values.size)}
+
+
+def gap_summary(sim: list[dict[str, float]], real: dict[str, list[dict[str, float]]]
+                ) -> dict[str, dict[str, dict[str, float]]]:
+    """#59's statistics side by side: {key: {"ours": spread, <real set name>: spread}}."""
+    return {key: {"ours": spread(sim, key), **{name: spread(rows, key)
+                                                for name, rows in real.items()}}
+            for key, *_ in GAP_ROWS}
+
+
+def gap_table(summary: dict[str, dict[str, dict[str, float]]], real_names: list[str]) -> str:
+    """Markdown table of `gap_summary`: ours' median and range, each real set's median;
+    "n/a" where a source has no value on any frame."""
+    def shown(value: float, scale: float, digits: int) -> str:
+        return cell(value * scale, digits)
+
+    n_sim = max(summary[key]["ours"]["n"] for key, *_ in GAP_ROWS)
+    head = (f"| statistic | ours median (of {n_sim}) | ours range | "
+            + " | ".join(f"{name} median" for name in real_names) + " |")
+    rule = "|---|---:|---:|" + "---:|" * len(real_names)
+    body = []
+    for key, label, scale, digits in GAP_ROWS:
+        ours = summary[key]["ours"]
+        cells = [shown(ours["median"], scale, digits),
+                 f"{shown(ours['min'], scale, digits)}-{shown(ours['max'], scale, digits)}"]
+        cells += [shown(summary[key][name]["median"], scale, digits)
+                  if summary[key][name]["n"] else "n/a" for name in real_names]
+        body.append(f"| {label} | " + " | ".join(cells) + " |")
     return "\n".join([head, rule, *body])
 
 
@@ -230,13 +304,14 @@ def run(request: ReportRequest) -> tuple[str, dict]:
 
     rows: list[tuple[str, dict[str, float]]] = []
     doc: dict = {"sim": [], "real": []}
+    real_frames: dict[str, list[dict[str, float]]] = {}
     for name in request.scenarios or shipped_scenarios():
         try:
             scenario = load_scenario(name)
         except ConfigError as err:
             raise TuningInputError(str(err)) from None
         rgb, paint, horizon = render_front(scenario, request.at_s)
-        stats = frame_stats(rgb, horizon, paint)
+        stats = all_stats(rgb, horizon, paint)
         rows.append((scenario.name, stats))
         doc["sim"].append({"scenario": scenario.name, "at_s": request.at_s, "stats": stats})
     for folder in folders:
@@ -244,7 +319,9 @@ def run(request: ReportRequest) -> tuple[str, dict]:
         per_image = real_folder_stats(folder, info)
         if not per_image:
             continue
-        stats = mean_stats([{k: v for k, v in r.items() if k != "image"} for r in per_image])
+        frames = [{k: v for k, v in r.items() if k != "image"} for r in per_image]
+        real_frames[info.name] = frames
+        stats = mean_stats(frames)
         label = f"{info.name} (mean of {len(per_image)})"
         if info.horizon_row is None:
             label += " [horizon assumed: centre row]"
@@ -254,7 +331,10 @@ def run(request: ReportRequest) -> tuple[str, dict]:
                             "per_image": per_image})
     if not doc["real"]:
         raise TuningInputError(f"--real {real}: none of its images could be read")
-    text = "\n\n".join([markdown_table(rows), LEGEND, FOOTER]) + "\n"
+    summary = gap_summary([d["stats"] for d in doc["sim"]], real_frames)
+    doc["gaps"] = summary
+    text = "\n\n".join([markdown_table(rows), LEGEND, gap_table(summary, list(real_frames)),
+                         GAP_LEGEND, FOOTER]) + "\n"
     doc["settings"] = {"work_width": WORK_WIDTH, "canny": [CANNY_LOW, CANNY_HIGH],
                        "at_s": request.at_s, "footer": FOOTER}
     return text, jsonable(doc)
