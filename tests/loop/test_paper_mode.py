@@ -1,6 +1,6 @@
 """The paper's own loop (`[estimation] mode = "paper"`, lanekeep/loop/paper_mode.py): its settings,
-and on fixed seeds, with three of our deviations kept (`KEEPS`), the pattern of paper 001: no
-departure in any of its five cases; in the
+and on fixed seeds, with some of our deviations kept (named below), the pattern of paper 001:
+no departure in any of its five cases; in the
 sharp turn (case 2) model #2, with its small region of interest, is clearly worse than model
 #1; in the building shadows (case 1) model #1
 loses the lane and the MMAE follows model #2 there (paper Fig. 12)."""
@@ -25,13 +25,18 @@ PAPER_CASES = ("case1_building_shadows", "case2_sharp_turn", "case3_mild_turn_sh
                "case4_half_shade_straight", "case5_wet_rain_turn")
 HOUGH, SLIDING = 0, 1  # model #1, model #2
 # Paper mode is the paper's loop to the letter (every deviation off). That loop leaves the lane
-# in cases 1, 4 and 5 at their nominal seeds, and kept alone our controller, our PID input or our
-# binarisation each keeps it there, yet with our controller case 2 still departs on three of
-# its five seeds here (2026-11-29, docs/paper_mode.md#to-the-letter). These tests were sized for
-# the paper's loop with three of our deviations kept, our tuned binarisation, eq. 8 with each
-# tracker's variance and a floor of 1e-3 (paper mode until 2026-11-29); they run that loop,
-# named, with their assertions unchanged. The letter's figures are in the docs, over seeds.
-KEEPS = ("binarisation", "residual_covariance", "probability_floor")
+# in cases 1, 4 and 5 at their nominal seeds; kept alone, our controller, our PID input or our
+# binarisation each keeps it there (2026-11-29, docs/paper_mode.md#to-the-letter). Two
+# configurations are tested, each named by the deviations it keeps:
+# - LETTER_OUR_CONTROLLER, the letter with our controller, the one deviation that is the car's
+#   and not the estimator's: every paper case at its nominal seed keeps its lane, and the case 1
+#   pattern (not reproduced, strict xfail);
+# - SIZED, the paper's loop with our tuned binarisation, eq. 8 with each tracker's variance and
+#   a floor of 1e-3 (paper mode until 2026-11-29): the case 2 seeds and pattern, sized for it,
+#   their assertions unchanged. With our controller alone case 2 departs on three of these
+#   five seeds (3, 5, 6). The letter's own figures, over seeds, are in the docs.
+LETTER_OUR_CONTROLLER = ("controller",)
+SIZED = ("binarisation", "residual_covariance", "probability_floor")
 
 
 @dataclass
@@ -48,15 +53,15 @@ class PaperTrace:
                 np.asarray(self.selected), np.asarray(self.errors_m, dtype=float))
 
 
-def paper_run(name: str, seed: int | None = None):
+def paper_run(name: str, seed: int | None = None, keeps: tuple[str, ...] = SIZED):
     """The paper's loop on a paper case with its trace (at `seed`, None: the file's own, its
     nominal drive), once per session."""
-    return shared(f"paper-{name}-{seed}", lambda: _paper_run(name, seed))
+    return shared(f"paper-{name}-{seed}-{'+'.join(keeps)}", lambda: _paper_run(name, seed, keeps))
 
 
-def _paper_run(name: str, seed: int | None = None):
+def _paper_run(name: str, seed: int | None, keeps: tuple[str, ...]):
     scenario = with_mode(load_scenario(name), "paper")
-    scenario = replace(scenario, estimation=replace(scenario.estimation, paper_keeps=KEEPS))
+    scenario = replace(scenario, estimation=replace(scenario.estimation, paper_keeps=keeps))
     if seed is not None:
         scenario = replace(scenario, seed=seed)
     trace = PaperTrace()
@@ -111,8 +116,8 @@ def test_each_mode_has_its_own_front_models_and_the_learned_reference():
 
 @pytest.mark.slow
 @pytest.mark.parametrize("name", PAPER_CASES)
-def test_paper_mode_keeps_the_lane_in_every_paper_case(name):
-    report, _ = paper_run(name)
+def test_the_letter_with_our_controller_keeps_the_lane_in_every_paper_case(name):
+    report, _ = paper_run(name, keeps=LETTER_OUR_CONTROLLER)
     assert report.completed and report.lane_departures == 0, report.table()
 
 
@@ -121,7 +126,7 @@ CASE2_SEEDS = (2, 3, 4, 5, 6)  # the file's own seed (2), then four drawn drives
 
 @pytest.mark.slow
 @pytest.mark.parametrize("seed", CASE2_SEEDS)
-def test_paper_mode_keeps_the_lane_in_case2_on_every_seed(seed):
+def test_the_sized_paper_loop_keeps_the_lane_in_case2_on_every_seed(seed):
     """The seeds the next test pairs: each drives the sharp turn without a departure (one
     seed a test, so that test workers share the runs)."""
     report, _ = paper_run("case2_sharp_turn", None if seed == 2 else seed)
@@ -167,7 +172,7 @@ def test_case2_model_2_is_worse_in_the_sharp_turn():
     "65%: model #1 is worse in the shade (docs/paper_mode.md) but does not lose the lane by "
     "these criteria; to the letter the drive departs."))
 def test_case1_model_1_loses_the_lane_in_shadow_and_the_mmae_follows_model_2():
-    report, trace = paper_run("case1_building_shadows")
+    report, trace = paper_run("case1_building_shadows", keeps=LETTER_OUR_CONTROLLER)
     _, shaded, selected, errors = trace.arrays()
     assert shaded.sum() >= 20  # the building shadows lie across the car's path
     hough_valid = np.isfinite(errors[:, HOUGH])
