@@ -149,8 +149,17 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--read", type=Path, help="print the rows of an earlier --json")
     args = parser.parse_args(argv)
     if args.read:
-        print(summarise(json.loads(args.read.read_text())["rows"]))
+        try:
+            rows = json.loads(args.read.read_text())["rows"]
+        except (OSError, ValueError, KeyError, TypeError) as err:
+            print(f"error: {args.read} is not a paper_tables.py --json file ({err})",
+                  file=sys.stderr)
+            return 2
+        print(summarise(rows))
         return 0
+    if args.seeds < 1 or args.workers < 1:
+        print("error: --seeds and --workers must be at least 1", file=sys.stderr)
+        return 2
     unknown = [c for c in args.cases if c not in PAPER_CASES]
     if unknown:
         print(f"error: not a paper case: {unknown[0]} (one of {', '.join(PAPER_CASES)})",
