@@ -203,6 +203,7 @@ class LaneEstimator:
         ("mmae"), for a caller's stage timing (lanekeep.core.timing.StageClock.lap).
         """
         events: list[str] = []
+        self._hold(detections)
         self._measure_lane_width(detections.values())
         centres = {name: self.centre_of(detections[name]) for name in self.names}
         tracked, status = self._track(centres, ego)
@@ -218,12 +219,14 @@ class LaneEstimator:
         """The detection a model hands the MMAE and the paper's PID input: its own, or with
         `missing_model = "hold"` its last valid one while it has none (the paper's loop
         carries a value for every model at every step). The trackers see only real ones."""
-        if self.settings.missing_model != "hold":
-            return detection
-        if detection.valid:
-            self._held[name] = detection
+        if self.settings.missing_model != "hold" or detection.valid:
             return detection
         return self._held.get(name, detection)
+
+    def _hold(self, detections: dict[str, LaneEstimate]) -> None:
+        """With `missing_model = "hold"`: remember each model's latest valid detection."""
+        if self.settings.missing_model == "hold":
+            self._held.update({n: d for n, d in detections.items() if d.valid})
 
     def _measure_lane_width(self, detections) -> None:
         """Update the running lane width from this step's two-boundary detections."""
