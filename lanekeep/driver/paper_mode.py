@@ -20,14 +20,16 @@ What changes from our default loop, and why the default differs:
     model #2 "has a smaller ROI"); ours gives both the same 4-20 m window;
   - binarisation: the paper's fixed thresholds (detectors/paper_thresholds.py: model #1 a
     brightness test, model #2 Sobel-x, saturation and hue, at the values of the authors'
-    code), not our tuned tests against the road beside the paint, and without our image
-    stage's additions (vehicle masking, rain-streak removal, the speckle and fill tests);
+    code but for the white level, set for this world's paint), not our tuned tests against
+    the road beside the paint, and without our image stage's additions (vehicle masking,
+    rain-streak removal, the speckle and fill tests);
   - eq. 8: the paper's R = 1e-6 and fixed P1, P2 (ours: each tracker's C P C' and (5 cm)^2);
   - probabilities: no floor beyond finite arithmetic, and a model without a detection keeps
     its last one (ours: a floor of 1e-3 and a penalty for a missing model).
 
-Each of these is a named deviation (`DEVIATIONS`): `[estimation] paper_keeps = [NAME, ...]`
-keeps ours for it in paper mode, so that what each one changes can be measured on its own.
+Each of these is a named deviation (lanekeep/scenario/estimation.py `PAPER_DEVIATIONS`):
+`[estimation] paper_keeps = [NAME, ...]` keeps ours for it in paper mode, so that what each
+one changes can be measured on its own.
 Left as ours in both modes, for the paper gives no rule: how the boundaries are found in the
 binary bird's-eye view (Hough segments grown into boundaries, sliding windows) and what
 counts as a lane boundary (detectors/config.py LaneRules); the control period (0.1 s; the
@@ -43,7 +45,7 @@ import numpy as np
 from lanekeep.detectors.config import DetectorsConfig, load_config
 from lanekeep.estimators.lane_estimator import EstimatorSettings
 from lanekeep.estimators.roll import RollCompensation
-from lanekeep.scenario.estimation import PAPER_DEVIATIONS, EstimationConfig
+from lanekeep.scenario.estimation import EstimationConfig
 
 # Front ground windows (x_near_m, x_far_m, y_half_m) of the paper's two models. Model #2's
 # 4-12 m x +-3 m holds the ego lane's two boundaries (+-1.85 m) on a straight, and loses the
@@ -68,7 +70,6 @@ ESTIMATOR_CHOICES: dict[str, dict[str, object]] = {
     "output": {"output": "select", "prefer_accepted": False},
     "pid_input": {"model_lane": "detection", "output_at": "nearest_row"},
 }
-assert set(ESTIMATOR_CHOICES) <= set(PAPER_DEVIATIONS)
 
 
 def estimator_settings(est: EstimationConfig) -> EstimatorSettings:

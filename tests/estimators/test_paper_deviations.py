@@ -36,6 +36,7 @@ def _ego(k: int) -> EgoMotion:
 
 
 def test_paper_mode_takes_the_papers_choice_for_every_deviation_and_a_kept_one_stays_ours():
+    assert set(ESTIMATOR_CHOICES) <= set(PAPER_DEVIATIONS)
     ours = EstimationConfig().estimator_settings()
     paper = estimator_settings(EstimationConfig(mode="paper"))
     assert (paper.residual_covariance, paper.probability_floor, paper.missing_model) == (
