@@ -134,8 +134,16 @@ def test_no_departure_in_the_paper_cases(paper_reports):
         _tables(paper_reports.values())
 
 
+# The two-model loop's guard runs the three paper cases where that loop is weakest (one drive
+# each with the shipped binarisation, docs/experiments.md, 2026-11-29, "Classical models that
+# find paint in the bird's-eye view", the "before" column: case 3 fused 8.1 cm, case 5 car max
+# 37.3 cm, case 2 car max 20.1 cm), not cases 1 and 4 (fused 0.9 and 1.1 cm, car max 3.2 and
+# 2.5 cm), for CI's time; those two run in the default loop here and in paper mode.
+TWO_MODEL_CASES = ("case2_sharp_turn", "case3_mild_turn_shade_bumps", "case5_wet_rain_turn")
+
+
 @pytest.mark.slow
-@pytest.mark.parametrize("name", PAPER_CASES)
+@pytest.mark.parametrize("name", TWO_MODEL_CASES)
 def test_the_papers_two_models_keep_the_lane(name):
     """The MMAE output of the paper's two classical front models (its Tables 3-4) drives every
     case without a departure. One case a test, so that test workers share the five runs."""
@@ -144,7 +152,7 @@ def test_the_papers_two_models_keep_the_lane(name):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("name", PAPER_CASES)
+@pytest.mark.parametrize("name", TWO_MODEL_CASES)
 def test_the_papers_two_models_fused_is_within_the_margin_of_their_worse_track(name):
     """Paper Tables 3-4's loop, one case a test at its nominal seed: the fused output is not
     worse than the worse of the two models' own tracks by more than the RMSE's margin

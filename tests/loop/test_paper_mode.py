@@ -29,10 +29,10 @@ HOUGH, SLIDING = 0, 1  # model #1, model #2
 # binarisation each keeps it there (2026-11-29, docs/paper_mode.md#to-the-letter). Two
 # configurations are tested, each named by the deviations it keeps:
 # - LETTER_OUR_CONTROLLER, the letter with our controller, the one deviation that is the car's
-#   and not the estimator's: every paper case at its nominal seed keeps its lane (a guard on
-#   those five drives, not a rate: over seeds file + 1 .. + 10 it departs in 5 of case 2's, 5
-#   of case 4's and 7 times in case 5's, docs/paper_mode.md), and the case 1 pattern (not
-#   reproduced by these criteria, strict xfail);
+#   and not the estimator's: cases 1 and 2 at their nominal seeds keep the lane (a guard on
+#   those drives, not a rate: over seeds file + 1 .. + 10 it departs in 5 of case 2's,
+#   docs/paper_mode.md), and the case 1 pattern (not reproduced by these criteria, strict
+#   xfail);
 # - SIZED, the paper's loop with our tuned binarisation, eq. 8 with each tracker's variance and
 #   a floor of 1e-3 (paper mode until 2026-11-29): the case 2 seeds and pattern, sized for it,
 #   their assertions unchanged. With our controller alone case 2 departs on three of these
@@ -116,9 +116,16 @@ def test_each_mode_has_its_own_front_models_and_the_learned_reference():
     assert with_mode(named, "paper").estimation.front_detectors == ("hough",)
 
 
+# The paper's two patterns live in cases 1 and 2, so the letter's closed-loop guard runs those
+# two drives (case 1's is also the xfail's). Cases 3-5 at their nominal seeds kept the lane too
+# (2026-11-29), but over seeds the letter with our controller departs 5 of 10 times in case 4
+# and 7 times in case 5 (docs/paper_mode.md): a nominal drive there guards little, for CI's time.
+PATTERN_CASES = ("case1_building_shadows", "case2_sharp_turn")
+
+
 @pytest.mark.slow
-@pytest.mark.parametrize("name", PAPER_CASES)
-def test_the_letter_with_our_controller_keeps_the_lane_in_every_paper_case(name):
+@pytest.mark.parametrize("name", PATTERN_CASES)
+def test_the_letter_with_our_controller_keeps_the_lane_in_the_pattern_cases(name):
     report, _ = paper_run(name, keeps=LETTER_OUR_CONTROLLER)
     assert report.completed and report.lane_departures == 0, report.table()
 
