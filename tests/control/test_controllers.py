@@ -228,9 +228,13 @@ def test_stanley_reads_only_the_estimate_and_the_sensors():
 
 @pytest.mark.slow
 def test_stanley_keeps_clear_curve_in_its_lane():
-    """The full 30 s scenario at 1280x720. Measured: 0 departures, car RMS 3.0 cm, max 10.1 cm
-    (the PID on the same run: RMS 5.8 cm, max 12.2 cm)."""
-    with Episode(small_scenario("clear_curve", control={"controller": "stanley"})) as episode:
+    """The first 15 s at 1280x720: the straight, the clothoid into the 150 m radius and 135 m
+    of the arc (the rest of the 30 s drive is more of the same arc and the way out; for CI's
+    time since 2026-11-29). Measured then: 0 departures, car RMS 5.3 cm, max 8.3 cm (the PID
+    on the same 15 s: RMS 8.1 cm, max 12.3 cm); over the whole drive, 2026-11-27: RMS 3.0 cm,
+    max 10.1 cm (the PID 5.8 and 12.2)."""
+    with Episode(small_scenario("clear_curve", 15.0,
+                                control={"controller": "stanley"})) as episode:
         report = episode.run()
     assert report.completed and report.lane_departures == 0
     assert report.car_max_cm < 30.0
