@@ -54,12 +54,14 @@ class EstimationConfig(EstimatorSettings):
     same road position.
     """
 
-    # "paper": the paper's own loop (lanekeep/driver/paper_mode.py): one-step-delay residuals, the
-    # selected model's detection at its nearest row into eq. 9 with Table 2's gain shape and no
-    # feed-forward, model #1 long range and model #2 short range. It overrides residual_mode,
-    # model_lane, mmae_prior and the front windows; "default" is our loop with its improvements.
-    mode: str = setting("default", "default = our loop; paper = the paper's own loop (overrides "
-                        "residual_mode, model_lane and the front windows).",
+    # "paper": the paper's own loop to the letter (lanekeep/driver/paper_mode.py): its
+    # fixed-threshold detectors and windows, one-step-delay residuals at the car, eq. 8 with its
+    # R and P, no floor, the likeliest model's nearest-row detection into eq. 9 with Table 2's
+    # gains; every difference from ours is a PAPER_DEVIATIONS name that `paper_keeps` can keep.
+    # "default" is our loop with its improvements.
+    mode: str = setting("default", "default = our loop; paper = the paper's own loop to the "
+                        "letter (its detectors, eq. 2-8 and PID; paper_keeps keeps named "
+                        "deviations of ours).",
                         choices=ESTIMATION_MODES)
     # None: the mode's own (DEFAULT_FRONT_DETECTORS), filled in at construction.
     front_detectors: tuple[str, ...] | None = setting(
