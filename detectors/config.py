@@ -341,6 +341,12 @@ class DetectorsConfig:
     # Raw tables of registered detectors, by name (not part of the strict schema above).
     tables: dict[str, dict] = field(default_factory=dict, metadata={"toml": False})
 
+    @classmethod
+    def from_table(cls, data: dict, path: str = "", source: str = "") -> DetectorsConfig:
+        """Read by config_io wherever a settings table nests this one (a scenario's
+        `[detectors]`): the defaults with `data`'s overrides, as a detectors file is read."""
+        return config_from_table(data, path=path, source=source)
+
     def window_for(self, camera_name: str) -> GroundWindow:
         """The ground window of a camera: by name, real cameras use the dashcam profile."""
         if camera_name in ("front", "rear"):
@@ -366,6 +372,16 @@ def _merged(defaults: dict, overrides: dict) -> dict:
     return out
 
 
+def config_from_table(data: dict, path: str = "", source: str = "") -> DetectorsConfig:
+    """The defaults with a detectors table's overrides laid over them (a detectors file's
+    contents, or a scenario's `[detectors]` table at dotted `path`). Strict: an unknown key
+    raises `ConfigError` naming it."""
+    data = dict(data)
+    tables = {name: data.pop(name) for name in list(data) if name in _DETECTOR_TABLES}
+    data = _merged(_as_table(DetectorsConfig()), data)
+    return replace(from_dict(DetectorsConfig, data, path=path, source=source), tables=tables)
+
+
 def load_config(path: str | Path | None = None) -> DetectorsConfig:
     """The defaults with a detectors TOML file's overrides; None reads the shipped
     detectors/detectors.toml. Strict: an unknown key raises `ConfigError` naming it."""
@@ -375,7 +391,4 @@ def load_config(path: str | Path | None = None) -> DetectorsConfig:
     else:
         text = Path(path).read_text()
         source = str(path)
-    data = tomllib.loads(text)
-    tables = {name: data.pop(name) for name in list(data) if name in _DETECTOR_TABLES}
-    data = _merged(_as_table(DetectorsConfig()), data)
-    return replace(from_dict(DetectorsConfig, data, source=source), tables=tables)
+    return config_from_table(tomllib.loads(text), source=source)

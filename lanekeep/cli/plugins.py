@@ -37,7 +37,8 @@ def overrides_from_args(args: argparse.Namespace) -> PluginOverrides:
         except ValueError as err:
             raise ConfigError("", "--set", str(err)) from None
     overrides = PluginOverrides(names, getattr(args, "reference_detector", None),
-                                getattr(args, "controller", None), tuple(settings))
+                                getattr(args, "controller", None), tuple(settings),
+                                getattr(args, "detectors_config", None))
     overrides.check()
     return overrides
 
@@ -52,6 +53,11 @@ def add_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--controller", metavar="NAME", default=None,
                    help=f"the controller instead of the scenario's [control] one: pid, stanley "
                         f"or {names}")
+    p.add_argument("--detectors-config", metavar="FILE", default=None,
+                   help="a detectors TOML file (the keys of detectors/detectors.toml, e.g. "
+                        "[hough] binarisation = \"ridge\") whose settings every scenario's "
+                        "detectors run with, as if it were the scenario's [detectors] table "
+                        "(applied before --set; recorded in bench --json under overrides)")
     p.add_argument("--set", dest="settings", action="append", metavar="KEY=VALUE", default=None,
                    help="set a scenario key for the episode, a dotted key as in "
                         "docs/scenario_format.md (road.segments[1].curvature_1pm) and a TOML "

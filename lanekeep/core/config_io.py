@@ -56,6 +56,9 @@ def _convert(value: Any, tp: Any, path: str, source: str) -> Any:
     if origin in (typing.Union, types.UnionType):
         if value is None and type(None) in args:
             return None
+        inner = [arg for arg in args if arg is not type(None)]
+        if len(inner) == 1:  # an optional value: its own error, at its own key
+            return _convert(value, inner[0], path, source)
         errors = []
         for arg in args:
             if arg is type(None):
@@ -68,6 +71,11 @@ def _convert(value: Any, tp: Any, path: str, source: str) -> Any:
     if dataclasses.is_dataclass(tp):
         if not isinstance(value, dict):
             raise ConfigError(source, path, f"expected a table, got {type(value).__name__}")
+        # A settings class with its own reading rules (defaults that depend on the table a
+        # key sits in) reads its table itself.
+        reader = getattr(tp, "from_table", None)
+        if reader is not None:
+            return reader(value, path=path, source=source)
         return from_dict(tp, value, path=path, source=source)
     if origin is tuple:
         if not isinstance(value, (list, tuple)):

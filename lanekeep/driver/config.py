@@ -38,6 +38,7 @@ class DriverConfig:
     cameras: Mapping[str, CameraModel]  # per camera name, its model at the frames' size
     distortions: Mapping[str, np.ndarray | None] = field(default_factory=dict)  # OpenCV lens
     acc: AccSettings | None = None  # the adaptive cruise ([control] acc); None: off
+    detectors: DetectorsConfig | None = None  # the scenario's [detectors]; None: the shipped
 
     # -- what the settings imply (paper mode folded in) --------------------------------------
     @property
@@ -56,7 +57,7 @@ class DriverConfig:
     def front_detector_config(self, label: str) -> DetectorsConfig | None:
         """The detectors config front model `label` runs with (None: the shipped one)."""
         return front_detector_config(self.families[label], self.estimation.mode,
-                                     keeps=self.estimation.paper_keeps)
+                                     base=self.detectors, keeps=self.estimation.paper_keeps)
 
     @property
     def estimator(self) -> EstimatorSettings:

@@ -60,6 +60,7 @@ class Driver:
         }
         self.reference: Detector = make_detector(est.reference_detector,
                                                    cameras[est.reference_camera],
+                                                   config.detectors,
                                                    distortion=lens.get(est.reference_camera))
         self.roll = RollFilter(config.roll, config.period_s)
         self.estimator = LaneEstimator(list(self.front), config.estimator,

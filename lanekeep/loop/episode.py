@@ -45,7 +45,8 @@ def driver_config(scenario: Scenario, simulator: Simulator) -> DriverConfig:
                         period_s=scenario.control_period_s,
                         target_speed_mps=scenario.target_speed_mps, car=simulator.car,
                         cameras=simulator.cameras, distortions=simulator.distortions,
-                        acc=acc_settings(scenario.control, scenario.estimation.mode))
+                        acc=acc_settings(scenario.control, scenario.estimation.mode),
+                        detectors=scenario.detectors)
 
 
 class Episode:

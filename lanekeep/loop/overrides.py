@@ -5,16 +5,20 @@ controller: a built-in name, an entry point's name or an import path `package.mo
 (lanekeep/core/plugins.py), so a user's own detector or controller runs on the shipped
 scenarios without editing a file. `--set KEY=VALUE` changes any other scenario key the same way
 (`estimation.mmae_prior=uniform`): how two methods are compared on the same scenarios.
+`--detectors-config FILE` gives every scenario a detectors file's settings as its
+`[detectors]` table (a scenario file's own table is the reproducible way to keep them).
 """
 
 from __future__ import annotations
 
 import dataclasses
 import json
+import tomllib
 from dataclasses import dataclass
 from typing import Any
 
 from lanekeep.core.config_io import ConfigError
+from lanekeep.detectors.config import DetectorsConfig, load_config
 from lanekeep.scenario.keys import check_key, with_settings
 from lanekeep.scenario.schema import Scenario, ScenarioError
 
@@ -28,6 +32,8 @@ class PluginOverrides:
     controller: str | None = None
     # (dotted key, TOML value) of each `--set`, in the command line's order, applied last
     settings: tuple[tuple[str, Any], ...] = ()
+    # a detectors file (`--detectors-config`) that becomes every scenario's `[detectors]`
+    detectors_config: str | None = None
 
     def check(self) -> None:
         """Import each name given and check each setting's key names a scenario key
@@ -42,11 +48,29 @@ class PluginOverrides:
             check_detector(self.reference_detector, "--reference-detector")
         if self.controller is not None:
             check_controller(self.controller, "--controller")
+        if self.detectors_config is not None:
+            self.detectors()
         for key, _ in self.settings:
             try:
                 check_key(key, None, seed_rule="use --seed")
             except ValueError as err:
                 raise ConfigError("", "--set", f"{key}: {err}") from None
+
+    def detectors(self) -> DetectorsConfig | None:
+        """The detectors file's settings (None: none given); a file that cannot be read or
+        holds a bad key is a ConfigError naming the option and the file."""
+        if self.detectors_config is None:
+            return None
+        try:
+            return load_config(self.detectors_config)
+        except OSError as err:
+            raise ConfigError("", "--detectors-config",
+                              f"{self.detectors_config}: {err.strerror or err}") from None
+        except tomllib.TOMLDecodeError as err:
+            raise ConfigError("", "--detectors-config",
+                              f"{self.detectors_config}: invalid TOML: {err}") from None
+        except ConfigError as err:
+            raise ConfigError("", "--detectors-config", str(err)) from None
 
     def apply(self, scenario: Scenario) -> Scenario:
         """`scenario` with these changes in place of its own: the detectors and controller,
@@ -62,6 +86,8 @@ class PluginOverrides:
         if self.controller is not None:
             control = dataclasses.replace(control, controller=self.controller)
         scenario = dataclasses.replace(scenario, estimation=est, control=control)
+        if self.detectors_config is not None:
+            scenario = dataclasses.replace(scenario, detectors=self.detectors())
         try:
             return with_settings(scenario, self.settings)
         except ScenarioError as err:

@@ -14,6 +14,7 @@ import copy
 import dataclasses
 import re
 import tomllib
+import types
 import typing
 from typing import Any
 
@@ -55,6 +56,7 @@ def check_key(key: str, base_table: dict | None, *, seed_rule: str) -> None:
             tp = typing.get_args(tp)[0]
             node = node[part] if base_table is not None else None
             continue
+        tp = _table_type(tp)
         if not dataclasses.is_dataclass(tp):
             raise ValueError(f"{part!r} is inside a value, not a table")
         names = {f.name for f in dataclasses.fields(tp) if f.metadata.get("toml", True)}
@@ -65,6 +67,15 @@ def check_key(key: str, base_table: dict | None, *, seed_rule: str) -> None:
         node = node.get(part) if isinstance(node, dict) else None
 
 
+def _table_type(tp: Any) -> Any:
+    """The table type of an optional table (`T | None` -> T); any other type unchanged."""
+    if typing.get_origin(tp) in (typing.Union, types.UnionType):
+        inner = [a for a in typing.get_args(tp) if a is not type(None)]
+        if len(inner) == 1 and dataclasses.is_dataclass(inner[0]):
+            return inner[0]
+    return tp
+
+
 def set_key(table: dict, path: list[str | int], value: Any) -> None:
     """Set `value` at `path`, creating the tables on the way that the base leaves out."""
     node: Any = table
@@ -72,7 +83,9 @@ def set_key(table: dict, path: list[str | int], value: Any) -> None:
         if isinstance(part, int):
             node = node[part]
         else:
-            node = node.setdefault(part, [] if isinstance(nxt, int) else {})
+            if node.get(part) is None:  # an optional table the base leaves unset
+                node[part] = [] if isinstance(nxt, int) else {}
+            node = node[part]
     node[path[-1]] = value
 
 

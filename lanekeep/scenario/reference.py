@@ -56,6 +56,8 @@ def _type_name(tp) -> str:
         if len(args) == 2 and args[1] is Ellipsis:
             return f"array of {_type_name(args[0])}s"
         return f"array of {len(args)} {_type_name(args[0])}s"
+    if dataclasses.is_dataclass(tp):
+        return "table"
     return {str: "string", int: "integer", float: "number", bool: "boolean"}[tp]
 
 

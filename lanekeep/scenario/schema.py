@@ -27,6 +27,7 @@ from pathlib import Path
 
 from lanekeep.core.config_io import ConfigError, InvalidValue, from_dict
 from lanekeep.core.setting import check_settings, setting
+from lanekeep.detectors.config import DetectorsConfig
 from lanekeep.geometry.road import Road
 from lanekeep.scenario.camera import CAMERA_PRESETS, CameraConfig
 from lanekeep.scenario.conditions import (
@@ -119,6 +120,12 @@ class Scenario:
     estimation: EstimationConfig = setting(
         factory=EstimationConfig,
         doc="Which detectors run, the MMAE's reference, how the output is formed.")
+    detectors: DetectorsConfig | None = setting(
+        None, "Settings of the detectors for this scenario's episodes: the tables of a "
+        "detectors file (detectors/config.py; e.g. `[detectors.hough]` with `binarisation = "
+        "\"ridge\"`), each key laid over the shipped detectors/detectors.toml. Not set: the "
+        "shipped settings. Paper mode still sets its own windows and thresholds over them.",
+        allowed="the keys of a detectors file")
     control: ControlConfig = setting(factory=ControlConfig,
                                      doc="The controller, by name, and the adaptive cruise.")
     sensors: SensorsConfig = setting(

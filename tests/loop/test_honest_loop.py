@@ -36,7 +36,8 @@ def test_the_driver_is_built_from_settings_and_a_spec_sheet_only():
         assert path_to_truth(episode.driver, "driver", truth) is None
         assert {f.name for f in dataclasses.fields(config)} == {
             "estimation", "controller", "period_s", "target_speed_mps", "car", "cameras",
-            "distortions", "acc"}  # acc: the adaptive cruise's settings ([control])
+            "distortions", "acc", "detectors"}  # acc: the adaptive cruise's settings
+        # ([control]); detectors: the scenario's [detectors] settings
         assert all(isinstance(c, CameraModel) for c in config.cameras.values())
 
 
