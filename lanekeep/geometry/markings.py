@@ -4,7 +4,13 @@ A strip is described in road (Frenet) coordinates only: from `s_start_m` to `s_e
 position `r_m`, `width_m` wide. The mesh builder in world.py samples `Road.position(s, r)` along it,
 so a strip may follow a curve; solid lines are cut at segment joins and into pieces of at most
 `MAX_STRIP_M` so that each is a short ribbon. A raised pavement marker (Botts' dot) is a `dot`
-piece: a small dome of diameter `width_m` centred between `s_start_m` and `s_end_m`.
+piece: a small dome of diameter `width_m` centred between `s_start_m` and `s_end_m`. A raised
+reflective pavement marker (the Californian kind: a ~10 cm square block with sloped reflective
+faces) is a `dot` piece with `reflector` set; `reflector_spacing_m` adds them to any pattern (in
+the gaps of a dashed line, on the line otherwise, between the lines of a double one). Like
+Botts' dots they belong to their boundary's marking, in the masks too: a detector must take a
+row of them for the lane's boundary where there is no paint, as TuSimple's labels run through
+them.
 
 Worn paint, as on real roads, is the line it was (solid, dashed, double) broken into chips:
 the paint flakes off in gaps a few decimetres long that grow with the wear, the chips left are
@@ -27,6 +33,7 @@ WORN_PATTERNS = ("solid", "dashed", "double", "dots")
 MAX_STRIP_M = 20.0  # longest solid strip; longer lines are cut into equal pieces
 WEAR_CORRELATION_M = 8.0  # the local wear of a worn line drifts over about this length
 WEAR_STEP_M = 0.05  # resolution of worn paint along the line
+REFLECTOR_M = 0.10  # a raised reflective marker's side
 
 
 @dataclass(frozen=True)
@@ -47,6 +54,11 @@ class MarkingStyle:
                            choices=WORN_PATTERNS[:3])
     dot_diameter_m: float = setting(0.10, "dots: diameter of one dot.", allowed="> 0")
     dot_spacing_m: float = setting(0.9, "dots: spacing of the dots within a row.", allowed="> 0")
+    reflector_spacing_m: float = setting(
+        0.0, "Raised reflective markers (10 cm square blocks, the paint's colour) every this "
+        "many metres along the boundary: on a dashed line in the middle of every k-th gap "
+        "(k = spacing / (dash + gap), rounded, at least 1), else on the line (between the lines "
+        "of a double one); with kind none they alone mark it. 0 = none.", allowed=">= 0")
     colour: tuple[float, float, float] = setting(
         (0.95, 0.95, 0.92), "Paint colour, RGB (yellow paint: [0.9, 0.7, 0.15]).",
         allowed="3 values in 0..1")
@@ -56,6 +68,9 @@ class MarkingStyle:
         for key in ("width_m", "dash_m", "gap_m", "dot_diameter_m", "dot_spacing_m"):
             if not getattr(self, key) > 0:
                 raise InvalidValue(key, f"must be > 0, got {getattr(self, key)}")
+        if not self.reflector_spacing_m >= 0:
+            raise InvalidValue("reflector_spacing_m",
+                               f"must be >= 0, got {self.reflector_spacing_m}")
         if not self.double_gap_m >= 0:
             raise InvalidValue("double_gap_m", f"must be >= 0, got {self.double_gap_m}")
         if len(self.colour) != 3 or not all(0.0 <= c <= 1.0 for c in self.colour):
@@ -73,6 +88,7 @@ class MarkingPiece:
     width_m: float
     brightness: float  # 1 = fresh paint; lower = faded
     dot: bool = False  # a raised marker (dome of diameter width_m), not a strip
+    reflector: bool = False  # a dot that is a square reflective marker of side width_m
 
 
 def default_markings(n_lanes: int) -> tuple[MarkingStyle, ...]:
@@ -117,6 +133,24 @@ def _pattern(style: MarkingStyle, kind: str, boundary: int, r_m: float, length_m
                for k in np.arange(0.0, style.dash_m - 0.5 * d + 1e-9, style.dot_spacing_m)]
     return [MarkingPiece(boundary, c, c + d, r_m, d, 1.0, dot=True)
             for c in centres if c + d <= length_m]
+
+
+def _reflectors(style: MarkingStyle, boundary: int, r_m: float, length_m: float
+                ) -> list[MarkingPiece]:
+    """Raised reflective markers every `reflector_spacing_m` (see MarkingStyle)."""
+    spacing = style.reflector_spacing_m
+    if spacing <= 0.0:
+        return []
+    dashed = style.kind == "dashed" or (style.kind == "worn" and style.pattern == "dashed")
+    if dashed:
+        period = style.dash_m + style.gap_m
+        every = max(1, round(spacing / period))
+        centres = np.arange(0.0, length_m, every * period) + style.dash_m + 0.5 * style.gap_m
+    else:
+        centres = np.arange(0.5 * spacing, length_m, spacing)
+    h = 0.5 * REFLECTOR_M
+    return [MarkingPiece(boundary, float(c) - h, float(c) + h, r_m, REFLECTOR_M, 1.0, dot=True,
+                         reflector=True) for c in centres if h <= c <= length_m - h]
 
 
 def _smooth(rng: np.random.Generator, n: int, sigma: float) -> np.ndarray:
@@ -175,8 +209,13 @@ def layout(
       rng_seed: seed of a worn line; the generator is `default_rng(rng_seed + boundary)`.
     """
     if style.kind == "none":
-        return []
-    if style.kind != "worn":
-        return _pattern(style, style.kind, boundary, r_m, length_m, joins)
-    fresh = _pattern(style, style.pattern, boundary, r_m, length_m, joins)
-    return _wear(fresh, style.wear, np.random.default_rng(rng_seed + boundary))
+        pieces = []
+    elif style.kind != "worn":
+        pieces = _pattern(style, style.kind, boundary, r_m, length_m, joins)
+    else:
+        fresh = _pattern(style, style.pattern, boundary, r_m, length_m, joins)
+        pieces = _wear(fresh, style.wear, np.random.default_rng(rng_seed + boundary))
+    reflectors = _reflectors(style, boundary, r_m, length_m)
+    if not reflectors:
+        return pieces
+    return sorted(pieces + reflectors, key=lambda p: (p.s_start_m, p.r_m))

@@ -13,6 +13,7 @@ draws around that start (lanekeep/scenario/nuisance.py).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -42,6 +43,11 @@ class RoadConfig:
     cracks: float = same_as(PavementStyle, "cracks")
     patches: float = same_as(PavementStyle, "patches")
     tyre_marks: float = same_as(PavementStyle, "tyre_marks")
+    tar_lines: float = same_as(PavementStyle, "tar_lines")
+    seams: float = same_as(PavementStyle, "seams")
+    oil_stripe: float = same_as(PavementStyle, "oil_stripe")
+    surface_changes: float = same_as(PavementStyle, "surface_changes")
+    section_surface: str = same_as(PavementStyle, "section_surface")
 
     def __post_init__(self):
         check_settings(self)
@@ -63,8 +69,8 @@ class RoadConfig:
 
     @property
     def pavement(self) -> PavementStyle:
-        return PavementStyle(self.surface, self.asphalt_tone, self.cracks, self.patches,
-                             self.tyre_marks)
+        return PavementStyle(**{f.name: getattr(self, f.name)
+                                for f in dataclasses.fields(PavementStyle)})
 
     @property
     def length_m(self) -> float:

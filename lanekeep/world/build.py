@@ -2,7 +2,8 @@
 
 The car comes from mjcf/car.xml; everything else is added procedurally:
   - the road surface: one textured mesh per road segment (asphalt or concrete with joints,
-    cracks, patches and tyre marks: lanekeep/world/pavement.py),
+    cracks, patches, tyre marks, tar lines, seams and sections of another surface:
+    lanekeep/world/pavement.py),
     gravel shoulders, and a grass ground plane that also carries the tyre contacts;
   - lane markings: one mesh geom per boundary, road segment and paint brightness, so that the
     segmentation render gives exact per-boundary masks (`World.marking_boundary[geom_id]`);
@@ -71,6 +72,11 @@ PAINT_SEED = 0x9A17  # the worn paint texture's
 PAINT_SHADE_STEP_M = 0.5  # how finely a paint strip is checked against the cast shadows
 DOT_HEIGHT_M = 0.015  # a Botts' dot's dome above the paint layer
 DOT_ALBEDO = 0.75  # a ceramic Botts' dot, cleaner and brighter than road paint
+REFLECTOR_HEIGHT_M = 0.018  # a raised reflective marker's height above the paint layer
+REFLECTOR_SLOPE_M = 0.035  # how far its reflective faces slope in, along the road
+REFLECTOR_ALBEDO = 0.8  # its plastic body
+OTHER_SURFACE_SEED = 1  # [scenario seed, PAVEMENT_SEED, this]: the other surface's texture
+SECTIONS_SEED = 2  # ... and where its sections lie
 PAINT_WEAR_SHIFT = 0.37  # each boundary reads the paint's wear texture this far along (v)
 
 
@@ -225,14 +231,39 @@ def _surface_pieces(road: Road, layout: WorldLayout) -> list[tuple[float, float]
     return [(-layout.lead_m, 0.0), *bounds, (road.length_m, road.length_m + layout.lead_m)]
 
 
+def _cut(s0: float, s1: float, other: list[tuple[float, float]]
+         ) -> tuple[list[tuple[float, float]], list[tuple[float, float]]]:
+    """[s0, s1) cut into the pieces of the road's own surface and those of `other` sections."""
+    own, theirs, s = [], [], s0
+    for a, b in other:
+        a, b = max(a, s0), min(b, s1)
+        if b <= a:
+            continue
+        if a > s:
+            own.append((s, a))
+        theirs.append((a, b))
+        s = b
+    if s < s1:
+        own.append((s, s1))
+    return own, theirs
+
+
 def _add_road_surface(spec: mujoco.MjSpec, road: Road, layout: WorldLayout,
-                      grid_step_m: float | None) -> None:
-    """Asphalt and gravel ribbons, one mesh per road segment for each."""
+                      grid_step_m: float | None,
+                      other: list[tuple[float, float]] | None = None) -> None:
+    """Asphalt and gravel ribbons, one mesh per road segment for each; the sections `other`
+    (s intervals, sorted) of another surface (pavement.sections) are cut out of them and
+    merged into one mesh of the material "asphalt_other"."""
     edge_right, edge_left = road.boundary_r(0), road.boundary_r(road.n_lanes)
     asphalt_right, asphalt_left = edge_right - layout.shoulder_m, edge_left + layout.shoulder_m
+    theirs: list[Ribbon] = []
     for i, (s0, s1) in enumerate(_surface_pieces(road, layout)):
-        asphalt = _asphalt_mesh(road, s0, s1, layout, grid_step_m)
-        add_mesh_geom(spec, f"road_{i}", asphalt, "asphalt", GROUP_WORLD)
+        own, cut = _cut(s0, s1, other or [])
+        theirs += [_asphalt_mesh(road, a, b, layout, grid_step_m) for a, b in cut]
+        if own:
+            asphalt = Ribbon.concatenate([_asphalt_mesh(road, a, b, layout, grid_step_m)
+                                          for a, b in own])
+            add_mesh_geom(spec, f"road_{i}", asphalt, "asphalt", GROUP_WORLD)
         gravel = Ribbon.concatenate(
             [
                 ribbon(road, s0, s1, asphalt_right - layout.gravel_m, asphalt_right, ROAD_Z_M,
@@ -242,6 +273,9 @@ def _add_road_surface(spec: mujoco.MjSpec, road: Road, layout: WorldLayout,
             ]
         )
         add_mesh_geom(spec, f"shoulder_{i}", gravel, "gravel", GROUP_WORLD)
+    if theirs:
+        add_mesh_geom(spec, "road_other", Ribbon.concatenate(theirs), "asphalt_other",
+                      GROUP_WORLD)
 
 
 def _dot_mesh(road: Road, piece: MarkingPiece, sides: int = 8) -> Ribbon:
@@ -258,6 +292,25 @@ def _dot_mesh(road: Road, piece: MarkingPiece, sides: int = 8) -> Ribbon:
     faces = np.stack([np.zeros(sides, int), k, np.roll(k, -1)], 1).astype(np.int32)
     uv = np.c_[r - piece.r_m, s - s_mid] / piece.width_m
     return Ribbon(verts, faces, uv)
+
+
+def _reflector_mesh(road: Road, piece: MarkingPiece) -> Ribbon:
+    """A raised reflective pavement marker: a square block of side `piece.width_m`,
+    REFLECTOR_HEIGHT_M high, whose faces towards and away from the traffic slope (the
+    reflectors) and whose sides are steep."""
+    a, b = 0.5 * piece.width_m, 0.5 * piece.width_m
+    a_top, b_top = a - REFLECTOR_SLOPE_M, b - 0.25 * REFLECTOR_SLOPE_M
+    s_mid = 0.5 * (piece.s_start_m + piece.s_end_m)
+    ds = np.array([-a, a, a, -a, -a_top, a_top, a_top, -a_top])
+    dr = np.array([-b, -b, b, b, -b_top, -b_top, b_top, b_top])
+    z = np.r_[np.full(4, MARKING_Z_M), np.full(4, MARKING_Z_M + REFLECTOR_HEIGHT_M)]
+    verts = np.c_[road.position(s_mid + ds, piece.r_m + dr), z]
+    faces = [[4, 5, 6], [4, 6, 7]]  # the top; then each side, outwards (CCW seen from out)
+    for i in range(4):
+        j = (i + 1) % 4
+        faces += [[i, j, 4 + j], [i, 4 + j, 4 + i]]
+    uv = np.c_[dr, ds] / piece.width_m + 0.5
+    return Ribbon(verts, np.asarray(faces, np.int32), uv)
 
 
 def _in_cast_shadow(road: Road, pieces: list[MarkingPiece], conditions: ConditionsInfo
@@ -287,7 +340,9 @@ def _add_markings(
     paint.py: soft edges, seeded fading along the road), the strip itself with the worn paint
     texture (flaked off in ragged pits, the asphalt showing) for faded levels, or, inside a
     static cast shadow, an opaque copy of the geometry. Raised dots are geometry in both
-    renders (GROUP_MARKING). The masks mark the whole strip; which of its pixels a camera
+    renders (GROUP_MARKING), and so are raised reflective markers (one geom per boundary,
+    `_reflector_mesh`): both are their boundary's marking in the masks, as a dataset's labels
+    run the lane through them. The masks mark the whole strip; which of its pixels a camera
     shows as paint is for lanekeep/sensing/paint_visibility.py to say. `surface`: the grey of the
     carriageway (lanekeep/world/pavement.surface_albedo), which faded paint fades towards.
 
@@ -303,12 +358,16 @@ def _add_markings(
     translucent: dict[tuple[int, int, int], list[Ribbon]] = {}
     shaded: dict[tuple[int, int, int], list[Ribbon]] = {}
     dots: set[tuple[int, int, int]] = set()
+    reflectors: dict[int, list[Ribbon]] = {}  # per boundary: one geom for the whole road
     bounds = road.segment_bounds()
     starts = np.array([b[0] for b in bounds])
     levels = layout.paint_brightness_levels
     pieces = road.marking_pieces(layout.lead_m)
     in_shadow = _in_cast_shadow(road, pieces, conditions)
     for piece, shade in zip(pieces, in_shadow, strict=True):
+        if piece.reflector:
+            reflectors.setdefault(piece.boundary, []).append(_reflector_mesh(road, piece))
+            continue
         segment = int(np.searchsorted(starts, piece.s_start_m, side="right") - 1)
         level = int(np.clip(round(piece.brightness * (levels - 1)), 0, levels - 1))
         half = piece.width_m / 2.0
@@ -370,6 +429,13 @@ def _add_markings(
             add_mesh_geom(spec, f"{name}_shaded_rgb", Ribbon.concatenate(shaded[key]),
                           in_shade, GROUP_RGB_OVERLAY)
             colour_only.add(f"{name}_shaded_rgb")
+    for boundary, blocks in sorted(reflectors.items()):
+        name = f"marking_b{boundary}_reflectors"
+        names[name] = boundary  # a boundary's marking, in both renders (as Botts' dots)
+        add_mesh_geom(spec, name, Ribbon.concatenate(blocks),
+                      material(f"paint_b{boundary}_reflector", "paint",
+                               list(REFLECTOR_ALBEDO * np.asarray(styles[boundary].colour))),
+                      GROUP_MARKING)
     return names, colour_only
 
 
@@ -396,6 +462,15 @@ def build_spec(
     add_texture(spec, "asphalt", pavement.pavement(
         np.random.default_rng([scenario.seed, PAVEMENT_SEED]), scenario.road.pavement,
         road.lane_width_m, layout.shoulder_m, layout.pavement_period_m, layout.texture_px))
+    style = scenario.road.pavement
+    other = pavement.sections(
+        np.random.default_rng([scenario.seed, PAVEMENT_SEED, SECTIONS_SEED]),
+        -layout.lead_m, road.length_m + layout.lead_m, style.surface_changes)
+    if other:
+        add_texture(spec, "asphalt_other", pavement.pavement(
+            np.random.default_rng([scenario.seed, PAVEMENT_SEED, OTHER_SURFACE_SEED]),
+            pavement.section_style(style), road.lane_width_m, layout.shoulder_m,
+            layout.pavement_period_m, layout.texture_px))
     add_texture(spec, "gravel", textures.gravel(rng))
     add_texture(spec, "grass", textures.grass(rng))
     add_texture(spec, "paint", textures.paint(rng))
@@ -405,12 +480,15 @@ def build_spec(
     surf = look.surfaces
     add_material(spec, "asphalt", "asphalt", rgba=list(surf.asphalt_rgba),
                  specular=surf.asphalt_specular, shininess=surf.asphalt_shininess)
+    if other:
+        add_material(spec, "asphalt_other", "asphalt_other", rgba=list(surf.asphalt_rgba),
+                     specular=surf.asphalt_specular, shininess=surf.asphalt_shininess)
     add_material(spec, "gravel", surf.verge_texture_gravel, rgba=list(surf.gravel_rgba),
                  specular=0.0)
     add_material(spec, "grass", surf.verge_texture_grass, texrepeat=[150.0, 150.0],
                  specular=0.0)
     _add_environment(spec, road, scenario, look.lighting)
-    _add_road_surface(spec, road, layout, look.asphalt_grid_step_m)
+    _add_road_surface(spec, road, layout, look.asphalt_grid_step_m, other)
     conditions = add_conditions(spec, scenario, road, layout)  # first: its cast shadows
     marking_names, ribbons = _add_markings(
         spec, road, layout, conditions, scenario.seed,

@@ -1,4 +1,9 @@
-"""The pavement texture: asphalt or concrete lanes with joints, cracks, patches and tyre marks.
+"""The pavement texture: asphalt or concrete lanes with joints, cracks, patches and tyre marks,
+and the structure of real roads that a lane detector may take for a line (TuSimple's frames show
+all of it): tar lines (crack sealant), a longitudinal construction seam a little inside the
+lane line, the dark oil stripe down the lane's centre beside polished wheel paths; and, along
+the road, sections of another surface (`sections`, `section_style`: build.py gives them their
+own atlas and cuts the road's mesh at their straight transverse ends).
 
 One texture is an atlas of one lane beside one shoulder: columns [0, LANE_U) hold a lane from
 its right boundary to its left one, columns [LANE_U, 1) a shoulder from the edge line outwards;
@@ -12,6 +17,8 @@ had two tar seams that ran the road's whole length).
 
 from __future__ import annotations
 
+import dataclasses
+
 import cv2
 import numpy as np
 
@@ -23,6 +30,9 @@ SLAB_M = 4.5  # concrete slab length between transverse joints
 WHEEL_TRACK_M = 1.7  # distance between a car's wheel paths
 ASPHALT_TINT = (1.0, 1.0, 1.02)
 CONCRETE_TINT = (1.0, 0.99, 0.95)
+TAR_GREY = 0.07  # crack sealant: near black, whatever the surface's age
+SEAM_INSET_M = (0.12, 0.45)  # the seam's distance inside the lane's left line
+SECTION_M = (25.0, 120.0)  # length of a section of another surface
 
 
 def _fold(canvas: np.ndarray, rows: int) -> np.ndarray:
@@ -66,6 +76,48 @@ def _patch_map(rng: np.random.Generator, shape: tuple[int, int], count: int,
         cv2.rectangle(fill, p0, p1, float(rng.uniform(0.6, 1.0)), -1)
         cv2.rectangle(edge, p0, p1, 255, 2)
     return np.clip(_fold(fill, rows), 0, 1), np.clip(_fold(edge / 255.0, rows), 0, 1)
+
+
+def _tar_map(rng: np.random.Generator, shape: tuple[int, int], count: int,
+             px_per_m: float) -> np.ndarray:
+    """Coverage (0..1) of crack sealant: bands 3-7 cm wide that follow long, gently meandering
+    cracks, three in four along the road (1.5-6 m), the rest across it (thermal cracks)."""
+    rows, cols = shape
+    canvas = np.zeros((3 * rows, cols), np.uint8)
+    step_px = 4.0
+    for _ in range(count):
+        lengthwise = rng.random() < 0.75
+        length_px = (rng.uniform(1.5, 6.0) if lengthwise else rng.uniform(0.6, 3.5)) * px_per_m
+        heading = (0.0 if lengthwise else np.pi / 2) + rng.normal(0.0, 0.12)
+        steps = max(int(length_px / step_px), 2)
+        turn = np.cumsum(rng.normal(0.0, 0.04, steps))  # gentle drift
+        turn += 0.15 * np.sin(np.linspace(0.0, rng.uniform(2.0, 8.0), steps)
+                              + rng.uniform(0.0, 2.0 * np.pi))  # a slow meander
+        turn += rng.normal(0.0, 0.35, steps)  # and the crack's own zigzag
+        xy = np.cumsum(step_px * np.stack([np.sin(heading + turn), np.cos(heading + turn)], 1),
+                       0)
+        xy += [rng.uniform(0, cols), rows + rng.uniform(0, rows)]
+        width = max(int(round(rng.uniform(0.025, 0.06) * px_per_m)), 2)
+        shade = int(rng.uniform(170, 255))  # older sealant is greyer
+        cv2.polylines(canvas, [np.round(xy).astype(np.int32)], False, shade, width, cv2.LINE_AA)
+    return np.clip(_fold(canvas.astype(np.float32) / 255.0, rows), 0.0, 1.0)
+
+
+def _seam(rng: np.random.Generator, shape: tuple[int, int], lane_width_m: float
+          ) -> tuple[np.ndarray, np.ndarray]:
+    """A straight longitudinal construction seam SEAM_INSET_M inside the lane's left line (the
+    atlas' last column): its darkening (0..1; about 2 cm wide, in places sealed wider and
+    darker) and the strip beyond it (0..1, soft-edged), laid by the other paving pass."""
+    rows, cols = shape
+    px_per_m = cols / lane_width_m
+    x0 = cols - rng.uniform(*SEAM_INSET_M) * px_per_m
+    x = x0 + 0.6 * tiled_noise(rng, (rows, 1), 30.0)  # barely wanders
+    col = np.arange(cols)[None, :] + 0.5
+    sealed = np.clip(0.5 + 0.8 * tiled_noise(rng, (rows, 1), 60.0), 0.0, 1.0)
+    sigma = 0.008 * px_per_m * (1.0 + 1.5 * sealed)
+    line = (0.45 + 0.55 * sealed) * np.exp(-0.5 * ((col - x) / np.maximum(sigma, 0.7)) ** 2)
+    beyond = np.clip(col - x, 0.0, 1.0)
+    return line.astype(np.float32), beyond.astype(np.float32)
 
 
 def _lane_profile(cols: int, lane_width_m: float, sigma_m: float) -> tuple[np.ndarray, ...]:
@@ -119,6 +171,27 @@ def _part(rng: np.random.Generator, style: PavementStyle, rows: int, cols: int,
         if lane:
             joints[:, 0] = joints[:, -1] = 1.0  # longitudinal joints under the lane lines
         grey -= 0.22 * np.clip(periodic_blur(joints, 0.7) * 2.0, 0.0, 1.0)
+    # The structure keys draw after everything above, and only when set: a scenario without
+    # them keeps its texture to the texel.
+    if lane and style.oil_stripe > 0.0:
+        paths, _ = _lane_profile(cols, width_m, 0.3)
+        r = (np.arange(cols) + 0.5) / cols * width_m - 0.5 * width_m
+        stripe = np.exp(-0.5 * (np.abs(r) / 0.32) ** 4)  # flat-topped, ~0.7 m wide
+        drips = np.clip(0.55 + 0.5 * tiled_noise(rng, shape, 10.0)
+                        + 0.25 * tiled_noise(rng, shape, 2.0), 0.0, 1.2)
+        k = style.oil_stripe * (1.6 if concrete else 1.0)
+        grey -= k * 0.09 * stripe[None, :] * drips
+        grey += k * 0.025 * paths[None, :] * (0.8 + 0.2 * tiled_noise(rng, shape, 40.0))
+    if lane and style.seams > 0.0:
+        line, beyond = _seam(rng, shape, width_m)
+        grey += style.seams * rng.choice([-1.0, 1.0]) * rng.uniform(0.02, 0.04) * beyond
+        grey -= style.seams * (0.22 if concrete else 0.18) * line
+    n_tar = rng.poisson(style.tar_lines * (9.0 if lane else 2.5)) if style.tar_lines else 0
+    if n_tar:
+        tar = _tar_map(rng, shape, n_tar, px_per_m)
+        tar_grey = (TAR_GREY + (0.10 if concrete else 0.0)  # on concrete: dust-greyed
+                    + 0.015 * tiled_noise(rng, shape, 1.0))
+        grey = grey * (1.0 - 0.9 * tar) + tar_grey * 0.9 * tar
     return grey
 
 
@@ -131,3 +204,30 @@ def pavement(rng: np.random.Generator, style: PavementStyle, lane_width_m: float
     shoulder = _part(rng, style, rows, cols - lane_cols, shoulder_m, period_m, lane=False)
     grey = np.clip(np.concatenate([lane, shoulder], axis=1), 0.02, 1.0)
     return to_rgb8(grey, CONCRETE_TINT if style.surface == "concrete" else ASPHALT_TINT)
+
+
+def section_style(style: PavementStyle) -> PavementStyle:
+    """The surface of the road's sections of `style.section_surface`: repaved is new, dark
+    asphalt (no cracks, patches or tar yet, faint wheel paths, the seams of its paving passes);
+    asphalt and concrete keep the road's wear."""
+    if style.section_surface == "repaved":
+        return dataclasses.replace(style, surface="asphalt", asphalt_tone=0.05, cracks=0.0,
+                                   patches=0.0, tyre_marks=0.3 * style.tyre_marks,
+                                   tar_lines=0.0, oil_stripe=0.4 * style.oil_stripe,
+                                   surface_changes=0.0)
+    return dataclasses.replace(style, surface=style.section_surface, surface_changes=0.0)
+
+
+def sections(rng: np.random.Generator, s0: float, s1: float, share: float
+             ) -> list[tuple[float, float]]:
+    """[s0, s1) intervals of the other surface: SECTION_M long, about `share` of the road,
+    alternating with the road's own surface, which starts (the car's start sees it)."""
+    if share <= 0.0:
+        return []
+    mean_other = 0.5 * sum(SECTION_M)
+    out, s = [], s0 + rng.exponential(mean_other * (1.0 - share) / share)
+    while s < s1:
+        end = s + rng.uniform(*SECTION_M)
+        out.append((s, min(end, s1)))
+        s = end + rng.exponential(mean_other * (1.0 - share) / share)
+    return out
