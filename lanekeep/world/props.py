@@ -29,11 +29,13 @@ from lanekeep.world.parts import ConditionsInfo, WorldLayout, add_mesh_geom
 from lanekeep.world.prop_meshes import hill_ring, tree_belt
 from lanekeep.world.prop_snow import PROP_SNOW_SEED
 from lanekeep.world.roadside import cast_shadow, disjoint_pieces
-from lanekeep.world.shade import add_shadow_overlay, shade_transmission
+from lanekeep.world.shade import add_shadow_overlay, add_soft_shadows, shade_transmission
 
 TREE_OFFSET_M = (4.0, 40.0)  # scenery trees: from the gravel's outer edge (m)
 BUILDING_OFFSET_M = (15.0, 60.0)
 HILL_WIDTH_M = 200.0
+TREE_DETAIL_SEED = 0x920B  # the stream of the scenery crowns' lobes (`rng` draws as before)
+TREE_SHADE_SEED = 0x920C  # the stream of the gaps in their soft shadows
 TREE_KINDS = {"broadleaf": 0.55, "poplar": 0.15, "conifer": 0.3}  # shares of scenery trees
 
 
@@ -69,9 +71,15 @@ def add_props(spec: mujoco.MjSpec, scenario: Scenario, road: Road, to_sun: np.nd
     for material, meshes in sorted(props.meshes.items()):
         add_mesh_geom(spec, material.replace("prop_", "props_", 1), Ribbon.concatenate(meshes),
                       material, GROUP_WORLD)
-    if props.casters and scenario.conditions.time_of_day != "night":
-        _add_shadows(spec, props, to_sun, info,
-                     shade_transmission(cfg.shadow_darkness, scenario.conditions))
+    if scenario.conditions.time_of_day != "night":
+        transmission = shade_transmission(cfg.shadow_darkness, scenario.conditions)
+        if props.casters:
+            _add_shadows(spec, props, to_sun, info, transmission)
+        if props.tree_shadows and add_soft_shadows(
+                spec, "props_shadow_trees", props.tree_shadows, to_sun, transmission,
+                np.random.default_rng([scenario.seed, TREE_SHADE_SEED])):
+            info.shadow_polygons.extend(cast_shadow(points, to_sun)
+                                        for group in props.tree_shadows for points in group)
 
 
 def _add_shadows(spec: mujoco.MjSpec, props: assets.Props, to_sun: np.ndarray,
@@ -79,8 +87,9 @@ def _add_shadows(spec: mujoco.MjSpec, props: assets.Props, to_sun: np.ndarray,
     """The props' cast shadows, as dark as skylight alone leaves shade (fog scatters the sun:
     lanekeep/world/shade.py), left out where a shadow zone's shadow already lies. Hard-edged:
     soft edges for hundreds of small casters cost ~8 s a world build in polygon clipping
-    (2026-11-27, cProfile of a dataset world), and a pole's or a crown's penumbra is narrow
-    near the ground, where the shadow is seen."""
+    (2026-11-27, cProfile of a dataset world), and a pole's penumbra is narrow near the
+    ground, where the shadow is seen. The scenery trees' shadows are soft
+    (shade.add_soft_shadows: a texture atlas, no clipping)."""
     polygons = [cast_shadow(points, to_sun) for points in props.casters]
     polygons = [p for p in polygons if len(p) >= 3]
     earlier = list(info.shadow_polygons)
@@ -123,6 +132,7 @@ def _scenery(props: assets.Props, rng: np.random.Generator, road: Road, scenario
     shadows stop 1 m short of the gravel (lower buildings, no tree where it would shade the
     road): shade on the road is what a scenario's `conditions.shadows` zones decide."""
     cfg = scenario.roadside
+    detail = np.random.default_rng([scenario.seed, TREE_DETAIL_SEED])  # crowns' extra lobes
     for side in SIDES:
         sign = 1.0 if side == "left" else -1.0
         verge = assets.verge_r(road, side, layout)
@@ -138,10 +148,13 @@ def _scenery(props: assets.Props, rng: np.random.Generator, road: Road, scenario
                 continue
             if not _clear_of_road(road, xy, abs(verge) + radius + 1.0):
                 continue
+            first = len(props.casters)
             if kind == "conifer":
                 assets.conifer(props, rng, xy, top, radius)
             else:
-                assets.tree(props, rng, xy, crown_z, radius, column)
+                assets.tree(props, rng, xy, crown_z, radius, column, detail)
+            props.tree_shadows.append(props.casters[first:])  # soft, one per tree
+            del props.casters[first:]
         placed: list[tuple[np.ndarray, float]] = []
         n_buildings = rng.poisson(cfg.buildings_per_100m * road.length_m / 100.0)
         for _ in range(n_buildings):
@@ -210,7 +223,7 @@ def _skyline(props: assets.Props, rng: np.random.Generator, road: Road, skyline:
         jitter = rng.uniform(-15.0, 15.0, n)
         tops = rng.uniform(6.0, 14.0, n) * (1.0 + 0.3 * shape)
         keep = np.repeat(rng.random(n // 4) < 0.6, 4)  # woods ~4 steps long, gaps between
-        props.add("prop_foliage_1", tree_belt(centre, belt + jitter, tops, keep), cast=False)
+        props.add("prop_woods", tree_belt(centre, belt + jitter, tops, keep), cast=False)
     if skyline != "city":
         return
     for a in rng.uniform(0.0, 2 * np.pi, 90):
