@@ -30,6 +30,7 @@ FOLIAGE_TINTS = ((1.0, 1.0, 1.0, 1.0), (0.8, 0.85, 0.8, 1.0), (1.0, 0.92, 0.72, 
 CONIFER_TINT = (0.62, 0.7, 0.75, 1.0)  # darker and bluer than broadleaf crowns
 CROWN_LOBES = (5, 8)  # extra clumps of leaves on a scenery tree's crown (`tree` with detail)
 WOODS_TINT = (0.8, 0.85, 0.8, 1.0)  # the belt of woods before the hills
+SHRUB_MATERIAL = "prop_foliage_1"  # the darkest broadleaf tint
 CROWN_SEED = 0x920A  # the crowns' texture's stream
 RAIL_PROFILE = np.array([[0.0, 0.45], [-0.08, 0.53], [-0.08, 0.67], [0.0, 0.75],
                          [0.03, 0.75], [0.03, 0.45]])  # (outwards, up) m: W-beam, closed
@@ -149,6 +150,21 @@ def tree(props: Props, rng: np.random.Generator, base_xy: np.ndarray, crown_z_m:
     props.add(material, Ribbon.concatenate(crowns))
     trunk_r = 0.1 + 0.05 * radius_m
     props.add("prop_trunk", prism(np.r_[base_xy, 0.0], crown_z_m, trunk_r, sides=5))
+
+
+def shrub(props: Props, rng: np.random.Generator, base_xy: np.ndarray, radius_m: float,
+          height_m: float) -> None:
+    """A bush: 3-5 low clumps of leaves around base_xy sitting on the ground, `radius_m`
+    across and up to `height_m` high, on the darkest leaf tint (in the shade of its own
+    leaves, a shrub is the darkest thing beside a road). One soft shadow for all its clumps."""
+    clumps = []
+    for _ in range(int(rng.integers(3, 6))):
+        ang, dist = rng.uniform(0.0, 2 * np.pi), radius_m * rng.uniform(0.0, 0.55)
+        size = radius_m * rng.uniform(0.45, 0.7)
+        high = height_m * rng.uniform(0.6, 1.0)
+        centre = np.r_[base_xy + dist * np.array([math.cos(ang), math.sin(ang)]), 0.5 * high]
+        clumps.append(ellipsoid(centre, (size, size * rng.uniform(0.7, 1.0), 0.5 * high), 8, 5))
+    props.add(SHRUB_MATERIAL, Ribbon.concatenate(clumps))
 
 
 def conifer(props: Props, rng: np.random.Generator, base_xy: np.ndarray, height_m: float,

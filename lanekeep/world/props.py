@@ -34,6 +34,9 @@ from lanekeep.world.shade import add_shadow_overlay, add_soft_shadows, shade_tra
 TREE_OFFSET_M = (4.0, 40.0)  # scenery trees: from the gravel's outer edge (m)
 BUILDING_OFFSET_M = (15.0, 60.0)
 HILL_WIDTH_M = 200.0
+BELT_COLUMNS = 6  # columns of a woods face (prop_meshes.tree_belt's ragged top)
+SHRUBS_PER_TREE = 1.5  # bushes per scenery tree (roadside.trees_per_100m)
+SHRUB_OFFSET_M = (2.0, 25.0)  # from the gravel's outer edge (m)
 TREE_DETAIL_SEED = 0x920B  # the stream of the scenery crowns' lobes (`rng` draws as before)
 TREE_SHADE_SEED = 0x920C  # the stream of the gaps in their soft shadows
 TREE_KINDS = {"broadleaf": 0.55, "poplar": 0.15, "conifer": 0.3}  # shares of scenery trees
@@ -67,7 +70,8 @@ def add_props(spec: mujoco.MjSpec, scenario: Scenario, road: Road, to_sun: np.nd
     for s in cfg.overpasses_m:
         assets.overpass(props, road, s, layout)
     _scenery(props, rng, road, scenario, layout, to_sun)
-    _skyline(props, rng, road, cfg.skyline, layout)
+    _skyline(props, rng, road, cfg.skyline, layout,
+             np.random.default_rng([scenario.seed, TREE_DETAIL_SEED, 1]))
     for material, meshes in sorted(props.meshes.items()):
         add_mesh_geom(spec, material.replace("prop_", "props_", 1), Ribbon.concatenate(meshes),
                       material, GROUP_WORLD)
@@ -155,6 +159,7 @@ def _scenery(props: assets.Props, rng: np.random.Generator, road: Road, scenario
                 assets.tree(props, rng, xy, crown_z, radius, column, detail)
             props.tree_shadows.append(props.casters[first:])  # soft, one per tree
             del props.casters[first:]
+        _shrubs(props, detail, road, side, verge, blocked, cfg.trees_per_100m, to_sun)
         placed: list[tuple[np.ndarray, float]] = []
         n_buildings = rng.poisson(cfg.buildings_per_100m * road.length_m / 100.0)
         for _ in range(n_buildings):
@@ -178,6 +183,30 @@ def _scenery(props: assets.Props, rng: np.random.Generator, road: Road, scenario
                 assets.building(props, rng, xy, th, length, depth, height)
 
 
+def _shrubs(props: assets.Props, detail: np.random.Generator, road: Road, side: str,
+            verge: float, blocked: list[tuple[float, float, float]], trees_per_100m: float,
+            to_sun: np.ndarray) -> None:
+    """Bushes beside the gravel on one side, SHRUBS_PER_TREE per scenery tree (real verges
+    have dark scrub among the dry grass), 2-25 m beyond the gravel, drawn from `detail` (the
+    trees' and buildings' draws stay); as the trees, none whose shadow would reach the gravel
+    or that stands in another prop's place."""
+    sign = 1.0 if side == "left" else -1.0
+    for _ in range(detail.poisson(SHRUBS_PER_TREE * trees_per_100m * road.length_m / 100.0)):
+        s = detail.uniform(0.0, road.length_m)
+        off = min(SHRUB_OFFSET_M[0] + detail.exponential(6.0), SHRUB_OFFSET_M[1])
+        radius, height = detail.uniform(0.7, 1.8), detail.uniform(0.8, 2.2)
+        xy = road.position(s, verge + sign * (off + radius))
+        reach = _towards_road(road, s, sign, to_sun) * height
+        if any(a <= s <= b and off < o for a, b, o in blocked) or reach > off - 1.0:
+            continue
+        if not _clear_of_road(road, xy, abs(verge) + radius + 1.0):
+            continue
+        first = len(props.casters)
+        assets.shrub(props, detail, xy, radius, height)
+        props.tree_shadows.append(props.casters[first:])
+        del props.casters[first:]
+
+
 def _tree_shape(rng: np.random.Generator) -> tuple[str, float, float, float, float]:
     """(kind, crown radius, crown centre height, column, top height) of a scenery tree: a
     broadleaf (crowns 4-8 m across on 2-3 m of bare trunk), a poplar (a narrow crown carried
@@ -197,7 +226,7 @@ def _tree_shape(rng: np.random.Generator) -> tuple[str, float, float, float, flo
 
 
 def _skyline(props: assets.Props, rng: np.random.Generator, road: Road, skyline: str,
-             layout: WorldLayout) -> None:
+             layout: WorldLayout, detail: np.random.Generator) -> None:
     """Hills in a ring around the whole road, where the ground plane ends; "city" puts far
     buildings in front of lower hills. Too far to cast a shadow on anything we see."""
     if skyline == "none":
@@ -223,7 +252,11 @@ def _skyline(props: assets.Props, rng: np.random.Generator, road: Road, skyline:
         jitter = rng.uniform(-15.0, 15.0, n)
         tops = rng.uniform(6.0, 14.0, n) * (1.0 + 0.3 * shape)
         keep = np.repeat(rng.random(n // 4) < 0.6, 4)  # woods ~4 steps long, gaps between
-        props.add("prop_woods", tree_belt(centre, belt + jitter, tops, keep), cast=False)
+        # Ragged tops (`detail`: the other draws stay): crowns 3-4 m apart rising and falling.
+        ragged = detail.uniform(-0.3, 0.15, (n, BELT_COLUMNS))
+        ragged[:, 1::2] += 0.12
+        props.add("prop_woods", tree_belt(centre, belt + jitter, tops, keep, ragged=ragged),
+                  cast=False)
     if skyline != "city":
         return
     for a in rng.uniform(0.0, 2 * np.pi, 90):

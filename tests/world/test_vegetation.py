@@ -108,3 +108,25 @@ def test_contact_shadows_are_textured_per_vehicle():
     tex = spec.texture("cond_vehicle_0_contact_shadow")
     alpha = np.frombuffer(tex.data, np.uint8)[3::4]
     assert alpha.max() > 150 and alpha.min() == 0
+
+
+def test_shrubs_sit_on_the_ground_in_the_darkest_tint():
+    props = assets.Props()
+    assets.shrub(props, np.random.default_rng(4), np.array([5.0, 5.0]), 1.2, 1.6)
+    verts = props.meshes[assets.SHRUB_MATERIAL][0].vertices
+    assert verts[:, 2].min() == pytest.approx(0.0, abs=1e-9) and verts[:, 2].max() <= 1.6 + 1e-9
+    tints = [np.mean(t[:3]) for t in assets.FOLIAGE_TINTS]
+    assert int(assets.SHRUB_MATERIAL.rsplit("_", 1)[1]) == int(np.argmin(tints))
+
+
+def test_the_woods_have_ragged_tops():
+    from lanekeep.world.prop_meshes import tree_belt
+
+    n = 16
+    radii, heights = np.full(n, 300.0), np.full(n, 10.0)
+    ragged = np.random.default_rng(0).uniform(-0.3, 0.15, (n, 4))
+    mesh = tree_belt(np.zeros(2), radii, heights, np.ones(n, bool), ragged=ragged)
+    tops = mesh.vertices[mesh.vertices[:, 2] > 0.0, 2]
+    assert tops.std() > 0.5 and 6.9 < tops.min() and tops.max() < 11.6
+    flat = tree_belt(np.zeros(2), radii, heights, np.ones(n, bool))
+    assert np.allclose(flat.vertices[flat.vertices[:, 2] > 0.0, 2], 10.0)
