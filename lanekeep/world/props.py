@@ -9,7 +9,9 @@ do), all visual only (contype 0) in GROUP_WORLD: the segmentation render shows t
 non-marking pixels that hide the paint behind them. Everything the sun reaches casts its
 silhouette on the ground as one translucent overlay (GROUP_SHADOW, like the shadow zones in
 roadside.py, cut so that no ground point is shaded twice, also where a shadow zone's
-shadow lies). At night there is no sun to cast them.
+shadow lies); the scenery trees and shrubs cast soft shadows that follow their crowns down to
+their trunks, all in one textured overlay (lanekeep/world/shade.py `add_soft_shadows`). At night
+there is no sun to cast them.
 """
 
 from __future__ import annotations

@@ -31,6 +31,13 @@ centimetres to decimetres across); a tree zone's overlays carry a seeded RGBA te
 alpha has such holes (DAPPLE_LIGHT_SHARE of the area lit, soft-edged), tiled every
 OVERLAY_TILE_M on the ground.
 
+Trees beside the road. A scenery tree's (or shrub's) shadow is the union of its crown's lobes
+and its trunk cast along the sun, so it follows the crown's outline and starts at the trunk's
+foot; each is rasterised into a cell of one texture atlas (SOFT_CELL_PX texels), blurred by
+SOFT_EDGE_M and holed by CROWN_GAP_SHARE of sun through the leaves, and drawn as one quad per
+tree in one geom (`add_soft_shadows`): soft edges without the polygon clipping that costs
+seconds for hundreds of casters.
+
 MuJoCo blends each translucent geom twice (lanekeep/world/roadside.py `overlay_alpha`): an
 overlay that should keep T of the light is given the per-pass alpha 1 - sqrt(T).
 """
