@@ -5,8 +5,8 @@ the JPEG is on by default (each step off at 0 in CameraConfig).
 Order, as a camera works: the lens darkens the corners (vignetting, falloff 1 - k r^2 with r
 the radius relative to the corner), the sensor integrates with the exposure the auto-exposure
 set and adds its read noise (before the gain, so the gain amplifies it: night frames are
-noisier), the ISP maps the signal through gain and a tone curve whose toe lifts deep shadows (a
-shaded road is dark grey, not black); then the optics' and the demosaic's softness: a mild
+noisier), the ISP maps the signal through gain and an S-shaped tone curve (black level crushed,
+midtones lifted a little: `tone_curve`); then the optics' and the demosaic's softness: a mild
 glare (bloom) spreads light from near-saturated areas (a bright sky over the treeline, lamps at
 night) onto their darker surroundings, and a small Gaussian point spread (`lens_blur_px`) makes
 a hard edge rise over 2-3 px as on a real photo instead of the renderer's 1 px stair step
@@ -28,8 +28,8 @@ sunlit clear-day road's level (EXPOSURE_TARGET_DN), so day scenes keep a gain of
 and night are brightened, up to MAX_GAIN (never darkened: see MIN_GAIN). Highlight protection
 only limits brightening: the gain keeps the brightest 1% of the frame (a headlit road at
 night, a sunlit sky) at or below HIGHLIGHT_DN, so a lit road is not blown out (night gain ~2)
-and a shaded road under a bright sky is not pushed to a gain above 1 (the tone curve's toe
-keeps it dark grey).
+and a shaded road under a bright sky is not pushed to a gain above 1 (it stays dark grey, about
+a quarter of the sunlit road's luma, as on real frames).
 
 Noise is signal-independent read noise (default 1 DN; Conditions.noise adds up to 8 DN), with
 no separate shot-noise term: per-pixel signal-dependent noise costs four more full-frame passes.
@@ -57,7 +57,11 @@ EXPOSURE_TARGET_DN = 105.0  # road metering of a well-exposed frame (sunlit clea
 # closed loop on `fog` (car lateral RMS 4 -> 22 cm, max 71 cm; 4 cm without the darkening).
 MIN_GAIN, MAX_GAIN = 1.0, 4.0
 HIGHLIGHT_DN = 160.0  # brightening stops where the frame's 99th percentile reaches this
-TOE_LIFT, TOE_POWER, TOE_ONSET = 2.5, 8.0, 1.3  # tone toe: t + lift t^onset (1 - t)^power
+# Tone curve: a midtone lift (t + lift t^2 (1 - t)^power: +5 DN at a sunlit road's 77 DN, none
+# at black or white) and a black crush (- crush t exp(-t / scale): the black level a camera's
+# ISP subtracts, slope 0.6 at black), so deep shade stays deep as on real dashcam frames.
+TOE_LIFT, TOE_POWER = 2.2, 6.0
+BLACK_CRUSH, BLACK_SCALE = 0.4, 0.08
 METER_STEP_PX = 8  # metering reads every 8th pixel in both directions
 BLOOM_HALVINGS = 4  # the glare is computed at 1/16 of the frame's size
 BLOOM_THRESHOLD = (200.0, 200.0, 200.0, 0.0)  # display level (DN) above which a pixel glares
@@ -66,10 +70,17 @@ BLOOM_GAIN = 2.0  # the glare's excess gain at bloom = 1
 
 
 def tone_curve(t: np.ndarray) -> np.ndarray:
-    """Display value (0..1) of a normalised signal t (0..1): identity except the toe, which
-    lifts deep shadows (12 DN -> 20 DN, 38 -> 53) as a camera's gamma does, with slope 1 at
-    black (so a gained-up 8-bit night sky does not band); monotonic."""
-    return t + TOE_LIFT * t**TOE_ONSET * (1.0 - t) ** TOE_POWER
+    """Display value (0..1) of a normalised signal t (0..1): an S-curve as a camera's ISP
+    applies, its toe crushing deep shadows (8 DN -> 6, 20 -> 19, 38 -> 40) and its middle
+    lifting the midtones a little (77 -> 82, 105 -> 109); monotonic (slope 1 - BLACK_CRUSH at
+    black, so a gained-up 8-bit night sky does not band).
+
+    Real dashcam frames crush blacks (their darkest 1% at 7-8 DN, a fifth of TuSimple's frame
+    below 40 DN); the toe this replaced lifted them (12 DN -> 20, 38 -> 53), which left no
+    pixel of ours below ~15 DN and shaded road at 0.35-0.4 of the sunlit road's luma where
+    the shade's physics (lanekeep/world/shade.py) and real frames give ~0.26."""
+    lift = TOE_LIFT * t**2 * (1.0 - t) ** TOE_POWER
+    return t + lift - BLACK_CRUSH * t * np.exp(-t / BLACK_SCALE)
 
 
 @functools.lru_cache(maxsize=256)

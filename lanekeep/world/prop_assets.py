@@ -26,8 +26,12 @@ from lanekeep.world.prop_meshes import box, cone, ellipsoid, extrude, prism
 
 FACADE_WALLS = ((0.72, 0.68, 0.6), (0.55, 0.4, 0.32), (0.8, 0.8, 0.78), (0.45, 0.47, 0.5))
 SIGN_COLOURS = ((0.05, 0.38, 0.18), (0.06, 0.2, 0.55))
-FOLIAGE_TINTS = ((1.0, 1.0, 1.0, 1.0), (0.78, 0.88, 0.7, 1.0), (0.9, 0.85, 0.6, 1.0))
-CONIFER_TINT = (0.5, 0.62, 0.55, 1.0)
+FOLIAGE_TINTS = ((1.0, 1.0, 1.0, 1.0), (0.8, 0.85, 0.8, 1.0), (1.0, 0.92, 0.72, 1.0))
+CONIFER_TINT = (0.62, 0.7, 0.75, 1.0)  # darker and bluer than broadleaf crowns
+CROWN_LOBES = (5, 8)  # extra clumps of leaves on a scenery tree's crown (`tree` with detail)
+WOODS_TINT = (0.8, 0.85, 0.8, 1.0)  # the belt of woods before the hills
+SHRUB_MATERIAL = "prop_foliage_1"  # the darkest broadleaf tint
+CROWN_SEED = 0x920A  # the crowns' texture's stream
 RAIL_PROFILE = np.array([[0.0, 0.45], [-0.08, 0.53], [-0.08, 0.67], [0.0, 0.75],
                          [0.03, 0.75], [0.03, 0.45]])  # (outwards, up) m: W-beam, closed
 JERSEY_PROFILE = np.array([[0.0, 0.0], [0.0, 0.075], [0.165, 0.33], [0.23, 0.81],
@@ -47,10 +51,12 @@ def _sign_of(side: str) -> float:
 
 @dataclass
 class Props:
-    """Meshes collected per material and the 3D point sets of convex bodies that cast shadows."""
+    """Meshes collected per material, the 3D point sets of convex bodies that cast (hard)
+    shadows, and per scenery tree the point sets of its pieces (one soft shadow each)."""
 
     meshes: dict[str, list[Ribbon]] = field(default_factory=dict)
     casters: list[np.ndarray] = field(default_factory=list)
+    tree_shadows: list[list[np.ndarray]] = field(default_factory=list)  # soft, per tree
 
     def add(self, material: str, mesh: Ribbon, cast: bool = True) -> None:
         self.meshes.setdefault(material, []).append(mesh)
@@ -80,29 +86,46 @@ def add_prop_materials(spec: mujoco.MjSpec, seed: int, night: bool = False,
         tint = snow_on.snowy_tint
         add_material(spec, snow_on.SNOW_MATERIAL, None, rgba=[*snow_on.SNOW_RGB, 1.0],
                      specular=0.15, shininess=0.2)
+    # Broadleaf crowns: the leaf texture with a self-shaded underside (an ellipsoid's v runs
+    # from its bottom to its top once), from a stream of its own (the draws above stay).
+    crown = tex.foliage(np.random.default_rng([seed, CROWN_SEED]), underside=True)
+    if snow > 0.0:
+        crown = snow_on.snowy_foliage(crown, np.random.default_rng(
+            [seed, snow_on.PROP_SNOW_SEED, 2]), snow)
     add_texture(spec, "prop_foliage", leaves)
+    add_texture(spec, "prop_crown", crown)
     for k, rgba in enumerate(FOLIAGE_TINTS):
-        add_material(spec, f"prop_foliage_{k}", "prop_foliage", rgba=tint(rgba), specular=0.0)
-    # Conifers: darker and bluer than the broadleaf crowns, on the same leaf texture.
+        add_material(spec, f"prop_foliage_{k}", "prop_crown", rgba=tint(rgba), specular=0.0)
+    # Conifers: darker and bluer than the broadleaf crowns, on the leaf texture; the woods
+    # before the hills on it too (their faces' v is height in metres: no underside there).
     add_material(spec, "prop_conifer", "prop_foliage", rgba=tint(CONIFER_TINT), specular=0.0)
+    add_material(spec, "prop_woods", "prop_foliage", rgba=tint(WOODS_TINT), specular=0.0)
     add_material(spec, "prop_steel", None, rgba=[0.68, 0.7, 0.72, 1.0], specular=0.5,
                  shininess=0.4)
     add_material(spec, "prop_pole", None, rgba=[0.5, 0.52, 0.55, 1.0], specular=0.3)
-    add_material(spec, "prop_trunk", None, rgba=[0.3, 0.23, 0.17, 1.0], specular=0.0)
+    add_material(spec, "prop_trunk", None, rgba=[0.2, 0.16, 0.12, 1.0], specular=0.0)
     # Far hills: hazy (lighter, bluer, of little contrast) and untextured, since texture
     # detail is lost at 400 m while sampling it over a sixth of the frame costs render time.
-    add_material(spec, "prop_hills", None, rgba=[0.36, 0.47, 0.36, 1.0], specular=0.0,
+    # Greyed towards the sky's haze: far woods and fields lose their green (aerial perspective).
+    add_material(spec, "prop_hills", None, rgba=[0.37, 0.42, 0.37, 1.0], specular=0.0,
                  emission=0.02 if night else 0.25)
 
 
 def tree(props: Props, rng: np.random.Generator, base_xy: np.ndarray, crown_z_m: float,
-         radius_m: float, column_m: float = 0.0) -> None:
+         radius_m: float, column_m: float = 0.0,
+         detail: np.random.Generator | None = None) -> None:
     """A tree: a trunk and a crown around (base_xy, crown_z_m): a core ellipsoid `radius_m`
     wide (0.8 of that high) with leafy lumps bulging out of it; a tall tree (a poplar) carries
-    lumps down a column `column_m` long too. One shadow for the crown, one for the trunk."""
+    lumps down a column `column_m` long too. One shadow for the crown, one for the trunk.
+
+    With `detail` (a generator of its own, so `rng` draws as before) the core shrinks and
+    CROWN_LOBES more clumps of leaves, drawn from `detail`, make the crown's ragged outline:
+    a real crown is a few big clumps with gaps, not one ball."""
     material = f"prop_foliage_{int(rng.integers(len(FOLIAGE_TINTS)))}"
     centre = np.r_[base_xy, crown_z_m]
-    crowns = [ellipsoid(centre, (radius_m, radius_m, 0.8 * radius_m), n_lon=7)]
+    core = 0.65 if detail is not None else 1.0
+    crowns = [ellipsoid(centre, (core * radius_m, core * radius_m, 0.8 * core * radius_m),
+                        n_lon=10, n_lat=6)]
     n = int(rng.integers(2, 4)) + int(column_m / radius_m)
     for k in range(n):
         ang, tilt = rng.uniform(0.0, 2 * np.pi), rng.uniform(-0.3, 0.8)
@@ -111,10 +134,37 @@ def tree(props: Props, rng: np.random.Generator, base_xy: np.ndarray, crown_z_m:
         dist = 0.6 * radius_m
         lump = centre + [dist * math.cos(ang) * math.cos(tilt), dist * math.sin(ang) *
                          math.cos(tilt), 0.8 * dist * math.sin(tilt) - down]
-        crowns.append(ellipsoid(lump, (size, size, size * rng.uniform(0.8, 1.2)), 5, 3))
+        crowns.append(ellipsoid(lump, (size, size, size * rng.uniform(0.8, 1.2)), 8, 5))
+    if detail is not None:
+        lo, hi = CROWN_LOBES
+        for ang in detail.uniform(0.0, 2 * np.pi) + np.linspace(0.0, 2 * np.pi,
+                                                                int(detail.integers(lo, hi + 1)),
+                                                                endpoint=False):
+            tilt = detail.uniform(-0.35, 0.7)
+            size = radius_m * detail.uniform(0.38, 0.58)
+            dist = radius_m * detail.uniform(0.6, 0.85)
+            down = column_m * detail.uniform(0.0, 1.0)
+            lump = centre + [dist * math.cos(ang) * math.cos(tilt), dist * math.sin(ang)
+                             * math.cos(tilt), 0.8 * dist * math.sin(tilt) - down]
+            crowns.append(ellipsoid(lump, (size, size, size * detail.uniform(0.7, 1.0)), 8, 5))
     props.add(material, Ribbon.concatenate(crowns))
     trunk_r = 0.1 + 0.05 * radius_m
     props.add("prop_trunk", prism(np.r_[base_xy, 0.0], crown_z_m, trunk_r, sides=5))
+
+
+def shrub(props: Props, rng: np.random.Generator, base_xy: np.ndarray, radius_m: float,
+          height_m: float) -> None:
+    """A bush: 3-5 low clumps of leaves around base_xy sitting on the ground, `radius_m`
+    across and up to `height_m` high, on the darkest leaf tint (in the shade of its own
+    leaves, a shrub is the darkest thing beside a road). One soft shadow for all its clumps."""
+    clumps = []
+    for _ in range(int(rng.integers(3, 6))):
+        ang, dist = rng.uniform(0.0, 2 * np.pi), radius_m * rng.uniform(0.0, 0.55)
+        size = radius_m * rng.uniform(0.45, 0.7)
+        high = height_m * rng.uniform(0.6, 1.0)
+        centre = np.r_[base_xy + dist * np.array([math.cos(ang), math.sin(ang)]), 0.5 * high]
+        clumps.append(ellipsoid(centre, (size, size * rng.uniform(0.7, 1.0), 0.5 * high), 8, 5))
+    props.add(SHRUB_MATERIAL, Ribbon.concatenate(clumps))
 
 
 def conifer(props: Props, rng: np.random.Generator, base_xy: np.ndarray, height_m: float,

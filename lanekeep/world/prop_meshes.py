@@ -156,19 +156,31 @@ def hill_ring(centre_xy: np.ndarray, apron_m: float, radius_m: float, width_m: f
 
 
 def tree_belt(centre_xy: np.ndarray, radii_m: np.ndarray, heights_m: np.ndarray,
-              keep: np.ndarray, uv_m: float = 6.0) -> Ribbon:
+              keep: np.ndarray, uv_m: float = 6.0, ragged: np.ndarray | None = None) -> Ribbon:
     """A belt of woodland around centre_xy, seen from inside: per angle step (n,) a vertical
-    face from the ground to heights_m at radii_m, only where `keep`; faces turn inwards."""
+    face from the ground to heights_m at radii_m, only where `keep`; faces turn inwards.
+
+    `ragged` (n, k) splits each face into k columns whose top corners rise and fall by these
+    shares of the height (the crowns of a wood's edge, not a hedge's straight top)."""
     n = len(radii_m)
+    k = 1 if ragged is None else ragged.shape[1]
     ang = np.linspace(0.0, 2 * np.pi, n, endpoint=False)
     foot = centre_xy + radii_m[:, None] * np.stack([np.cos(ang), np.sin(ang)], 1)
     nxt = np.roll(np.arange(n), -1)
     i = np.flatnonzero(keep)
-    a, b = foot[i], foot[nxt[i]]
-    quads = np.stack([np.c_[a, np.zeros(len(i))], np.c_[b, np.zeros(len(i))],
-                      np.c_[b, heights_m[nxt[i]]], np.c_[a, heights_m[i]]], 1)
-    run = np.hypot(*(b - a).T)
-    uv = np.zeros((len(i), 4, 2))
+    f = np.arange(k + 1) / k  # column edges along a face
+    a = foot[i][:, None] + f[None, :, None] * (foot[nxt[i]] - foot[i])[:, None]  # (m, k+1, 2)
+    top = heights_m[i][:, None] + f[None] * (heights_m[nxt[i]] - heights_m[i])[:, None]
+    if ragged is not None:
+        bump = np.c_[ragged[i], ragged[nxt[i], :1]]  # a face ends where the next one starts
+        top = top * (1.0 + bump)
+    m = len(i)
+    p0, p1 = a[:, :-1].reshape(-1, 2), a[:, 1:].reshape(-1, 2)
+    t0, t1 = top[:, :-1].reshape(-1), top[:, 1:].reshape(-1)
+    zero = np.zeros(m * k)
+    quads = np.stack([np.c_[p0, zero], np.c_[p1, zero], np.c_[p1, t1], np.c_[p0, t0]], 1)
+    run = np.hypot(*(p1 - p0).T)
+    uv = np.zeros((m * k, 4, 2))
     uv[:, :, 0] = (np.cumsum(run) - run)[:, None] + np.array([0.0, 1.0, 1.0, 0.0]) * run[:, None]
     uv[:, :, 1] = quads[..., 2]
     # The first triangle's normal points outwards here (foot a, foot b, top b): reverse all.

@@ -13,6 +13,7 @@ FACADE_BAYS = 4  # window bays across a facade tile
 FACADE_FLOORS = 4  # floors up a facade tile
 FACADE_TILE_M = 12.0  # a facade tile is 4 bays of 3 m by 4 floors of 3 m
 CONCRETE_TILE_M = 6.0  # barrier segments are cast 6 m long: one joint per tile
+FOLIAGE_RGB = (0.3, 0.4, 0.17)  # lit leaves' albedo: dark olive green, as real crowns are
 
 
 def _rgb8(rgb: np.ndarray) -> np.ndarray:
@@ -77,10 +78,20 @@ def concrete(rng: np.random.Generator, size: int = 256) -> np.ndarray:
     return _rgb8(grey[..., None] * np.array([1.0, 0.99, 0.95], np.float32))
 
 
-def foliage(rng: np.random.Generator, size: int = 128) -> np.ndarray:
-    """Leaf clusters: light and dark green blobs, the edges a crown shows against the sky."""
+def foliage(rng: np.random.Generator, size: int = 128, underside: bool = False) -> np.ndarray:
+    """Leaf clusters: clumps of lit leaves with dark gaps between them (the inside of a crown,
+    in its own shade, shows through), the edges a crown shows against the sky. Real crowns
+    are dark (V 40-60 of 255 in dashcam frames) with strong contrast at the clump scale.
+
+    `underside`: the texture also darkens towards its bottom rows (v = 0: an ellipsoid's
+    lowest point, prop_meshes.ellipsoid), the self-shade of a crown's underside, which the sky
+    lights less than its top."""
     clumps = tiled_noise(rng, size, 3.0)
     leaves = tiled_noise(rng, size, 0.7)
-    grey = 0.55 + 0.22 * np.tanh(1.5 * clumps) + 0.12 * leaves
+    lit = 1.0 / (1.0 + np.exp(-2.2 * (clumps + 0.25)))  # 0 in the gaps between clumps
+    grey = 0.16 + 0.62 * lit + 0.14 * leaves * (0.3 + lit)
     grey = periodic_blur(grey, 0.4)
-    return _rgb8(grey[..., None] * np.array([0.42, 0.62, 0.28], np.float32))
+    if underside:
+        v = np.linspace(0.0, 1.0, size, dtype=np.float32)[:, None]
+        grey = grey * (0.45 + 0.55 * np.clip(v / 0.6, 0.0, 1.0) ** 0.8)
+    return _rgb8(grey[..., None] * np.array(FOLIAGE_RGB, np.float32))

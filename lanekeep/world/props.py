@@ -9,7 +9,9 @@ do), all visual only (contype 0) in GROUP_WORLD: the segmentation render shows t
 non-marking pixels that hide the paint behind them. Everything the sun reaches casts its
 silhouette on the ground as one translucent overlay (GROUP_SHADOW, like the shadow zones in
 roadside.py, cut so that no ground point is shaded twice, also where a shadow zone's
-shadow lies). At night there is no sun to cast them.
+shadow lies); the scenery trees and shrubs cast soft shadows that follow their crowns down to
+their trunks, all in one textured overlay (lanekeep/world/shade.py `add_soft_shadows`). At night
+there is no sun to cast them.
 """
 
 from __future__ import annotations
@@ -29,11 +31,16 @@ from lanekeep.world.parts import ConditionsInfo, WorldLayout, add_mesh_geom
 from lanekeep.world.prop_meshes import hill_ring, tree_belt
 from lanekeep.world.prop_snow import PROP_SNOW_SEED
 from lanekeep.world.roadside import cast_shadow, disjoint_pieces
-from lanekeep.world.shade import add_shadow_overlay, shade_transmission
+from lanekeep.world.shade import add_shadow_overlay, add_soft_shadows, shade_transmission
 
 TREE_OFFSET_M = (4.0, 40.0)  # scenery trees: from the gravel's outer edge (m)
 BUILDING_OFFSET_M = (15.0, 60.0)
 HILL_WIDTH_M = 200.0
+BELT_COLUMNS = 6  # columns of a woods face (prop_meshes.tree_belt's ragged top)
+SHRUBS_PER_TREE = 1.5  # bushes per scenery tree (roadside.trees_per_100m)
+SHRUB_OFFSET_M = (2.0, 25.0)  # from the gravel's outer edge (m)
+TREE_DETAIL_SEED = 0x920B  # the stream of the scenery crowns' lobes (`rng` draws as before)
+TREE_SHADE_SEED = 0x920C  # the stream of the gaps in their soft shadows
 TREE_KINDS = {"broadleaf": 0.55, "poplar": 0.15, "conifer": 0.3}  # shares of scenery trees
 
 
@@ -65,13 +72,20 @@ def add_props(spec: mujoco.MjSpec, scenario: Scenario, road: Road, to_sun: np.nd
     for s in cfg.overpasses_m:
         assets.overpass(props, road, s, layout)
     _scenery(props, rng, road, scenario, layout, to_sun)
-    _skyline(props, rng, road, cfg.skyline, layout)
+    _skyline(props, rng, road, cfg.skyline, layout,
+             np.random.default_rng([scenario.seed, TREE_DETAIL_SEED, 1]))
     for material, meshes in sorted(props.meshes.items()):
         add_mesh_geom(spec, material.replace("prop_", "props_", 1), Ribbon.concatenate(meshes),
                       material, GROUP_WORLD)
-    if props.casters and scenario.conditions.time_of_day != "night":
-        _add_shadows(spec, props, to_sun, info,
-                     shade_transmission(cfg.shadow_darkness, scenario.conditions))
+    if scenario.conditions.time_of_day != "night":
+        transmission = shade_transmission(cfg.shadow_darkness, scenario.conditions)
+        if props.casters:
+            _add_shadows(spec, props, to_sun, info, transmission)
+        if props.tree_shadows and add_soft_shadows(
+                spec, "props_shadow_trees", props.tree_shadows, to_sun, transmission,
+                np.random.default_rng([scenario.seed, TREE_SHADE_SEED])):
+            info.shadow_polygons.extend(cast_shadow(points, to_sun)
+                                        for group in props.tree_shadows for points in group)
 
 
 def _add_shadows(spec: mujoco.MjSpec, props: assets.Props, to_sun: np.ndarray,
@@ -79,8 +93,9 @@ def _add_shadows(spec: mujoco.MjSpec, props: assets.Props, to_sun: np.ndarray,
     """The props' cast shadows, as dark as skylight alone leaves shade (fog scatters the sun:
     lanekeep/world/shade.py), left out where a shadow zone's shadow already lies. Hard-edged:
     soft edges for hundreds of small casters cost ~8 s a world build in polygon clipping
-    (2026-11-27, cProfile of a dataset world), and a pole's or a crown's penumbra is narrow
-    near the ground, where the shadow is seen."""
+    (2026-11-27, cProfile of a dataset world), and a pole's penumbra is narrow near the
+    ground, where the shadow is seen. The scenery trees' shadows are soft
+    (shade.add_soft_shadows: a texture atlas, no clipping)."""
     polygons = [cast_shadow(points, to_sun) for points in props.casters]
     polygons = [p for p in polygons if len(p) >= 3]
     earlier = list(info.shadow_polygons)
@@ -123,6 +138,7 @@ def _scenery(props: assets.Props, rng: np.random.Generator, road: Road, scenario
     shadows stop 1 m short of the gravel (lower buildings, no tree where it would shade the
     road): shade on the road is what a scenario's `conditions.shadows` zones decide."""
     cfg = scenario.roadside
+    detail = np.random.default_rng([scenario.seed, TREE_DETAIL_SEED])  # crowns' extra lobes
     for side in SIDES:
         sign = 1.0 if side == "left" else -1.0
         verge = assets.verge_r(road, side, layout)
@@ -138,10 +154,14 @@ def _scenery(props: assets.Props, rng: np.random.Generator, road: Road, scenario
                 continue
             if not _clear_of_road(road, xy, abs(verge) + radius + 1.0):
                 continue
+            first = len(props.casters)
             if kind == "conifer":
                 assets.conifer(props, rng, xy, top, radius)
             else:
-                assets.tree(props, rng, xy, crown_z, radius, column)
+                assets.tree(props, rng, xy, crown_z, radius, column, detail)
+            props.tree_shadows.append(props.casters[first:])  # soft, one per tree
+            del props.casters[first:]
+        _shrubs(props, detail, road, side, verge, blocked, cfg.trees_per_100m, to_sun)
         placed: list[tuple[np.ndarray, float]] = []
         n_buildings = rng.poisson(cfg.buildings_per_100m * road.length_m / 100.0)
         for _ in range(n_buildings):
@@ -165,6 +185,30 @@ def _scenery(props: assets.Props, rng: np.random.Generator, road: Road, scenario
                 assets.building(props, rng, xy, th, length, depth, height)
 
 
+def _shrubs(props: assets.Props, detail: np.random.Generator, road: Road, side: str,
+            verge: float, blocked: list[tuple[float, float, float]], trees_per_100m: float,
+            to_sun: np.ndarray) -> None:
+    """Bushes beside the gravel on one side, SHRUBS_PER_TREE per scenery tree (real verges
+    have dark scrub among the dry grass), 2-25 m beyond the gravel, drawn from `detail` (the
+    trees' and buildings' draws stay); as the trees, none whose shadow would reach the gravel
+    or that stands in another prop's place."""
+    sign = 1.0 if side == "left" else -1.0
+    for _ in range(detail.poisson(SHRUBS_PER_TREE * trees_per_100m * road.length_m / 100.0)):
+        s = detail.uniform(0.0, road.length_m)
+        off = min(SHRUB_OFFSET_M[0] + detail.exponential(6.0), SHRUB_OFFSET_M[1])
+        radius, height = detail.uniform(0.7, 1.8), detail.uniform(0.8, 2.2)
+        xy = road.position(s, verge + sign * (off + radius))
+        reach = _towards_road(road, s, sign, to_sun) * height
+        if any(a <= s <= b and off < o for a, b, o in blocked) or reach > off - 1.0:
+            continue
+        if not _clear_of_road(road, xy, abs(verge) + radius + 1.0):
+            continue
+        first = len(props.casters)
+        assets.shrub(props, detail, xy, radius, height)
+        props.tree_shadows.append(props.casters[first:])
+        del props.casters[first:]
+
+
 def _tree_shape(rng: np.random.Generator) -> tuple[str, float, float, float, float]:
     """(kind, crown radius, crown centre height, column, top height) of a scenery tree: a
     broadleaf (crowns 4-8 m across on 2-3 m of bare trunk), a poplar (a narrow crown carried
@@ -184,7 +228,7 @@ def _tree_shape(rng: np.random.Generator) -> tuple[str, float, float, float, flo
 
 
 def _skyline(props: assets.Props, rng: np.random.Generator, road: Road, skyline: str,
-             layout: WorldLayout) -> None:
+             layout: WorldLayout, detail: np.random.Generator) -> None:
     """Hills in a ring around the whole road, where the ground plane ends; "city" puts far
     buildings in front of lower hills. Too far to cast a shadow on anything we see."""
     if skyline == "none":
@@ -210,7 +254,11 @@ def _skyline(props: assets.Props, rng: np.random.Generator, road: Road, skyline:
         jitter = rng.uniform(-15.0, 15.0, n)
         tops = rng.uniform(6.0, 14.0, n) * (1.0 + 0.3 * shape)
         keep = np.repeat(rng.random(n // 4) < 0.6, 4)  # woods ~4 steps long, gaps between
-        props.add("prop_foliage_1", tree_belt(centre, belt + jitter, tops, keep), cast=False)
+        # Ragged tops (`detail`: the other draws stay): crowns 3-4 m apart rising and falling.
+        ragged = detail.uniform(-0.3, 0.15, (n, BELT_COLUMNS))
+        ragged[:, 1::2] += 0.12
+        props.add("prop_woods", tree_belt(centre, belt + jitter, tops, keep, ragged=ragged),
+                  cast=False)
     if skyline != "city":
         return
     for a in rng.uniform(0.0, 2 * np.pi, 90):

@@ -8,8 +8,9 @@ casters (roadside.py) a vehicle's shadow is drawn: two dark translucent polygons
 GROUP_SHADOW (hidden from the segmentation render, so the marking masks stay exact), children of
 the mocap body so they drive along:
 
-  - a contact shadow: the footprint, a little larger, darkness CONTACT_DARKNESS (the road under
-    a car gets no sky light, sun or not);
+  - a contact shadow: ambient occlusion, a soft-edged texture over the footprint grown by
+    CONTACT_FRINGE_M, darkness CONTACT_DARKNESS under the body's middle (the road under a car
+    gets neither sun nor most of the sky, sun or not: the dark band real cars stand on);
   - the cast shadow: the convex hull of all parts' corners cast along the sun onto the road,
     computed in the vehicle's frame for its heading at the build. As the road turns, the
     shadow turns with the vehicle: its tip errs by the turn angle times the shadow's length
@@ -44,6 +45,7 @@ from lanekeep.world.parts import (
 )
 from lanekeep.world.prop_meshes import ellipsoid
 from lanekeep.world.roadside import cast_shadow, overlay_alpha
+from lanekeep.world.shade import TRANSLUCENT_ALPHA
 from lanekeep.world.vehicle_assets import Part, vehicle_parts
 from lanekeep.world.vehicle_textures import textured_box, trailer_texture
 
@@ -52,7 +54,9 @@ if TYPE_CHECKING:
 
 SUN_SHADOW_DARKNESS = 0.55  # as a ShadowZone's default, under the full day sun
 DAY_SUN_DIFFUSE = 0.75  # world_lighting.LIGHTING["day"]: the sun of SUN_SHADOW_DARKNESS
-CONTACT_DARKNESS = 0.7  # the road under a car gets neither sun nor most of the sky
+CONTACT_DARKNESS = 0.85  # the road under a car's middle gets neither sun nor most of the sky
+CONTACT_FRINGE_M = 0.4  # how far beyond the footprint the body's ambient occlusion reaches
+CONTACT_TEXELS = 64  # the contact shadow's texture (per vehicle: its proportions)
 DAY_GLASS_GLOW = 0.35  # emission of the glass by day: the sky it mirrors
 GLOW_ALPHA = 0.3  # a lit lamp's glow
 LIGHTS_ON_BELOW = 0.5  # sun diffuse under which vehicles drive with lights on (dawn, dusk, night)
@@ -175,14 +179,30 @@ def _add_glows(spec: mujoco.MjSpec, body, name: str, parts: list[Part]) -> None:
                       material=material, group=GROUP_SHADOW, contype=0, conaffinity=0, mass=1.0)
 
 
-def contact_polygon(parts: list[Part], margin_m: float = 0.05) -> np.ndarray:
-    """Footprint of the parts (mirrors aside: they are high above the road) grown by a margin,
-    corners cut: CCW octagon (8, 2)."""
+def contact_polygon(parts: list[Part], margin_m: float = CONTACT_FRINGE_M) -> np.ndarray:
+    """Footprint of the parts (mirrors aside: they are high above the road) grown by a margin:
+    the contact shadow's quad, CCW (4, 2), vehicle frame."""
     pts = np.concatenate([p.corners() for p in parts if not p.name.startswith("mirror")])
     (x0, y0), (x1, y1) = pts[:, :2].min(0) - margin_m, pts[:, :2].max(0) + margin_m
-    c = 0.25 * min(x1 - x0, y1 - y0)
-    return np.array([[x1 - c, y0], [x1, y0 + c], [x1, y1 - c], [x1 - c, y1],
-                     [x0 + c, y1], [x0, y1 - c], [x0, y0 + c], [x0 + c, y0]])
+    return np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1]])
+
+
+def contact_darkness(length_m: float, width_m: float, texels: int = CONTACT_TEXELS
+                     ) -> np.ndarray:
+    """(texels, texels) darkness (1 - light kept) of the road under and around a footprint
+    length_m x width_m, over the footprint grown by CONTACT_FRINGE_M: CONTACT_DARKNESS where
+    the body hides nearly all the sky (more than 0.2 m inside its outline), about 0.65 of
+    that at the outline, fading to none CONTACT_FRINGE_M beyond it (ambient occlusion:
+    the skylight a car's body and sills block, the dark band real cars stand on)."""
+    f = CONTACT_FRINGE_M
+    along = (np.arange(texels) + 0.5) / texels * (length_m + 2 * f) - 0.5 * length_m - f
+    across = (np.arange(texels) + 0.5) / texels * (width_m + 2 * f) - 0.5 * width_m - f
+    dx = np.abs(along)[None, :] - 0.5 * length_m
+    dy = np.abs(across)[:, None] - 0.5 * width_m
+    outside = np.hypot(np.maximum(dx, 0.0), np.maximum(dy, 0.0))
+    d = outside + np.minimum(np.maximum(dx, dy), 0.0)  # signed distance to the outline (m)
+    ramp = np.clip(0.65 - d / (0.6 * f / 0.4), 0.0, 1.0)
+    return (CONTACT_DARKNESS * ramp * ramp * (3.0 - 2.0 * ramp)).astype(np.float32)
 
 
 def cast_polygon(parts: list[Part], to_sun_local: np.ndarray) -> np.ndarray:
@@ -192,11 +212,20 @@ def cast_polygon(parts: list[Part], to_sun_local: np.ndarray) -> np.ndarray:
 
 def _add_shadows(spec: mujoco.MjSpec, body, name: str, parts: list[Part], yaw: float,
                  to_sun: np.ndarray | None, sun: float) -> None:
-    contact = _material(spec, "cond_vehicle_contact_shadow",
-                        rgba=[0.0, 0.0, 0.0, overlay_alpha(CONTACT_DARKNESS)], specular=0.0,
-                        shininess=0.0)
-    _add_polygon(spec, body, f"{name}_contact_shadow", contact_polygon(parts),
-                 OVERLAY_Z_M + 0.004, contact)
+    quad = contact_polygon(parts)
+    length, width = quad[2] - quad[0] - 2.0 * CONTACT_FRINGE_M
+    darkness = contact_darkness(float(length), float(width))
+    rgba = np.zeros((*darkness.shape, 4), np.uint8)
+    per_pass = 1.0 - np.sqrt(1.0 - darkness)  # overlay_alpha: MuJoCo blends it twice
+    rgba[..., 3] = np.clip(np.round(255.0 * per_pass / TRANSLUCENT_ALPHA), 0, 255)
+    texture = spec.add_texture(name=f"{name}_contact_shadow", nchannel=4,
+                               type=mujoco.mjtTexture.mjTEXTURE_2D,
+                               width=rgba.shape[1], height=rgba.shape[0])
+    texture.data = np.ascontiguousarray(rgba).tobytes()
+    add_material(spec, f"{name}_contact_shadow", f"{name}_contact_shadow",
+                 rgba=[1.0, 1.0, 1.0, TRANSLUCENT_ALPHA], specular=0.0, shininess=0.0)
+    _add_polygon(spec, body, f"{name}_contact_shadow", quad, OVERLAY_Z_M + 0.004,
+                 f"{name}_contact_shadow", uv=np.array([[0, 0], [1, 0], [1, 1], [0, 1]], float))
     darkness = SUN_SHADOW_DARKNESS * min(1.0, sun / DAY_SUN_DIFFUSE)
     if to_sun is None or to_sun[2] <= 0.0 or darkness < 0.05:
         return
@@ -208,14 +237,16 @@ def _add_shadows(spec: mujoco.MjSpec, body, name: str, parts: list[Part], yaw: f
 
 
 def _add_polygon(spec: mujoco.MjSpec, body, name: str, poly: np.ndarray, z_m: float,
-                 material: str) -> None:
-    """A flat convex polygon (CCW, body frame) as a triangle-fan mesh geom in GROUP_SHADOW."""
+                 material: str, uv: np.ndarray | None = None) -> None:
+    """A flat convex polygon (CCW, body frame) as a triangle-fan mesh geom in GROUP_SHADOW,
+    with texture coordinates `uv` (n, 2) per corner if given."""
     n = len(poly)
     verts = np.c_[poly, np.full(n, z_m)]
     i = np.arange(1, n - 1)
     faces = np.stack([np.zeros_like(i), i, i + 1], 1)
+    extra = {} if uv is None else {"usertexcoord": np.asarray(uv, float).ravel().tolist()}
     spec.add_mesh(name=name, uservert=verts.ravel().tolist(), userface=faces.ravel().tolist(),
-                  inertia=mujoco.mjtMeshInertia.mjMESH_INERTIA_SHELL)
+                  inertia=mujoco.mjtMeshInertia.mjMESH_INERTIA_SHELL, **extra)
     body.add_geom(name=name, type=mujoco.mjtGeom.mjGEOM_MESH, meshname=name, material=material,
                   group=GROUP_SHADOW, contype=0, conaffinity=0, mass=1.0)
 

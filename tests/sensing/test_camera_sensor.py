@@ -72,6 +72,18 @@ def test_shade_is_dark_grey_not_black():
     assert 17 <= toe_only.mean() <= 25
 
 
+def test_the_tone_curve_crushes_blacks_and_keeps_the_midtones():
+    """Real dashcams crush deep shadows (their darkest 1% at 7-8 DN): the curve darkens them,
+    keeps shaded road about where the shade's physics puts it and a sunlit road's midtones."""
+    t = np.arange(256) / 255.0
+    out = 255.0 * tone_curve(t)
+    assert np.all(np.diff(out) > 0)  # monotonic
+    assert out[8] < 7 and out[4] < 3.5  # blacks crushed
+    assert abs(out[25] - 25) < 2.5  # shaded road (~0.26 of a sunlit one)
+    assert 0 <= out[80] - 80 <= 8 and abs(out[160] - 160) < 4  # a sunlit road, the sky
+    assert out[255] == pytest.approx(255, abs=0.01)
+
+
 def test_auto_exposure_is_causal_and_follows_with_its_time_constant():
     rng = np.random.default_rng(0)
     sensor = _sensor(read_noise_dn=0.0, vignetting=0.0, exposure_time_constant_s=0.3)
