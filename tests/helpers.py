@@ -32,9 +32,9 @@ def small_scenario(name: str = "clear_curve", seconds: float | None = None,
 def small_scenario_text(name: str = "clear_straight", seconds: float | None = None,
                         width: int = 320, height: int = 180, keep_criteria: bool = False) -> str:
     """The shipped scenario file `name` as TOML text, `seconds` long (None: the file's own), with
-    its `[camera]` (or a new one) at `width` x `height`, for tests that hand a file to the CLI. Without its
-    `[criteria]` (the last table of a shipped file; its limits are tuned for 1280x720 frames)
-    unless `keep_criteria`."""
+    its `[camera]` (or a new one) at `width` x `height`, for tests that hand a file to the CLI.
+    Without its `[criteria]` (the last table of a shipped file; its limits are tuned for
+    1280x720 frames) unless `keep_criteria`."""
     text = Path(load_scenario(name).source).read_text(encoding="utf-8")
     if seconds is not None:
         text, n = re.subn(r"^duration_s = [0-9.]+", f"duration_s = {seconds}", text, count=1,

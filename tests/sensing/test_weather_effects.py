@@ -7,12 +7,12 @@ import mujoco
 import numpy as np
 import pytest
 
+from lanekeep.mjcf import SCENE_XML
 from lanekeep.scenario.schema import Conditions, load_scenario
 from lanekeep.sensing.cameras import CameraRig, RenderSettings
 from lanekeep.sensing.lens_drops import LensDrops
 from lanekeep.sensing.snapshot import place_on_road
 from lanekeep.sensing.weather import DEPTH_STEP_PX, Weather
-from lanekeep.mjcf import SCENE_XML
 from lanekeep.world.camera_mount import camera_from_model
 from lanekeep.world.lighting import fog_visibility_m
 
