@@ -32,9 +32,9 @@ def small_scenario(name: str = "clear_curve", seconds: float | None = None,
 def small_scenario_text(name: str = "clear_straight", seconds: float | None = None,
                         width: int = 320, height: int = 180, keep_criteria: bool = False) -> str:
     """The shipped scenario file `name` as TOML text, `seconds` long (None: the file's own), with
-    a `[camera]` of `width` x `height`, for tests that hand a file to the CLI. Without its
-    `[criteria]` (the last table of a shipped file; its limits are tuned for 1280x720 frames)
-    unless `keep_criteria`."""
+    its `[camera]` (or a new one) at `width` x `height`, for tests that hand a file to the CLI.
+    Without its `[criteria]` (the last table of a shipped file; its limits are tuned for
+    1280x720 frames) unless `keep_criteria`."""
     text = Path(load_scenario(name).source).read_text(encoding="utf-8")
     if seconds is not None:
         text, n = re.subn(r"^duration_s = [0-9.]+", f"duration_s = {seconds}", text, count=1,
@@ -42,6 +42,13 @@ def small_scenario_text(name: str = "clear_straight", seconds: float | None = No
         assert n == 1, f"{name} names no duration_s"
     if not keep_criteria:
         text = text.split("\n[criteria]")[0]
-    assert "\n[camera]" not in text, f"{name} has its own [camera] table"
-    return text + f"\n[camera]\nwidth = {width}\nheight = {height}\n"
+    size = f"width = {width}\nheight = {height}\n"
+    if "\n[camera]" not in text:
+        return text + f"\n[camera]\n{size}"
+    # its own [camera] table (the dashcam preset, #59): the size goes in there
+    head, tail = text.split("\n[camera]", 1)
+    header, body = tail.split("\n", 1)
+    table = body.split("\n[", 1)[0]
+    assert not re.search(r"^(width|height)\s*=", table, flags=re.M), f"{name} sets its size"
+    return f"{head}\n[camera]{header}\n{size}{body}"
 

@@ -12,8 +12,10 @@ Which streams fold the name (each with its own tag, so one shifts no other):
     camera noise, and the sensors' stream spawned from it;
   - the start and traffic-timing jitter (lanekeep/scenario/nuisance.py, NUISANCE_STREAM);
   - the drawn traffic (lanekeep/world/traffic_flow.py, TRAFFIC_STREAM).
-The world's static details (textures, props, paint wear, sky: lanekeep/world/) keep their
-seed-only streams: they are the scene, not the drive.
+The world's static details (textures, props, paint wear: lanekeep/world/) keep their
+seed-only streams: they are the scene, not the drive. The sky (lanekeep/world/sky.py) folds the
+name too: it does not depend on the road, so on a shared seed it was the one detail that made
+different scenarios look the same.
 """
 
 from __future__ import annotations

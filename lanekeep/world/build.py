@@ -54,7 +54,7 @@ from lanekeep.world.parts import (
     add_texture,
 )
 from lanekeep.world.pavement import LANE_U, SLAB_M
-from lanekeep.world.sky import SKY_SEED, sky_texture
+from lanekeep.world.sky import sky_generator, sky_texture
 from lanekeep.world.street_lights import update_pools
 from lanekeep.world.traffic import make_flow, update_dynamic
 from lanekeep.world.vehicle import Car
@@ -153,7 +153,7 @@ def _add_environment(spec: mujoco.MjSpec, road: Road, scenario: Scenario,
     spec.visual.headlight.diffuse = [lighting.headlight_diffuse] * 3
     spec.visual.headlight.specular = [0.0, 0.0, 0.0]
     sky = sky_texture(lighting.sky_zenith, lighting.sky_horizon, lighting.clouds,
-                      lighting.overcast, np.random.default_rng([scenario.seed, SKY_SEED]))
+                      lighting.overcast, sky_generator(scenario.seed, scenario.name))
     texture = spec.add_texture(name="sky", type=mujoco.mjtTexture.mjTEXTURE_SKYBOX,
                                width=sky.shape[1], height=sky.shape[0], nchannel=3)
     texture.data = sky.tobytes()

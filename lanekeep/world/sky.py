@@ -12,6 +12,11 @@ only as faintly lighter patches against the near-black zenith and darker ones ag
 (blended in as the time of day's light fades, NIGHT_LIGHT). Below the horizon (seen only past
 the end of the ground) the texture is the horizon colour.
 
+The clouds are drawn from the scenario's seed and a key of its name (`sky_generator`): with the
+seed alone, the shipped scenarios that share a seed (clear_curve, clear_straight, s_bend and
+sharp_turn all have seed 0) had one and the same cloud map. The same file and seed still draw
+the same sky in any process (lanekeep/scenario/streams.py's name_key, a SHA-256 of the name).
+
 The texture is SKY_FACE_PX square per face; with the noise made at CLOUD_NOISE_PX and sampled
 with cv2.remap, building it costs ~30 ms once per world.
 """
@@ -23,8 +28,10 @@ import functools
 import cv2
 import numpy as np
 
+from lanekeep.scenario.streams import name_key
+
 SKY_FACE_PX = 256  # texels per cube face edge
-SKY_SEED = 0x5C1  # the sky's own generator: [scenario seed, this]
+SKY_SEED = 0x5C1  # the sky's own generator: [scenario seed, name key, this]
 CLOUD_NOISE_PX = 256  # the tileable cloud field's size
 CLOUD_OCTAVES = (4, 8, 16, 32, 64)  # cells across the field per octave
 CLOUD_DECK_SCALE = 0.35  # field tiles per unit of (horizontal / vertical) ray length
@@ -34,6 +41,12 @@ FAIR_CLOUD_RGB = (0.96, 0.96, 0.97)  # sunlit cumulus top, at day; its base is g
 CLOUD_BASE_SHADE = 0.78  # the base's brightness relative to the top
 NIGHT_LIGHT = 0.3  # below this much of a day's light the clouds are lit by the glow only
 NIGHT_CLOUD_GLOW = 0.22  # a night cloud's brightness relative to the glow at the horizon
+
+
+def sky_generator(seed: int, name: str) -> np.random.Generator:
+    """The sky's generator for the scenario `name` on `seed`: its own stream (SKY_SEED), with
+    the name folded in so that scenarios sharing a seed do not share a sky."""
+    return np.random.default_rng([seed, name_key(name), SKY_SEED])
 
 
 @functools.lru_cache(maxsize=2)

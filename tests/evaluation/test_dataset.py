@@ -39,8 +39,9 @@ def _paint_at(world, rig, cam, uv) -> int:
 def test_remounted_camera_renders_what_its_model_projects(mount):
     """A point of the right edge line 12 m ahead, projected by the camera model read from the
     re-mounted model, lands on that line's paint in the segmentation render."""
-    base = load_scenario("clear_straight")
-    scenario = dataclasses.replace(base, camera=dataclasses.replace(
+    base = load_scenario("clear_straight")  # the mounts move the paper camera (the file's
+    base = dataclasses.replace(base, camera=dataclasses.replace(base.camera, preset="paper"))
+    scenario = dataclasses.replace(base, camera=dataclasses.replace(  # is the dashcam, #59)
         base.camera, width=640, height=360, show_hood=False, **mount))
     world = build(scenario)
     x, y, yaw = place_on_road(world, 40.0)

@@ -63,10 +63,12 @@ def test_masks_and_frames_are_bent_alike():
 
 
 def test_a_lens_that_folds_the_image_is_one_clear_error(tmp_path):
+    # case 4, a straight road with the paper's 120 deg camera (no [camera] table), where these
+    # coefficients fold; clear_straight has the 60 deg dashcam since #59, where they do not.
     with pytest.raises(ScenarioError, match="camera.distortion: .* folds the image"):
-        build(_with_lens("clear_straight", (-0.28, 0.08, 0.0, 0.0, -0.01)))
+        build(_with_lens("case4_half_shade_straight", (-0.28, 0.08, 0.0, 0.0, -0.01)))
     shipped = Path(lanekeep.__file__).parent / "scenario" / "shipped"
-    body = (shipped / "clear_straight.toml").read_text()
+    body = (shipped / "case4_half_shade_straight.toml").read_text()
     path = tmp_path / "folded.toml"
     path.write_text(body + "\n[camera]\ndistortion = [-0.28, 0.08, 0, 0, -0.01]\n")
     proc = subprocess.run([sys.executable, "-m", "lanekeep.cli", "render", str(path), "--out",

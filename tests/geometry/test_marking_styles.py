@@ -65,7 +65,8 @@ def test_shipped_highway_has_dots_between_the_left_lanes_and_a_yellow_left_edge(
 def test_dots_are_their_boundarys_marking_in_the_segmentation_render():
     scenario = load_scenario("highway_multilane")
     scenario = dataclasses.replace(scenario, conditions=dataclasses.replace(
-        scenario.conditions, vehicles=()))
+        scenario.conditions, vehicles=()), camera=dataclasses.replace(  # the paper camera the
+        scenario.camera, preset="paper"))  # count was set for (the file's dashcam since #59)
     world = build(scenario)
     with CameraRig(world.model, RenderSettings.of(scenario, 640, 360)) as rig:
         seg = rig.render_segmentation(world.data, "front")

@@ -13,6 +13,7 @@ from lanekeep.scenario.schema import CameraConfig, ScenarioError, load_scenario,
 from lanekeep.sensing.camera_sensor import MAX_GAIN, CameraSensor, tone_curve, vignetting_map
 from lanekeep.sensing.cameras import CameraRig, RenderSettings
 from lanekeep.sensing.snapshot import place_on_road
+from lanekeep.world.build import build
 
 H, W = 180, 320
 OPTICS_OFF = {"lens_blur_px": 0.0, "bloom": 0.0, "jpeg_quality": 0}  # the sensor alone
@@ -150,6 +151,10 @@ def test_bad_camera_keys_are_named(key, value):
 
 
 def test_the_hood_shows_low_in_the_front_image_only(straight_world):
+    # the paper camera: clear_straight's dashcam (#59) looks over the hood (no hood pixel)
+    base = straight_world.scenario
+    straight_world = build(dataclasses.replace(base, camera=dataclasses.replace(
+        base.camera, preset="paper")))
     hood = straight_world.model.geom("hood").id
     place_on_road(straight_world, 20.0)
     shares = {}

@@ -72,12 +72,18 @@ def test_ground_projection_round_trip():
         np.testing.assert_allclose(back, xy, atol=1e-9)
 
 
-@pytest.mark.parametrize("scenario,s_m,offset", [("clear_straight", 50.0, 0.0),
-                                                  ("clear_curve", 150.0, 0.4),
-                                                  ("sharp_turn", 95.0, -0.3)])
-def test_marking_points_project_onto_marking_pixels(scenario, s_m, offset):
+# sharp_turn at the paper camera: its file's dashcam (#59) sees the 40 m bend's edge line
+# 29-45 m ahead running across the image, under a pixel tall there, which the width test
+# below (along the view) does not catch (179 of 226 front points on paint, 2026-11-29).
+@pytest.mark.parametrize("scenario,s_m,offset,preset", [("clear_straight", 50.0, 0.0, None),
+                                                         ("clear_curve", 150.0, 0.4, None),
+                                                         ("sharp_turn", 95.0, -0.3, "paper")])
+def test_marking_points_project_onto_marking_pixels(scenario, s_m, offset, preset):
     # without the scenario's traffic, whose vehicles may hide paint from a camera
-    world = build(dataclasses.replace(load_scenario(scenario), traffic=Traffic()))
+    sc = load_scenario(scenario)
+    if preset is not None:
+        sc = dataclasses.replace(sc, camera=dataclasses.replace(sc.camera, preset=preset))
+    world = build(dataclasses.replace(sc, traffic=Traffic()))
     x, y, yaw = place_on_road(world, s_m, offset)
     with CameraRig(world.model) as rig:
         masks = {n: world.marking_mask(rig.render_segmentation(world.data, n))

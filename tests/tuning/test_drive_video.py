@@ -5,6 +5,7 @@ import json
 from lanekeep.cli.main import main as lanekeep_main
 from lanekeep.realcam.camera_file import read_camera_file
 from lanekeep.tuning.drive_video import main
+from lanekeep.world.camera_mount import DASHCAM_HEIGHT_M, DASHCAM_PITCH_DEG
 
 
 def test_a_drive_video_is_read_by_detect_with_its_camera(tmp_path, capsys):
@@ -12,8 +13,9 @@ def test_a_drive_video_is_read_by_detect_with_its_camera(tmp_path, capsys):
     assert main(["clear_straight", "--seconds", "0.5", "--size", "320x180",
                  "--out", str(out)]) == 0
     camera = read_camera_file(tmp_path / "drive.camera.toml")
-    assert (camera.width, camera.height, camera.height_m) == (320, 180, 1.5)
-    assert abs(camera.pitch_deg - 10.0) < 0.01  # the front camera looks 10 deg up (mjcf)
+    # clear_straight's front camera is the dashcam preset (#59): 1.4 m, 3.07 deg down
+    assert (camera.width, camera.height, camera.height_m) == (320, 180, DASHCAM_HEIGHT_M)
+    assert abs(camera.pitch_deg - DASHCAM_PITCH_DEG) < 0.01
     capsys.readouterr()
     assert lanekeep_main(["detect", "--sequence", str(out), "--camera",
                           str(tmp_path / "drive.camera.toml"), "--detector", "hough"]) == 0

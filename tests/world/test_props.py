@@ -98,14 +98,15 @@ def test_a_pole_casts_its_shadow_away_from_the_sun():
 
 def test_the_overpass_shades_the_road_where_the_sun_puts_its_deck(highway):
     scenario, road, _, info = highway
-    (s_bridge,) = scenario.roadside.overpasses_m
+    assert scenario.roadside.overpasses_m
     to_sun = sun_direction(scenario.conditions, road)
     shift = -to_sun[:2] / to_sun[2] * 6.4  # the deck's mid height
-    t = np.array([math.cos(road.heading_at(s_bridge)), math.sin(road.heading_at(s_bridge))])
-    s_shade = s_bridge + float(shift @ t)
     lanes = np.linspace(road.boundary_r(0) + 0.5, road.boundary_r(road.n_lanes) - 0.5, 9)
-    assert info.shaded(road.position(np.full(9, s_shade), lanes)).all()
-    assert not info.shaded(road.position(np.full(9, s_shade - 25.0), lanes)).any()
+    for s_bridge in scenario.roadside.overpasses_m:  # every bridge
+        t = np.array([math.cos(road.heading_at(s_bridge)), math.sin(road.heading_at(s_bridge))])
+        s_shade = s_bridge + float(shift @ t)
+        assert info.shaded(road.position(np.full(9, s_shade), lanes)).all(), s_bridge
+        assert not info.shaded(road.position(np.full(9, s_shade - 25.0), lanes)).any(), s_bridge
 
 
 def test_scenery_shadows_stay_off_the_road():
