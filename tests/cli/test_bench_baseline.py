@@ -13,7 +13,12 @@ import pytest
 from lanekeep.cli.main import main
 
 ROOT = Path(__file__).resolve().parents[2]
-SMALL = ["--seconds", "3", "--size", "320x180", "--quiet", "--workers", "1"]
+# clear_curve with the front camera this test was sized on, the paper's pose: with the dashcam
+# front camera its file now has (issue #59), three 3 s drives at 320x180 spread too much for a
+# 2 cm shift to be resolved (fused +1.08 cm [-0.12, +5.21]; with the paper's pose +0.94
+# [+0.20, +2.22], measured 2026-11-29). The gate is what is tested here, not the camera.
+SMALL = ["--seconds", "3", "--size", "320x180", "--quiet", "--workers", "1",
+         "--set", "camera.preset=paper"]
 FRONT = "hough,sliding_window,examples.sabotage:{}"
 
 
