@@ -28,7 +28,7 @@ FACADE_WALLS = ((0.72, 0.68, 0.6), (0.55, 0.4, 0.32), (0.8, 0.8, 0.78), (0.45, 0
 SIGN_COLOURS = ((0.05, 0.38, 0.18), (0.06, 0.2, 0.55))
 FOLIAGE_TINTS = ((1.0, 1.0, 1.0, 1.0), (0.8, 0.85, 0.8, 1.0), (1.0, 0.92, 0.72, 1.0))
 CONIFER_TINT = (0.62, 0.7, 0.75, 1.0)  # darker and bluer than broadleaf crowns
-CROWN_LOBES = (5, 8)  # extra clumps of leaves on a scenery tree's crown (`tree` with detail)
+CROWN_LOBES = (3, 5)  # extra clumps of leaves on a scenery tree's crown (`tree` with detail)
 WOODS_TINT = (0.8, 0.85, 0.8, 1.0)  # the belt of woods before the hills
 SHRUB_MATERIAL = "prop_foliage_1"  # the darkest broadleaf tint
 CROWN_SEED = 0x920A  # the crowns' texture's stream
@@ -125,7 +125,7 @@ def tree(props: Props, rng: np.random.Generator, base_xy: np.ndarray, crown_z_m:
     centre = np.r_[base_xy, crown_z_m]
     core = 0.65 if detail is not None else 1.0
     crowns = [ellipsoid(centre, (core * radius_m, core * radius_m, 0.8 * core * radius_m),
-                        n_lon=10, n_lat=6)]
+                        n_lon=8, n_lat=5)]
     n = int(rng.integers(2, 4)) + int(column_m / radius_m)
     for k in range(n):
         ang, tilt = rng.uniform(0.0, 2 * np.pi), rng.uniform(-0.3, 0.8)
@@ -134,7 +134,7 @@ def tree(props: Props, rng: np.random.Generator, base_xy: np.ndarray, crown_z_m:
         dist = 0.6 * radius_m
         lump = centre + [dist * math.cos(ang) * math.cos(tilt), dist * math.sin(ang) *
                          math.cos(tilt), 0.8 * dist * math.sin(tilt) - down]
-        crowns.append(ellipsoid(lump, (size, size, size * rng.uniform(0.8, 1.2)), 8, 5))
+        crowns.append(ellipsoid(lump, (size, size, size * rng.uniform(0.8, 1.2)), 6, 4))
     if detail is not None:
         lo, hi = CROWN_LOBES
         for ang in detail.uniform(0.0, 2 * np.pi) + np.linspace(0.0, 2 * np.pi,
@@ -146,7 +146,7 @@ def tree(props: Props, rng: np.random.Generator, base_xy: np.ndarray, crown_z_m:
             down = column_m * detail.uniform(0.0, 1.0)
             lump = centre + [dist * math.cos(ang) * math.cos(tilt), dist * math.sin(ang)
                              * math.cos(tilt), 0.8 * dist * math.sin(tilt) - down]
-            crowns.append(ellipsoid(lump, (size, size, size * detail.uniform(0.7, 1.0)), 8, 5))
+            crowns.append(ellipsoid(lump, (size, size, size * detail.uniform(0.7, 1.0)), 6, 4))
     props.add(material, Ribbon.concatenate(crowns))
     trunk_r = 0.1 + 0.05 * radius_m
     props.add("prop_trunk", prism(np.r_[base_xy, 0.0], crown_z_m, trunk_r, sides=5))
@@ -163,7 +163,7 @@ def shrub(props: Props, rng: np.random.Generator, base_xy: np.ndarray, radius_m:
         size = radius_m * rng.uniform(0.45, 0.7)
         high = height_m * rng.uniform(0.6, 1.0)
         centre = np.r_[base_xy + dist * np.array([math.cos(ang), math.sin(ang)]), 0.5 * high]
-        clumps.append(ellipsoid(centre, (size, size * rng.uniform(0.7, 1.0), 0.5 * high), 8, 5))
+        clumps.append(ellipsoid(centre, (size, size * rng.uniform(0.7, 1.0), 0.5 * high), 5, 3))
     props.add(SHRUB_MATERIAL, Ribbon.concatenate(clumps))
 
 
