@@ -14,7 +14,7 @@ from lanekeep.scenario.pavement import PavementStyle
 from lanekeep.scenario.schema import ScenarioError, load_scenario, parse_scenario
 from lanekeep.sensing.cameras import CameraRig, RenderSettings
 from lanekeep.world.build import build
-from lanekeep.world.pavement import LANE_U, SECTION_M, SEAM_INSET_M, pavement, sections
+from lanekeep.world.pavement import LANE_U, SEAM_INSET_M, SECTION_M, pavement, sections
 
 PERIOD_M = 9.0
 ROWS = 512
