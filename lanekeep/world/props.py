@@ -149,10 +149,7 @@ def _scenery(props: assets.Props, rng: np.random.Generator, road: Road, scenario
             off = min(TREE_OFFSET_M[0] + rng.exponential(10.0), TREE_OFFSET_M[1])
             kind, radius, crown_z, column, top = _tree_shape(rng)
             xy = road.position(s, verge + sign * (off + radius))
-            reach = _towards_road(road, s, sign, to_sun) * top
-            if any(a <= s <= b and off < o for a, b, o in blocked) or reach > off - 1.0:
-                continue
-            if not _clear_of_road(road, xy, abs(verge) + radius + 1.0):
+            if not _placeable(road, s, off, xy, radius, top, sign, verge, blocked, to_sun):
                 continue
             first = len(props.casters)
             if kind == "conifer":
@@ -185,6 +182,17 @@ def _scenery(props: assets.Props, rng: np.random.Generator, road: Road, scenario
                 assets.building(props, rng, xy, th, length, depth, height)
 
 
+def _placeable(road: Road, s: float, off: float, xy: np.ndarray, radius: float, height: float,
+               sign: float, verge: float, blocked: list[tuple[float, float, float]],
+               to_sun: np.ndarray) -> bool:
+    """Whether a plant `off` metres beyond the gravel at `s` may stand: not in another prop's
+    place, its shadow not reaching the gravel, its crown clear of the road."""
+    reach = _towards_road(road, s, sign, to_sun) * height
+    if any(a <= s <= b and off < o for a, b, o in blocked) or reach > off - 1.0:
+        return False
+    return _clear_of_road(road, xy, abs(verge) + radius + 1.0)
+
+
 def _shrubs(props: assets.Props, detail: np.random.Generator, road: Road, side: str,
             verge: float, blocked: list[tuple[float, float, float]], trees_per_100m: float,
             to_sun: np.ndarray) -> None:
@@ -198,10 +206,7 @@ def _shrubs(props: assets.Props, detail: np.random.Generator, road: Road, side: 
         off = min(SHRUB_OFFSET_M[0] + detail.exponential(6.0), SHRUB_OFFSET_M[1])
         radius, height = detail.uniform(0.7, 1.8), detail.uniform(0.8, 2.2)
         xy = road.position(s, verge + sign * (off + radius))
-        reach = _towards_road(road, s, sign, to_sun) * height
-        if any(a <= s <= b and off < o for a, b, o in blocked) or reach > off - 1.0:
-            continue
-        if not _clear_of_road(road, xy, abs(verge) + radius + 1.0):
+        if not _placeable(road, s, off, xy, radius, height, sign, verge, blocked, to_sun):
             continue
         first = len(props.casters)
         assets.shrub(props, detail, xy, radius, height)

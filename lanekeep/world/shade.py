@@ -155,12 +155,7 @@ def add_shadow_overlay(spec: mujoco.MjSpec, name: str, polygons: list[np.ndarray
         alpha = np.clip(np.round(255.0 * per_pass / TRANSLUCENT_ALPHA), 0, 255).astype(np.uint8)
         rgba = np.zeros((*alpha.shape, 4), np.uint8)
         rgba[..., 3] = alpha
-        tex = spec.add_texture(name=material, type=mujoco.mjtTexture.mjTEXTURE_2D,
-                               width=alpha.shape[1], height=alpha.shape[0], nchannel=4)
-        tex.data = np.ascontiguousarray(rgba).tobytes()
-        mat = spec.add_material(name=material, rgba=[1.0, 1.0, 1.0, TRANSLUCENT_ALPHA],
-                                specular=0.0, shininess=0.0)
-        mat.textures[mujoco.mjtTextureRole.mjTEXROLE_RGB] = material
+        add_shade_material(spec, material, rgba)
     else:
         alpha = 1.0 - math.sqrt(max(transmission, 0.0) ** share)
         spec.add_material(name=material, rgba=[0.0, 0.0, 0.0, alpha], specular=0.0,
@@ -178,6 +173,17 @@ def add_shadow_overlay(spec: mujoco.MjSpec, name: str, polygons: list[np.ndarray
                       GROUP_SHADOW)
         added += 1
     return added
+
+
+def add_shade_material(spec: mujoco.MjSpec, material: str, rgba: np.ndarray) -> None:
+    """A translucent overlay's texture (black, its shade in the alpha) and material, both
+    named `material`: drawn in MuJoCo's translucent pass (material alpha below 1)."""
+    tex = spec.add_texture(name=material, type=mujoco.mjtTexture.mjTEXTURE_2D,
+                           width=rgba.shape[1], height=rgba.shape[0], nchannel=4)
+    tex.data = np.ascontiguousarray(rgba).tobytes()
+    mat = spec.add_material(name=material, rgba=[1.0, 1.0, 1.0, TRANSLUCENT_ALPHA],
+                            specular=0.0, shininess=0.0)
+    mat.textures[mujoco.mjtTextureRole.mjTEXROLE_RGB] = material
 
 
 def soft_shadow_atlas(groups: list[list[np.ndarray]], to_sun: np.ndarray, transmission: float,
@@ -246,11 +252,6 @@ def add_soft_shadows(spec: mujoco.MjSpec, name: str, groups: list[list[np.ndarra
         return False
     rgba, mesh = soft_shadow_atlas(groups, to_sun, transmission, rng)
     material = f"{name}_shade"
-    tex = spec.add_texture(name=material, type=mujoco.mjtTexture.mjTEXTURE_2D,
-                           width=rgba.shape[1], height=rgba.shape[0], nchannel=4)
-    tex.data = np.ascontiguousarray(rgba).tobytes()
-    mat = spec.add_material(name=material, rgba=[1.0, 1.0, 1.0, TRANSLUCENT_ALPHA],
-                            specular=0.0, shininess=0.0)
-    mat.textures[mujoco.mjtTextureRole.mjTEXROLE_RGB] = material
+    add_shade_material(spec, material, rgba)
     add_mesh_geom(spec, name, mesh, material, GROUP_SHADOW)
     return True
