@@ -92,10 +92,12 @@ def ellipsoid(centre: np.ndarray, radii: tuple[float, float, float], n_lon: int 
     verts = (unit * np.asarray(radii) + centre).reshape(-1, 3)
     uv = np.stack([lo / np.pi, la / np.pi + 0.5], -1).reshape(-1, 2)
     idx = np.arange(verts.shape[0]).reshape(n_lat + 1, n_lon + 1)
-    # CCW seen from outside: east along a parallel, then north.
-    q = np.stack([idx[:-1, :-1], idx[:-1, 1:], idx[1:, 1:], idx[1:, :-1]], -1).reshape(-1, 4)
-    faces = np.concatenate([q[:, [0, 1, 2]], q[:, [0, 2, 3]]]).astype(np.int32)
-    return Ribbon(verts, faces, uv)
+    # CCW seen from outside: east along a parallel, then north. The quads touching a pole
+    # are triangles: their other half has zero area (no pixels, but vertex work), so it goes.
+    q = np.stack([idx[:-1, :-1], idx[:-1, 1:], idx[1:, 1:], idx[1:, :-1]], -1)
+    lower, upper = q[..., [0, 1, 2]], q[..., [0, 2, 3]]
+    faces = np.concatenate([lower[1:].reshape(-1, 3), upper[:-1].reshape(-1, 3)])
+    return Ribbon(verts, faces.astype(np.int32), uv)
 
 
 def extrude(road: Road, s0: float, s1: float, profile: np.ndarray, uv_m: float = 1.0,
