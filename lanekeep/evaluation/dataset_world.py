@@ -1,15 +1,16 @@
 """Random worlds for the LaneNet dataset: a whole scenario drawn from one seed.
 
 Paper 000 trains on real video; we train on the simulator, so what must transfer to real photos
-is varied in the world itself, not only in the image (lanekeep/evaluation/dataset.py renders these):
-roads of 1-5 lanes 3.3-3.9 m wide, straights, arcs and clothoids; asphalt of every tone and
-light concrete with cracks, patches and tyre marks; solid, dashed, double, worn and Botts'-dot
-boundaries; guard rails, barriers, poles, trees, buildings, overpasses; traffic of every size
-and colour in every lane; day, dawn, dusk and night, sun anywhere, shadows, wet, fog, rain,
-snow; cameras 1.2-1.9 m high with 62-120 deg of horizontal field of view, pitched so the
-horizon falls anywhere between rows 200 and 450 of 720, or (a quarter of the worlds) the
-`dashcam` preset's front camera (1.4 m, horizon near row 300) with a 56-64 deg lens; rolled
-and yawed a little; JPEG, noise, vignetting and blur.
+is varied in the world itself, not only in the image (lanekeep/evaluation/dataset.py renders
+these): roads of 1-5 lanes 3.3-3.9 m wide, straights, arcs and clothoids; asphalt of every tone
+and light concrete with cracks, patches and tyre marks, and (their own stream) tar lines,
+seams, oil stripes and sections of another surface; solid, dashed, double, worn and Botts'-dot
+boundaries, some with raised reflectors; guard rails, barriers, poles, trees, buildings,
+overpasses; traffic of every size and colour in every lane; day, dawn, dusk and night, sun
+anywhere, shadows, wet, fog, rain, snow; cameras 1.2-1.9 m high with 62-120 deg of horizontal
+field of view, pitched so the horizon falls anywhere between rows 200 and 450 of 720, or (a
+quarter of the worlds) the `dashcam` preset's front camera (1.4 m, horizon near row 300) with a
+56-64 deg lens; rolled and yawed a little; JPEG, noise, vignetting and blur.
 
 `random_scenario(seed)` is a pure function of the seed: the same seed builds the same world.
 The shares below were chosen for variety, not tuned on any score.
@@ -218,6 +219,30 @@ def _roadside(rng: np.random.Generator) -> Roadside:
     )
 
 
+def _structure(seed: int) -> dict:
+    """The road's structure (#59: tar lines, seams, an oil stripe, sections of another surface)
+    and raised reflectors on the inner lines, from their own stream so that every other draw
+    of the world stays: the false lines a detector must learn to ignore."""
+    rng = np.random.default_rng([seed, 0x5EA5])
+    return dict(
+        tar_lines=float(rng.uniform(0.0, 1.0)) if rng.random() < 0.5 else 0.0,
+        seams=float(rng.uniform(0.2, 1.0)) if rng.random() < 0.3 else 0.0,
+        oil_stripe=float(rng.uniform(0.2, 0.8)) if rng.random() < 0.4 else 0.0,
+        surface_changes=float(rng.uniform(0.1, 0.6)) if rng.random() < 0.25 else 0.0,
+        section_surface=_pick(rng, {"repaved": 0.5, "asphalt": 0.25, "concrete": 0.25}),
+        reflector_spacing_m=float(rng.uniform(10.0, 24.0)) if rng.random() < 0.3 else 0.0,
+    )
+
+
+def _with_reflectors(markings: tuple[MarkingStyle, ...], spacing_m: float
+                     ) -> tuple[MarkingStyle, ...]:
+    """The inner lines with raised reflectors every `spacing_m` (0: as they are)."""
+    if spacing_m <= 0.0:
+        return markings
+    inner = [dataclasses.replace(m, reflector_spacing_m=spacing_m) for m in markings[1:-1]]
+    return (markings[0], *inner, markings[-1])
+
+
 def draw_tag(rng: np.random.Generator) -> str:
     return _pick(rng, {"clear": 0.34, "shade": 0.14, "dusk": 0.08, "night": 0.1, "wet": 0.08,
                        "fog": 0.08, "rain": 0.1, "snow": 0.08})
@@ -232,6 +257,8 @@ def random_scenario(seed: int, tag: str | None = None, attempts: int = 20) -> Sc
     tag = tag or draw_tag(rng)
     if tag not in CONDITION_TAGS:
         raise ValueError(f"condition tag must be one of {CONDITION_TAGS}, got {tag!r}")
+    structure = _structure(seed)
+    reflectors = structure.pop("reflector_spacing_m")
     last: Exception | None = None
     for _ in range(attempts):  # a road that curves the shadows away is drawn again
         n_lanes = int(rng.choice([1, 2, 3, 4, 5], p=[0.05, 0.3, 0.3, 0.25, 0.1]))
@@ -244,12 +271,12 @@ def random_scenario(seed: int, tag: str | None = None, attempts: int = 20) -> Sc
                 road=RoadConfig(
                     segments=_segments(rng), n_lanes=n_lanes,
                     lane_width_m=float(rng.uniform(3.3, 3.9)), ego_lane=ego,
-                    markings=_markings(rng, n_lanes),
+                    markings=_with_reflectors(_markings(rng, n_lanes), reflectors),
                     start_heading_deg=float(rng.uniform(-180, 180)),
                     surface="concrete" if concrete else "asphalt",
                     asphalt_tone=float(rng.uniform(0.0, 1.0)),
                     cracks=float(rng.uniform(0.0, 0.8)), patches=float(rng.uniform(0.0, 0.6)),
-                    tyre_marks=float(rng.uniform(0.0, 0.8))),
+                    tyre_marks=float(rng.uniform(0.0, 0.8)), **structure),
                 seed=int(seed),
                 start=StartConfig(s_m=30.0),
                 camera=_camera(rng, dashcam),
