@@ -81,6 +81,28 @@ def test_random_worlds_vary_and_repeat():
         CONDITION_TAGS)
 
 
+def test_random_worlds_carry_road_structure_and_reflectors_from_their_own_stream():
+    """#59's road structure (tar lines, seams, oil stripe, sections of another surface) and
+    raised reflectors appear in some worlds and not in others, on the inner lines only; they
+    are drawn from a stream of their own, so a world's other draws do not depend on them."""
+    worlds = [random_scenario(s) for s in range(40)]
+    for key in ("tar_lines", "seams", "oil_stripe", "surface_changes"):
+        values = [getattr(w.road, key) for w in worlds]
+        assert any(v > 0.0 for v in values) and any(v == 0.0 for v in values), key
+    with_dots = [w for w in worlds if any(m.reflector_spacing_m > 0 for m in w.road.markings)]
+    assert 0 < len(with_dots) < len(worlds)
+    for w in with_dots:  # the edges never carry them
+        assert w.road.markings[0].reflector_spacing_m == 0.0
+        assert w.road.markings[-1].reflector_spacing_m == 0.0
+    # Seeds 0-2 as drawn before the structure came (36c6a89): lanes, width, cracks, segments.
+    before = {0: (4, 3.4760567709680883, 0.38731228686003427, 7),
+              1: (4, 3.6083897342378752, 0.33668121959371194, 8),
+              2: (4, 3.512140688694329, 0.6810763665917838, 7)}
+    for seed, drawn in before.items():
+        road = worlds[seed].road
+        assert (road.n_lanes, road.lane_width_m, road.cracks, len(road.segments)) == drawn
+
+
 def test_splits_never_share_a_world_seed():
     seeds = {split: {world_seed(SMALL, split, i) for i in range(200)}
              for split in ("train", "val", "test")}
