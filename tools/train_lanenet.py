@@ -204,6 +204,9 @@ def main(argv: list[str] | None = None) -> int:
                         help="train on pieces of K frames (1: frame by frame; default: whole)")
     parser.add_argument("--init", default="",
                         help="start from these weights (fine-tuning) instead of a seeded draw")
+    parser.add_argument("--worlds", default="",
+                        help="a JSON list of the training worlds to use (indices; default: all), "
+                             "as tools/dataset_content.py writes for a leave-content-out run")
     parser.add_argument("--resume", action="store_true",
                         help="go on from the checkpoint beside --out")
     args = parser.parse_args(argv)
@@ -213,7 +216,12 @@ def main(argv: list[str] | None = None) -> int:
     torch.manual_seed(args.seed)
     start = time.perf_counter()
     recipe, worlds = read_recipe(Path(args.data))
-    train, val = load_split(Path(args.data), "train"), load_split(Path(args.data), "val")
+    try:
+        chosen = json.loads(Path(args.worlds).read_text()) if args.worlds else None
+        train = load_split(Path(args.data), "train", chosen)
+    except (OSError, ValueError, TypeError) as exc:
+        raise SystemExit(f"train_lanenet: error: --worlds: {exc}") from None
+    val = load_split(Path(args.data), "val")
     if args.limit:
         train = {k: v[:args.limit] for k, v in train.items()}
     stored_frames = train["frames"].shape[1]
@@ -244,11 +252,12 @@ def main(argv: list[str] | None = None) -> int:
     first_epoch = 0
     ckpt = checkpoint_path(args.out)
     fixed = {k: getattr(args, k) for k in ("data", "epochs", "batch", "lr", "seed", "limit",
-                                            "occlusion", "clip", "init")}
+                                            "occlusion", "clip", "init", "worlds")}
     if args.resume and ckpt.is_file():
         state = torch.load(str(ckpt), map_location="cpu", weights_only=True)
-        if state.get("args") != fixed:
-            changed = sorted(k for k in fixed if state.get("args", {}).get(k) != fixed[k])
+        saved = {"worlds": "", **state.get("args", {})}  # checkpoints from before --worlds
+        if saved != fixed:
+            changed = sorted(k for k in fixed if saved.get(k) != fixed[k])
             raise SystemExit(f"train_lanenet: error: --resume with other arguments than the "
                              f"checkpoint's ({', '.join(changed)}): {ckpt}")
         model.load_state_dict(state["model"])

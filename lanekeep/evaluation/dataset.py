@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import json
 import math
+from collections.abc import Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
@@ -281,9 +282,17 @@ def read_recipe(root: Path) -> tuple[DatasetRecipe, dict[str, int]]:
     return DatasetRecipe(**blob["recipe"]), blob["worlds"]
 
 
-def load_split(root: Path, split: str) -> dict[str, np.ndarray]:
-    """All shards of a split concatenated (sequences along axis 0); `tag` per sequence."""
-    paths = sorted((Path(root) / split).glob("world_*.npz"))
+def load_split(root: Path, split: str, worlds: Sequence[int] | None = None
+               ) -> dict[str, np.ndarray]:
+    """All shards of a split concatenated (sequences along axis 0); `tag` per sequence.
+    `worlds`: only these world indices (each must be there)."""
+    if worlds is None:
+        paths = sorted((Path(root) / split).glob("world_*.npz"))
+    else:
+        paths = [shard_path(root, split, i) for i in sorted(set(worlds))]
+        missing = [p.name for p in paths if not p.is_file()]
+        if missing:
+            raise FileNotFoundError(f"{Path(root) / split}: no shard {missing[0]}")
     if not paths:
         raise FileNotFoundError(f"{Path(root) / split}: no shards")
     parts: dict[str, list] = {}

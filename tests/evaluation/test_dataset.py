@@ -153,3 +153,19 @@ def test_front_slots_left_of_right_and_camera_round_trip(shard):
             assert bottom[0] < bottom[1]
         camera = camera_from_vector(shard["camera"][i])
         assert camera.width == 1280 and camera.height == 720 and camera.fx > 0
+
+
+def test_a_shards_content_is_its_world_and_its_frames(shard, tmp_path):
+    """lanekeep/evaluation/dataset_content.py reads a stored shard: the world's drawn content
+    (from its seed) and a paint contrast measured on its front frames."""
+    from lanekeep.evaluation.dataset_content import world_content
+
+    path = tmp_path / "world_00000.npz"
+    np.savez(path, **shard)
+    content = world_content(path, 0)
+    scenario = random_scenario(int(shard["world_seed"]))
+    assert content.world_seed == int(shard["world_seed"]) and content.tag == str(shard["tag"])
+    assert content.dashcam == (scenario.camera.preset == "dashcam")
+    assert 0.0 <= content.shade_share <= 1.0 and content.vehicles_per_lane_km >= 0.0
+    assert content.paint_contrast_dn > 10.0  # this world's paint shows (56.5 DN on 2026-11-29)
+    assert 100.0 < content.horizon_row < 620.0
