@@ -64,7 +64,7 @@ class RenderSettings:
 
 
 class CameraRig:
-    """One reused `mujoco.Renderer` per camera; RGB and segmentation renders.
+    """One reused `mujoco.Renderer` for both cameras; RGB and segmentation renders.
 
     The ego car's body and tyres are hidden (group 2) as on AirSim's onboard cameras, except its
     hood (group 4) on the front camera when `show_hood` is set (it hides paint there in the
@@ -90,11 +90,12 @@ class CameraRig:
                                         for n, d in self.settings.distortion if is_distorted(d)}
         self.cameras.update({n: lens.camera for n, lens in self.lenses.items()})
         try:
-            self._renderers = {
-                n: mujoco.Renderer(model, height=h, width=w) for n in self.CAMERA_NAMES
-            }
+            # One renderer (one GL context, the world's textures uploaded once) for both
+            # cameras: every render sets its camera, options and flags anew.
+            shared = mujoco.Renderer(model, height=h, width=w)
         except Exception as exc:  # noqa: BLE001 - any GL failure means the same thing to a user
             raise RendererUnavailable(str(exc)) from exc
+        self._renderers = {n: shared for n in self.CAMERA_NAMES}
         self._rgb_option, self._seg_option = {}, {}
         for name in self.CAMERA_NAMES:
             rgb, seg = mujoco.MjvOption(), mujoco.MjvOption()
@@ -167,7 +168,7 @@ class CameraRig:
         context is current, which may be another open rig's (their ids coincide): that rig
         then renders with deleted textures. Each renderer's own context is made current first."""
         if not self._closed:
-            for renderer in self._renderers.values():
+            for renderer in {id(r): r for r in self._renderers.values()}.values():
                 if renderer._gl_context is not None:
                     renderer._gl_context.make_current()
                 renderer.close()
