@@ -21,10 +21,16 @@ from pathlib import Path
 
 import numpy as np
 
-from lanekeep.evaluation.dataset_content import FACTORS, content_rows, held_out, split_content
+from lanekeep.evaluation.dataset_content import (
+    FACTORS,
+    content_rows,
+    held_out,
+    label_contrast,
+    split_content,
+)
 
-COLUMNS = ("paint_contrast_dn", "vehicles_per_lane_km", "shade_share", "horizon_row",
-           "camera_height_m")
+COLUMNS = ("paint_contrast_dn", "label_contrast_dn", "vehicles_per_lane_km", "shade_share",
+           "horizon_row", "camera_height_m")
 
 
 def summary(rows: list[dict]) -> str:
@@ -38,6 +44,29 @@ def summary(rows: list[dict]) -> str:
     return "\n".join(lines)
 
 
+def real_contrast(folder: Path) -> str:
+    """The label-read paint contrast of each labelled real frame, at the network's size."""
+    from lanekeep.detectors.lanenet_model import LaneNetConfig, prepare_frame
+    from lanekeep.realcam.calibration import read_image
+
+    config, values, lines_out = LaneNetConfig(), [], []
+    labelled = sorted((folder / "labels").glob("*.txt"))
+    if not labelled:
+        raise ValueError(f"{folder}: no labels/*.txt")
+    for label in labelled:
+        image = read_image(folder / f"{label.stem}.jpg")
+        small = prepare_frame(image, config).transpose(1, 2, 0)
+        lines = [np.asarray([float(v) for v in row.split()]).reshape(-1, 2)
+                 for row in label.read_text().splitlines() if len(row.split()) >= 4]
+        full = (image.shape[1], image.shape[0])
+        value = label_contrast(np.ascontiguousarray(small), lines, full)
+        values.append(value)
+        lines_out.append(f"  {label.stem}: {value:.1f}")
+    finite = [v for v in values if math.isfinite(v)]
+    return "\n".join([f"real frames ({folder}), label_contrast_dn: median "
+                      f"{np.median(finite):.1f} over {len(finite)} frames", *lines_out])
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--data", required=True, help="dataset folder (tools/make_dataset.py)")
@@ -47,6 +76,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--count", type=int, default=80, help="worlds to drop")
     parser.add_argument("--seed", type=int, default=0, help="the random control's draw")
     parser.add_argument("--keep", help="write the kept training worlds (JSON list) here")
+    parser.add_argument("--real", help="also read the paint contrast at the labels of these "
+                        "real frames (N.jpg, labels/N.txt), as for the worlds' labels")
     args = parser.parse_args(argv)
     if bool(args.drop) != bool(args.keep):
         print("dataset_content: error: --drop and --keep go together", file=sys.stderr)
@@ -59,6 +90,12 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     rows = content_rows(content)
     print(summary(rows))
+    if args.real:
+        try:
+            print(real_contrast(Path(args.real)))
+        except (OSError, ValueError) as exc:
+            print(f"dataset_content: error: --real: {exc}", file=sys.stderr)
+            return 2
     if args.json:
         Path(args.json).write_text(json.dumps(rows, indent=1) + "\n")
     if args.keep:

@@ -21,7 +21,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from lanekeep.evaluation.dataset import camera_from_vector
+from lanekeep.evaluation.dataset import LABEL_ROWS, camera_from_vector
 from lanekeep.evaluation.dataset_world import ROAD_LENGTH_M, random_scenario
 
 FACTORS = ("paint_contrast", "traffic", "shade", "dashcam", "random")
@@ -36,6 +36,7 @@ class WorldContent:
     world_seed: int
     tag: str
     paint_contrast_dn: float  # NaN when no front frame shows enough paint
+    label_contrast_dn: float  # the same read at the labels, as on real frames (NaN: none)
     vehicles_per_lane_km: float
     shade_share: float  # share of the road's length inside a cast-shadow zone
     dashcam: bool
@@ -61,6 +62,37 @@ def paint_contrast(frames: np.ndarray, paint: np.ndarray) -> float:
     return float(np.median(values)) if values else math.nan
 
 
+def label_contrast(frame: np.ndarray, lines: list[np.ndarray], full: tuple[int, int] = (1280, 720),
+                   near_share: float = 0.4) -> float:
+    """Paint contrast read at labelled lane lines, the same way for our frames and real ones
+    (whose paint has no mask): per labelled point in the lowest `near_share` of the rows, the
+    brightest luma within 1 px of the line minus the median luma 3-6 px to either side, at the
+    frame's size (`frame`: RGB, e.g. the network's 320x176; `lines`: (N, 2) arrays of x, y in
+    `full`-size pixels). The 90th percentile over points, in DN; NaN without labelled near
+    points."""
+    luma = cv2.cvtColor(frame, cv2.COLOR_RGB2GRAY).astype(np.float32)
+    h, w = luma.shape
+    sx, sy = w / full[0], h / full[1]
+    values = []
+    for line in lines:
+        for x, y in np.asarray(line, dtype=float).reshape(-1, 2):
+            u, v = int(round(x * sx)), int(round(y * sy))
+            if not (v >= h * (1.0 - near_share) and v < h and 7 <= u < w - 7):
+                continue
+            row = luma[v]
+            side = np.concatenate([row[u - 6:u - 2], row[u + 3:u + 7]])
+            values.append(float(row[u - 1:u + 2].max() - np.median(side)))
+    # Labels run on through dash gaps (TuSimple's and ours), so most points of a dashed line
+    # see road: the 90th percentile reads the paint where there is any.
+    return float(np.percentile(values, 90)) if values else math.nan
+
+
+def stored_lines(xs: np.ndarray) -> list[np.ndarray]:
+    """A stored frame's labelled boundaries (xs: (boundaries, LABEL_ROWS)) as (N, 2) x, y."""
+    return [np.stack([x[ok], LABEL_ROWS[ok]], 1) for x in xs
+            if (ok := np.isfinite(x)).sum() >= 2]
+
+
 def horizon_row(camera_vector: np.ndarray) -> float:
     """The row (at 720) where the ground far ahead meets the sky in this camera."""
     camera = camera_from_vector(camera_vector)
@@ -76,6 +108,9 @@ def world_content(shard: Path, index: int) -> WorldContent:
         paint = z["paint"][front].reshape(-1, *z["paint"].shape[2:])
         seed = int(z["world_seed"])
         cameras = z["camera"][front]
+        xs = z["xs"][front].reshape(-1, *z["xs"].shape[2:])
+    at_labels = [label_contrast(f, stored_lines(x)) for f, x in zip(frames, xs, strict=True)]
+    at_labels = [v for v in at_labels if math.isfinite(v)]
     scenario = random_scenario(seed)
     n_lanes = scenario.road.n_lanes
     shaded = sum(max(0.0, min(z.s_end_m, ROAD_LENGTH_M) - max(z.s_start_m, 0.0))
@@ -83,6 +118,7 @@ def world_content(shard: Path, index: int) -> WorldContent:
     return WorldContent(
         index=index, world_seed=seed, tag=scenario.name.rsplit("_", 1)[1],
         paint_contrast_dn=paint_contrast(frames, paint),
+        label_contrast_dn=float(np.median(at_labels)) if at_labels else math.nan,
         vehicles_per_lane_km=len(scenario.conditions.vehicles) / n_lanes / (ROAD_LENGTH_M / 1000),
         shade_share=shaded / ROAD_LENGTH_M,
         dashcam=scenario.camera.preset == "dashcam",

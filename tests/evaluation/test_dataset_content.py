@@ -11,7 +11,12 @@ import numpy as np
 import pytest
 
 from lanekeep.evaluation.dataset import load_split, shard_path
-from lanekeep.evaluation.dataset_content import WorldContent, held_out, paint_contrast
+from lanekeep.evaluation.dataset_content import (
+    WorldContent,
+    held_out,
+    label_contrast,
+    paint_contrast,
+)
 
 
 def _frame(road: int, paint: int, width: int = 4) -> tuple[np.ndarray, np.ndarray]:
@@ -33,9 +38,24 @@ def test_a_world_without_visible_paint_has_no_contrast():
     assert math.isnan(paint_contrast(rgb[None], np.zeros_like(ids)[None]))
 
 
+def test_label_contrast_reads_dashed_paint_at_its_labels():
+    """A dashed line labelled through its gaps (as TuSimple labels lanes): the read is the
+    paint's contrast, not the gaps'; the far rows and a line off the frame are not read."""
+    rgb = np.full((176, 320, 3), 70, np.uint8)
+    for top in range(106, 176, 20):  # dashes of 6 rows every 20 in the near rows
+        rgb[top:top + 6, 159:162] = 130
+    rows = np.arange(0, 720, 5, dtype=float)
+    line = np.stack([np.full_like(rows, 160 * 4.0), rows], 1)
+    assert label_contrast(rgb, [line]) == pytest.approx(60.0)
+    rgb[:, 159:162] = 70  # no paint: the read is the road's own
+    assert label_contrast(rgb, [line]) == pytest.approx(0.0)
+    assert math.isnan(label_contrast(rgb, [line[:20]]))  # only far rows labelled
+
+
 def _worlds() -> list[WorldContent]:
     base = WorldContent(index=0, world_seed=0, tag="clear", paint_contrast_dn=20.0,
-                        vehicles_per_lane_km=5.0, shade_share=0.0, dashcam=False,
+                        label_contrast_dn=20.0, vehicles_per_lane_km=5.0, shade_share=0.0,
+                        dashcam=False,
                         horizon_row=350.0, camera_height_m=1.4)
     return [
         dataclasses.replace(base, index=0, paint_contrast_dn=4.0, vehicles_per_lane_km=1.0),
