@@ -224,12 +224,15 @@ def mirror_targets(cls: np.ndarray, position: np.ndarray, bins: int
 
 def rowanchor_loss(logits: torch.Tensor, cls: torch.Tensor, position: torch.Tensor,
                    l1_weight: float = 0.5) -> tuple[torch.Tensor, dict[str, float]]:
-    """Cross-entropy over bins + absent, plus L1 (bins) of the location where present."""
+    """Cross-entropy over bins + absent, plus L1 (bins, clipped) of the location where
+    present."""
     n = logits.shape[-1]
     ce = F.cross_entropy(logits.reshape(-1, n), cls.reshape(-1))
     expect = expected_position(logits[..., :-1])
     present = torch.isfinite(position)
-    l1 = (expect[present] - position[present]).abs().mean() if present.any() else \
-        logits.sum() * 0.0
+    # clipped: a point whose peak is in the wrong bins is the cross-entropy's to move; the L1
+    # refines one whose peak is near (the expectation reads only PEAK_HALF_WIDTH bins around it)
+    l1 = (expect[present] - position[present]).abs().clamp(max=2.0 * PEAK_HALF_WIDTH).mean() \
+        if present.any() else logits.sum() * 0.0
     total = ce + l1_weight * l1
     return total, {"ce": float(ce.detach()), "l1_bins": float(l1.detach())}
