@@ -163,10 +163,12 @@ def test_overfit_synthetic_rear_frames_end_to_end(tmp_path):
     save_weights(model, tmp_path / "overfit.pt", half=False)
     detector = RowAnchorDetector(camera, weights=tmp_path / "overfit.pt")
     assert detector.x_ref == pytest.approx(-4.0)
+    # 10 cm: this small net's bins are 32 px wide at 1280 (its points ~5 px off, median); a
+    # side or sign mistake (the rear camera's left is the car's right) would be 0.7 m off
     for (frame, _, _), (offset_m, curvature) in zip(samples, poses, strict=True):
         est = detector.detect(frame)
         expected = offset_m - curvature * est.x_m ** 2
-        assert est.valid and abs(est.offset_m - expected) < 0.06, (est, expected)
+        assert est.valid and abs(est.offset_m - expected) < 0.10, (est, expected)
 
 
 def test_hard_frames_give_invalid_estimates_not_errors(tmp_path):
