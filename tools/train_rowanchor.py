@@ -194,6 +194,35 @@ def offset_errors(weights: str, data: dict) -> dict:
                                      for k, v in sorted(by_tag.items())}}
 
 
+def timing(weights: str, data: dict, repeats: int) -> dict:
+    """Median ms of one frame at 1280x720 (a stored frame scaled up, as the loop's camera
+    gives it): the area resize to 320x176, the network (as `detect` runs it: one thread, on
+    the portable convolution path) and the whole `detect` (resize, network, ground fit)."""
+    import cv2
+
+    from lanekeep.core.reproducibility import portable_torch
+
+    camera = camera_from_vector(data["camera"][0], "rear")
+    detector = RowAnchorDetector(camera, weights=weights)
+    cfg = detector.model.config
+    frame = cv2.resize(data["frames"][0], (LABEL_WIDTH, LABEL_HEIGHT),
+                       interpolation=cv2.INTER_LINEAR)
+    times: dict[str, list[float]] = {"resize": [], "network": [], "detect": []}
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        small = cv2.resize(frame, (cfg.width, cfg.height), interpolation=cv2.INTER_AREA)
+        t1 = time.perf_counter()
+        with torch.inference_mode(), portable_torch():
+            detector.model(torch.from_numpy(small.transpose(2, 0, 1).copy())[None])
+        t2 = time.perf_counter()
+        detector.detect(frame)
+        t3 = time.perf_counter()
+        for k, a, b in (("resize", t0, t1), ("network", t1, t2), ("detect", t2, t3)):
+            times[k].append(1000.0 * (b - a))
+    return {**{f"{k}_ms_median": round(float(np.median(v)), 2) for k, v in times.items()},
+            "repeats": repeats, "threads": torch.get_num_threads()}
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--data", required=True, help="dataset folder (tools/make_dataset.py)")
@@ -209,6 +238,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--resume", action="store_true", help="go on from --checkpoint")
     parser.add_argument("--evaluate", default="", metavar="SPLIT",
                         help="score --out on SPLIT (val or test) and print JSON; no training")
+    parser.add_argument("--time", type=int, default=0, metavar="N",
+                        help="with --evaluate: also time N frames at 1280x720")
     args = parser.parse_args(argv)
     torch.set_num_threads(args.threads)
     root = Path(args.data)
@@ -221,7 +252,10 @@ def main(argv: list[str] | None = None) -> int:
         data = rear_frames(root, args.evaluate)
         cls, pos = targets_of(data, model.config)
         result = {"split": args.evaluate, "frames": len(data["frames"]), "command": command,
+                  "weights_bytes": Path(args.out).stat().st_size,
                   **evaluate(model, data, cls, pos), **offset_errors(args.out, data)}
+        if args.time:
+            result["timing_1280x720"] = timing(args.out, data, args.time)
         print(json.dumps(result, indent=1))
         return 0
     return train(args, root, command)
