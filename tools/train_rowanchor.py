@@ -24,7 +24,9 @@ validation split is scored and the best epoch's weights are kept (float16, < 1 M
 
 `--evaluate SPLIT` also runs the detector (the shared ground fit) on every frame of the split
 with that sequence's own camera and reports the ego lane's offset error at the rear window's
-look-ahead (4 m behind the car) against the labels' ground truth, in centimetres.
+look-ahead (4 m behind the car) against the labels' ground truth, in centimetres;
+`--baseline lanenet` the same for today's reference on the same frames (LaneNet never saw
+these worlds either: its data are seed 0's).
 
 A JSON-lines log goes beside the weights (`.log.jsonl`): a first line with the command, seed,
 recipe and data, one line per epoch, a last line with the chosen epoch. After every epoch the
@@ -163,13 +165,17 @@ def true_offset(ground_y: np.ndarray, slots: np.ndarray, at_m: float) -> float |
     return -(y[0] + y[1]) / 2.0
 
 
-def offset_errors(weights: str, data: dict) -> dict:
-    """The detector (network + shared ground fit) on every frame with its own camera: the
-    offset error at the look-ahead, in cm, where the labels have the ego pair."""
+def offset_errors(weights: str | None, data: dict, name: str = "rowanchor") -> dict:
+    """Detector `name` (here: network + shared ground fit) on every frame with its own camera:
+    the offset error at the look-ahead, in cm, where the labels have the ego pair. Another
+    registered detector (`--baseline lanenet`: the reference today) is made with its own
+    default weights, fresh for each frame (a LaneNet keeps no state across these frames)."""
+    from lanekeep.detectors.registry import make_detector
+
     errors, valid, labelled, ms, by_tag = [], 0, 0, [], {}
     for i in range(len(data["frames"])):
         camera = camera_from_vector(data["camera"][i], "rear")
-        detector = RowAnchorDetector(camera, weights=weights)
+        detector = make_detector(name, camera, weights=weights)
         truth = true_offset(data["ground_y"][i], data["slots"][i], abs(detector.x_ref))
         if truth is None:
             continue
@@ -238,6 +244,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--resume", action="store_true", help="go on from --checkpoint")
     parser.add_argument("--evaluate", default="", metavar="SPLIT",
                         help="score --out on SPLIT (val or test) and print JSON; no training")
+    parser.add_argument("--baseline", default="", metavar="NAME",
+                        help="with --evaluate: also the offset errors of detector NAME on the "
+                             "same frames (e.g. lanenet, the reference today)")
     parser.add_argument("--time", type=int, default=0, metavar="N",
                         help="with --evaluate: also time N frames at 1280x720")
     args = parser.parse_args(argv)
@@ -254,6 +263,8 @@ def main(argv: list[str] | None = None) -> int:
         result = {"split": args.evaluate, "frames": len(data["frames"]), "command": command,
                   "weights_bytes": Path(args.out).stat().st_size,
                   **evaluate(model, data, cls, pos), **offset_errors(args.out, data)}
+        if args.baseline:
+            result[f"baseline_{args.baseline}"] = offset_errors(None, data, args.baseline)
         if args.time:
             result["timing_1280x720"] = timing(args.out, data, args.time)
         print(json.dumps(result, indent=1))
