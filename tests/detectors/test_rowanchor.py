@@ -204,3 +204,39 @@ def test_registered_lazily_with_weights_and_bad_files_named(tmp_path):
         str(tmp_path / "ok.pt")]
     with pytest.raises(ValueError, match="bad.pt"):
         check_detectors_weights(["hough"], None, str(bad))
+
+
+@pytest.fixture(scope="module")
+def rear_frame():
+    """The rear camera of clear_straight at 640x360 (a quarter of the loop's pixels; the
+    detector's camera model follows), the car 0.3 m left of centre, and the true offset at
+    the rear window's look-ahead (4 m behind)."""
+    from lanekeep.scenario.schema import load_scenario
+    from lanekeep.scoring.truth import lane_centre_at
+    from lanekeep.sensing.cameras import CameraRig, RenderSettings
+    from lanekeep.sensing.snapshot import place_on_road
+    from lanekeep.world.build import build
+
+    scenario = load_scenario("clear_straight")
+    world = build(scenario)
+    x, y, yaw = place_on_road(world, 60.0, 0.3)
+    truth = -float(lane_centre_at(world.road, x, y, yaw, scenario.road.ego_lane, [-4.0])[0])
+    with CameraRig(world.model, RenderSettings(640, 360)) as rig:
+        return rig.render_rgb(world.data, "rear"), rig.cameras["rear"], truth
+
+
+def test_shipped_weights_load_safely_and_find_the_ego_lane_behind(rear_frame):
+    from importlib import resources
+
+    path = resources.files("lanekeep.detectors").joinpath(DEFAULT_WEIGHTS)
+    blob = torch.load(str(path), map_location="cpu", weights_only=True)
+    assert blob["meta"]["seed"] == 58 and blob["meta"]["recipe"]["seed"] == 58
+    assert path.stat().st_size < 1_000_000
+    frame, camera, truth = rear_frame
+    detector = RowAnchorDetector(camera)
+    estimate = detector.detect(frame)
+    assert estimate.valid, estimate.reason
+    assert estimate.x_m == pytest.approx(-4.0)
+    assert abs(estimate.offset_m - truth) < 0.10, (estimate.offset_m, truth)
+    again = RowAnchorDetector(camera).detect(frame)  # deterministic
+    assert again.offset_m == estimate.offset_m
