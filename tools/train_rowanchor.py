@@ -24,7 +24,8 @@ validation split is scored and the best epoch's weights are kept (float16, < 1 M
 
 `--evaluate SPLIT` also runs the detector (the shared ground fit) on every frame of the split
 with that sequence's own camera and reports the ego lane's offset error at the rear window's
-look-ahead (4 m behind the car) against the labels' ground truth, in centimetres;
+look-ahead (4 m behind the car) against the labels' ground truth, in centimetres (and which
+frames are off by more than FAR_CM, and the RMSE of the others);
 `--baseline lanenet` the same for today's reference on the same frames (LaneNet never saw
 these worlds either: its data are seed 0's).
 
@@ -74,6 +75,7 @@ from lanekeep.evaluation.dataset import (
 from lanekeep.scoring.metrics import ADE_POINTS_M
 
 TOLERANCE_PX = 20.0  # at 1280x720, as TuSimple counts a point
+FAR_CM = 30.0  # an offset error beyond this is a wrong lane or a failed fit, not noise
 
 
 def rear_frames(root: Path, split: str) -> dict[str, np.ndarray]:
@@ -172,7 +174,7 @@ def offset_errors(weights: str | None, data: dict, name: str = "rowanchor") -> d
     default weights, fresh for each frame (a LaneNet keeps no state across these frames)."""
     from lanekeep.detectors.registry import make_detector
 
-    errors, valid, labelled, ms, by_tag = [], 0, 0, [], {}
+    errors, valid, labelled, ms, by_tag, far = [], 0, 0, [], {}, []
     for i in range(len(data["frames"])):
         camera = camera_from_vector(data["camera"][i], "rear")
         detector = make_detector(name, camera, weights=weights)
@@ -187,6 +189,8 @@ def offset_errors(weights: str | None, data: dict, name: str = "rowanchor") -> d
             valid += 1
             e = 100.0 * abs(est.offset_m - truth)
             errors.append(e)
+            if e > FAR_CM:
+                far.append(i)
             by_tag.setdefault(str(data["tag"][i]), []).append(e)
     e = np.array(errors)
     return {"frames_with_ego_pair": labelled, "valid": valid,
@@ -195,6 +199,8 @@ def offset_errors(weights: str | None, data: dict, name: str = "rowanchor") -> d
             "offset_err_cm_rmse": float(np.sqrt(np.mean(e ** 2))) if len(e) else None,
             "offset_err_cm_p90": float(np.percentile(e, 90)) if len(e) else None,
             "share_within_10cm": float((e < 10).sum() / max(labelled, 1)),
+            "rmse_cm_under_far": float(np.sqrt(np.mean(e[e <= FAR_CM] ** 2))) if len(e) else None,
+            "far_frames": far,
             "detect_ms_median": float(np.median(ms)) if ms else None,
             "median_err_cm_by_tag": {k: round(float(np.median(v)), 1)
                                      for k, v in sorted(by_tag.items())}}
@@ -264,7 +270,9 @@ def main(argv: list[str] | None = None) -> int:
                   "weights_bytes": Path(args.out).stat().st_size,
                   **evaluate(model, data, cls, pos), **offset_errors(args.out, data)}
         if args.baseline:
-            result[f"baseline_{args.baseline}"] = offset_errors(None, data, args.baseline)
+            base = offset_errors(None, data, args.baseline)
+            result[f"baseline_{args.baseline}"] = base
+            result["far_frames_both"] = sorted(set(result["far_frames"]) & set(base["far_frames"]))
         if args.time:
             result["timing_1280x720"] = timing(args.out, data, args.time)
         print(json.dumps(result, indent=1))
