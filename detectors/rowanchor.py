@@ -48,6 +48,7 @@ from lanekeep.detectors.lanenet_decode import (
 from lanekeep.detectors.lanenet_targets import CellGrid
 from lanekeep.detectors.rowanchor_model import (
     LANES,
+    MIRRORED_LANES,
     RowAnchorConfig,
     RowAnchorNet,
     anchor_rows,
@@ -58,6 +59,7 @@ from lanekeep.geometry.camera_model import CameraModel
 
 FORMAT = "lanekeep-rowanchor/1"
 DEFAULT_WEIGHTS = "weights/rowanchor.pt"  # inside the detectors package
+MIRROR_AGREE_BINS = 2.0  # a frame's and its mirror's points further apart are two readings
 
 
 class WeightsError(ValueError):
@@ -136,6 +138,10 @@ class RowAnchorSettings:
     # Ground points further than this from the camera are not fitted: a rear camera's far
     # anchors span metres per pixel, and the offset is read 2 m behind the camera.
     max_range_m: float = 30.0
+    # Also run the frame mirrored left-right (one batch of two) and pool both reads, so that
+    # a left-right lean the network learnt cancels (LaneNet's mirror pass, for the same
+    # reason; docs/observer.md measures what it changes).
+    mirror: bool = True
 
     def decode(self) -> DecodeSettings:
         return DecodeSettings(score_threshold=self.presence_threshold, inlier_px=self.inlier_px,
@@ -144,6 +150,22 @@ class RowAnchorSettings:
                               curvature_prior_shape=self.curvature_prior_shape,
                               width_std_m=self.width_std_m, score_power=0.0,
                               max_range_m=self.max_range_m)
+
+
+def _pooled(position: np.ndarray, presence: np.ndarray, bins: int
+            ) -> tuple[np.ndarray, np.ndarray]:
+    """One read from a frame's (item 0) and its mirror's (item 1), each (2, lanes, anchors):
+    the mirror's lanes swapped and columns mapped back; where both passes place a point
+    within MIRROR_AGREE_BINS, the presence-weighted mean, elsewhere the more present one's;
+    the presence is the two passes' mean."""
+    lanes = position.shape[1]
+    back = list(MIRRORED_LANES[:lanes])
+    pos = np.stack([position[0], bins - position[1][back]])
+    pres = np.stack([presence[0], presence[1][back]])
+    mean = (pres * pos).sum(0) / np.maximum(pres.sum(0), 1e-12)
+    pick = np.take_along_axis(pos, pres.argmax(0)[None], 0)[0]
+    agree = np.abs(pos[0] - pos[1]) <= MIRROR_AGREE_BINS
+    return np.where(agree, mean, pick), pres.mean(0)
 
 
 class RowAnchorDetector:
@@ -189,8 +211,14 @@ class RowAnchorDetector:
             frame, (cfg.width, cfg.height), interpolation=cv2.INTER_AREA)  # as the dataset's
         item = torch.from_numpy(np.ascontiguousarray(small.transpose(2, 0, 1)))[None]
         with torch.inference_mode(), portable_torch(), _one_thread():
-            logits = self.model(item)[0]
+            if self.settings.mirror:
+                item = torch.cat([item, item.flip(-1)])
+            logits = self.model(item)
         position, presence = decode(logits)
+        if self.settings.mirror:
+            position, presence = _pooled(position, presence, cfg.bins)
+        else:
+            position, presence = position[0], presence[0]
         return bin_to_x(position, w, cfg.bins), presence
 
     def proposals(self, frame: np.ndarray) -> Proposals:

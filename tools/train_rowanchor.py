@@ -167,17 +167,20 @@ def true_offset(ground_y: np.ndarray, slots: np.ndarray, at_m: float) -> float |
     return -(y[0] + y[1]) / 2.0
 
 
-def offset_errors(weights: str | None, data: dict, name: str = "rowanchor") -> dict:
+def offset_errors(weights: str | None, data: dict, name: str = "rowanchor",
+                  config_file: str = "") -> dict:
     """Detector `name` (here: network + shared ground fit) on every frame with its own camera:
     the offset error at the look-ahead, in cm, where the labels have the ego pair. Another
     registered detector (`--baseline lanenet`: the reference today) is made with its own
     default weights, fresh for each frame (a LaneNet keeps no state across these frames)."""
+    from lanekeep.detectors.config import load_config
     from lanekeep.detectors.registry import make_detector
 
-    errors, valid, labelled, ms, by_tag, far = [], 0, 0, [], {}, []
+    config = load_config(config_file) if config_file else None
+    errors, signed, valid, labelled, ms, by_tag, far = [], [], 0, 0, [], {}, []
     for i in range(len(data["frames"])):
         camera = camera_from_vector(data["camera"][i], "rear")
-        detector = make_detector(name, camera, weights=weights)
+        detector = make_detector(name, camera, config, weights=weights)
         truth = true_offset(data["ground_y"][i], data["slots"][i], abs(detector.x_ref))
         if truth is None:
             continue
@@ -187,7 +190,8 @@ def offset_errors(weights: str | None, data: dict, name: str = "rowanchor") -> d
         ms.append(1000.0 * (time.perf_counter() - t0))
         if est.valid:
             valid += 1
-            e = 100.0 * abs(est.offset_m - truth)
+            signed.append(100.0 * (est.offset_m - truth))
+            e = abs(signed[-1])
             errors.append(e)
             if e > FAR_CM:
                 far.append(i)
@@ -201,6 +205,7 @@ def offset_errors(weights: str | None, data: dict, name: str = "rowanchor") -> d
             "share_within_10cm": float((e < 10).sum() / max(labelled, 1)),
             "rmse_cm_under_far": float(np.sqrt(np.mean(e[e <= FAR_CM] ** 2))) if len(e) else None,
             "far_frames": far,
+            "bias_cm_under_far": float(np.mean(np.array(signed)[e <= FAR_CM])) if len(e) else None,
             "detect_ms_median": float(np.median(ms)) if ms else None,
             "median_err_cm_by_tag": {k: round(float(np.median(v)), 1)
                                      for k, v in sorted(by_tag.items())}}
@@ -253,6 +258,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--baseline", default="", metavar="NAME",
                         help="with --evaluate: also the offset errors of detector NAME on the "
                              "same frames (e.g. lanenet, the reference today)")
+    parser.add_argument("--detectors-config", default="", metavar="FILE",
+                        help="with --evaluate: a detectors TOML (e.g. [rowanchor] mirror = false)")
     parser.add_argument("--time", type=int, default=0, metavar="N",
                         help="with --evaluate: also time N frames at 1280x720")
     args = parser.parse_args(argv)
@@ -268,9 +275,10 @@ def main(argv: list[str] | None = None) -> int:
         cls, pos = targets_of(data, model.config)
         result = {"split": args.evaluate, "frames": len(data["frames"]), "command": command,
                   "weights_bytes": Path(args.out).stat().st_size,
-                  **evaluate(model, data, cls, pos), **offset_errors(args.out, data)}
+                  **evaluate(model, data, cls, pos),
+                  **offset_errors(args.out, data, config_file=args.detectors_config)}
         if args.baseline:
-            base = offset_errors(None, data, args.baseline)
+            base = offset_errors(None, data, args.baseline, args.detectors_config)
             result[f"baseline_{args.baseline}"] = base
             result["far_frames_both"] = sorted(set(result["far_frames"]) & set(base["far_frames"]))
         if args.time:

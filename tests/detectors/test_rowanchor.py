@@ -20,6 +20,7 @@ from lanekeep.detectors.registry import (
 from lanekeep.detectors.rowanchor import (
     DEFAULT_WEIGHTS,
     RowAnchorDetector,
+    RowAnchorSettings,
     WeightsError,
     load_weights,
     save_weights,
@@ -240,3 +241,16 @@ def test_shipped_weights_load_safely_and_find_the_ego_lane_behind(rear_frame):
     assert abs(estimate.offset_m - truth) < 0.10, (estimate.offset_m, truth)
     again = RowAnchorDetector(camera).detect(frame)  # deterministic
     assert again.offset_m == estimate.offset_m
+
+
+def test_mirror_pass_makes_the_read_mirror_symmetric(rear_frame):
+    """With `mirror` (the default) a frame and its mirror image give opposite offsets: a
+    left-right lean of the network cancels (a centred camera: the image mirror is the
+    world's)."""
+    frame, camera, _ = rear_frame
+    direct = RowAnchorDetector(camera).detect(frame)
+    mirrored = RowAnchorDetector(camera).detect(np.ascontiguousarray(frame[:, ::-1]))
+    assert direct.valid and mirrored.valid
+    assert abs(direct.offset_m + mirrored.offset_m) < 1e-3, (direct.offset_m, mirrored.offset_m)
+    single = RowAnchorDetector(camera, settings=RowAnchorSettings(mirror=False)).detect(frame)
+    assert single.valid and single.offset_m != direct.offset_m
