@@ -12,7 +12,9 @@ data with any front model. What turns its points into a lane is the project's sh
 as LaneNet uses it (detectors/lanenet_decode.py): each boundary's anchor points are brought
 down to the ground through the camera model and fitted by RANSAC as a 2nd-order y(x) with the
 curvature prior, and the ego pair is refitted as one parallel lane and checked against the
-lane width; the offset is read at the camera's window's look-ahead (`detector_view`).
+lane width; the offset is read at the camera's window's look-ahead (`detector_view`). With
+`mirror` (the default) the frame and its mirror image run as one batch of two and their reads
+are pooled, so that a left-right lean of the network cancels.
 
 A weights file is a dict: a format tag, the architecture (`RowAnchorConfig`), the state dict
 (float16: the file stays small; loaded as float32) and plain metadata, read with

@@ -8,7 +8,7 @@ own and shares nothing learned with LaneNet (detectors/lanenet_model.py: a segme
 grid of proposals with a GRU over frames): other architecture, other data draws, no weights
 in common. That is the point: the MMAE's judge must not be one of the judged.
 
-Architecture (one frame, no memory; ~90 k parameters):
+Architecture (one frame, no memory; 78,244 parameters):
   - input RGB (3, 176, 320) uint8 plus two coordinate channels (x, y in -1..1), so that the
     fully convolutional net knows where a column is: which boundary is the ego-left one depends
     on where it lies in the image, not only on what it looks like;
