@@ -278,14 +278,25 @@ def check_detectors_weights(names: list[str], config: DetectorsConfig | None = N
                             weights: str | None = None) -> list[str]:
     """`check_weights` for each of `names` that takes weights: the files they would load.
 
-    A `weights` file given while none of `names` takes one is still checked, as a file of
-    every learned detector: a wrong path on a command line is reported, not ignored.
+    A `weights` file given while none of `names` takes one is still checked: it must be a
+    file of some learned detector (LaneNet's or the row-anchor observer's), so that a wrong
+    path on a command line is reported, not ignored.
     Raises:
       ValueError: the first bad file's error ("PATH: why").
     """
     learned = [n for n in dict.fromkeys(names) if takes_weights(n)]
     if not learned and weights is not None:
-        learned = [n for n in known_detectors() if takes_weights(n)]
+        errors = []
+        for n in (n for n in known_detectors() if takes_weights(n)):
+            try:
+                path = check_weights(n, config, weights)
+            except ValueError as exc:
+                errors.append(exc)
+                continue
+            return [path] if path else []
+        if errors:
+            raise errors[0]
+        return []
     return [path for n in learned if (path := check_weights(n, config, weights))]
 
 
@@ -293,3 +304,7 @@ def check_detectors_weights(names: list[str], config: DetectorsConfig | None = N
 # in ~0.2 s instead of ~1.2 s.
 register_lazy_detector("lanenet", "lanekeep.detectors.lanenet", "LaneNetDetector",
                        "LaneNetSettings")
+# The row-anchor network (#58): the rear reference that shares nothing learned with a front
+# model; selectable by name, not the default.
+register_lazy_detector("rowanchor", "lanekeep.detectors.rowanchor", "RowAnchorDetector",
+                       "RowAnchorSettings")

@@ -6,6 +6,8 @@ and source the verdict of lanekeep/scoring/independence.py (issue #58, paper 001
     .venv/bin/python tools/independence_report.py clear_curve s_bend --seeds 20 \\
         --json out/independence.json
     .venv/bin/python tools/independence_report.py --read out/independence.json  # print again
+    .venv/bin/python tools/independence_report.py case1_building_shadows --seeds 3 \
+        --reference-detector rowanchor    # #58's row-anchor observer as the reference
 
 Per step: each front model's raw detection error (its offset minus the true offset at the
 detector's own look-ahead, +4 m) and its Kalman track's (at the output's look-ahead), the
@@ -62,9 +64,14 @@ def _error(estimate: float | None, truth: float) -> float:
     return math.nan if estimate is None or not math.isfinite(estimate) else estimate - truth
 
 
-def run_episode(name: str, seed: int, size: tuple[int, int], seconds: float | None) -> Trace:
-    """Drive one episode and keep, per step, every source's error and where it looked."""
+def run_episode(name: str, seed: int, size: tuple[int, int], seconds: float | None,
+                reference: str | None = None) -> Trace:
+    """Drive one episode and keep, per step, every source's error and where it looked;
+    `reference`: the MMAE's reference detector instead of the scenario's."""
     scenario = dataclasses.replace(load_scenario(name), seed=seed)
+    if reference is not None:
+        scenario = dataclasses.replace(scenario, estimation=dataclasses.replace(
+            scenario.estimation, reference_detector=reference))
     with Episode(scenario, render_size=size) as episode:
         road = episode.truth.road
         models = list(episode.driver.front)
@@ -158,14 +165,33 @@ def row_line(source: str, row: dict) -> str:
             f"{row['n_steps']}  {verdict}")
 
 
+def reference_summary(traces: list[Trace]) -> dict:
+    """The reference's own error over all episodes: RMSE and max (cm) over the steps it gave
+    an offset, and the share of steps it did."""
+    e = np.concatenate([np.asarray(t.errors[REFERENCE], dtype=float) for t in traces])
+    ok = np.isfinite(e)
+    return _json_safe({"rmse_cm": float(100.0 * np.sqrt(np.mean(e[ok] ** 2))) if ok.any()
+                       else math.nan,
+                       "max_cm": float(100.0 * np.max(np.abs(e[ok]))) if ok.any() else math.nan,
+                       "valid_share": float(ok.mean()) if len(e) else math.nan,
+                       "steps": int(len(e))})
+
+
 def report(document: dict) -> int:
     """Print a document (this tool's JSON); the number of failed verdicts."""
     s = document["settings"]
-    print(f"tau {s['tau_m']:g} m, align {s['align']}, {s['size']}, seconds {s['seconds']}; "
+    reference = s.get("reference_detector") or "each scenario's"
+    print(f"tau {s['tau_m']:g} m, align {s['align']}, {s['size']}, seconds {s['seconds']}, "
+          f"reference {reference}; "
           "r: curvature partialled out; failures (both, source, reference)")
     failed = total = 0
     for name, entry in document["scenarios"].items():
         print(f"{name}: seeds {entry['seeds']} ({', '.join(entry['statuses'])})")
+        ref = entry.get("reference")
+        if ref:
+            print(f"  reference error: RMSE {_cell(ref['rmse_cm'], 1, '.2f')} cm, max "
+                  f"{_cell(ref['max_cm'], 1, '.1f')} cm, valid "
+                  f"{_cell(ref['valid_share'], 100, '.1f')}% of {ref['steps']} steps")
         for source, row in entry["sources"].items():
             print(row_line(source, row))
             total += 1
@@ -184,6 +210,8 @@ def main(argv: list[str] | None = None) -> int:
                         help="a failure: |error| > tau (m)")
     parser.add_argument("--align", choices=("step", "road"), default="step")
     parser.add_argument("--boots", type=int, default=independence.BOOTSTRAPS)
+    parser.add_argument("--reference-detector", default=None, metavar="NAME",
+                        help="the MMAE's reference instead of each scenario's (e.g. rowanchor)")
     parser.add_argument("--json", help="write the verdicts here")
     parser.add_argument("--read", help="print a JSON this tool wrote, run nothing")
     args = parser.parse_args(argv)
@@ -193,15 +221,18 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     width, height = (int(v) for v in args.size.lower().split("x"))
     document = {"settings": {"tau_m": args.tau, "align": args.align, "size": args.size,
-                             "seconds": args.seconds, "boots": args.boots},
+                             "seconds": args.seconds, "boots": args.boots,
+                             "reference_detector": args.reference_detector},
                 "scenarios": {}}
     for name in args.scenarios or shipped_scenarios():
         nominal = load_scenario(name).seed
         seeds = [nominal + k for k in range(1, args.seeds + 1)]
-        traces = [run_episode(name, seed, (width, height), args.seconds) for seed in seeds]
+        traces = [run_episode(name, seed, (width, height), args.seconds, args.reference_detector)
+                  for seed in seeds]
         sources = [n for n in traces[0].errors if n != REFERENCE]
         document["scenarios"][name] = {
             "seeds": seeds, "statuses": [t.status for t in traces],
+            "reference": reference_summary(traces),
             "sources": {source: verdict_row(independence.independence_verdict(
                 source, [aligned(t, source, args.align) for t in traces], tau_m=args.tau,
                 boots=args.boots, rng=0)) for source in sources}}

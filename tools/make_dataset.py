@@ -2,6 +2,7 @@
 seed.
 
     python tools/make_dataset.py --out data/lanenet --train 320 --val 24 --test 24 [--workers 2]
+    python tools/make_dataset.py --out /work/data/observer58 --seed 58 --cameras rear ...
 
 Each world is one compressed shard (`SPLIT/world_NNNNN.npz`); a shard already there is kept,
 so an interrupted run goes on where it stopped. `recipe.json` records the recipe and counts:
@@ -19,7 +20,7 @@ from pathlib import Path
 import numpy as np
 
 from lanekeep.core.files import atomic_path
-from lanekeep.evaluation.dataset import DatasetRecipe, make_shard, shard_path, write_recipe
+from lanekeep.evaluation.dataset import CAMERAS, DatasetRecipe, make_shard, shard_path, write_recipe
 
 
 def _one(job: tuple[DatasetRecipe, str, int, str]) -> tuple[str, int, float]:
@@ -43,11 +44,15 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--sequences-per-world", type=int, default=6)
     parser.add_argument("--frames", type=int, default=3)
     parser.add_argument("--workers", type=int, default=2)
+    parser.add_argument("--cameras", choices=("both", "front", "rear"), default="both",
+                        help="the cameras each sequence is rendered by (rear: a rear-only "
+                             "model's data, without the front's render cost)")
     args = parser.parse_args(argv)
     from tqdm import tqdm
 
+    cameras = CAMERAS if args.cameras == "both" else (args.cameras,)
     recipe = DatasetRecipe(seed=args.seed, sequences_per_world=args.sequences_per_world,
-                           frames=args.frames)
+                           frames=args.frames, cameras=cameras)
     counts = {"train": args.train, "val": args.val, "test": args.test}
     root = Path(args.out)
     write_recipe(root, recipe, counts)

@@ -4,9 +4,10 @@
 
 A recipe (`DatasetRecipe`) and a split name fix everything: world `i` of split `split` is
 `random_scenario` of the seed SeedSequence([recipe.seed, SPLIT_IDS[split], i]); in it,
-`sequences_per_world` places on the road, each seen by both cameras for `frames` consecutive
-frames `frame_period_s` apart as the car moves on (a lateral drift now and then: a lane
-change). Splits by seed: train, val and test worlds never share a seed.
+`sequences_per_world` places on the road, each seen by the recipe's cameras (both unless
+`cameras` says otherwise) for `frames` consecutive frames `frame_period_s` apart as the car
+moves on (a lateral drift now and then: a lane change). Splits by seed: train, val and test
+worlds never share a seed.
 
 Labels (exact, from the road geometry and the segmentation render, never from the image):
   - every painted boundary as a polyline continuous through dash gaps (as TuSimple labels
@@ -71,10 +72,22 @@ class DatasetRecipe:
     # 640x360, which the classical detectors shrink to anyway (2x2 pixels per working pixel).
     store_width: int = LaneNetConfig.width
     store_height: int = LaneNetConfig.height
+    # The cameras each sequence is seen by, in CAMERAS' order. Both by default (LaneNet learns
+    # from both, and every two-camera shard stays as it was); ("rear",) for a rear-only model
+    # (#58's observer) skips the front renders. Its worlds and
+    # places are the two-camera recipe's of the same seed; its image noise is not (the front's
+    # frames no longer take their draws from the world's stream).
+    cameras: tuple[str, ...] = CAMERAS
 
     def __post_init__(self):
         if self.frames < 1 or self.sequences_per_world < 1:
             raise ValueError("frames and sequences_per_world must be >= 1")
+        cameras = tuple(self.cameras)  # recipe.json stores a list
+        if not cameras or any(c not in CAMERAS for c in cameras) or \
+                cameras != tuple(c for c in CAMERAS if c in cameras):
+            raise ValueError(f"cameras must be a non-empty subset of {CAMERAS} in that order, "
+                             f"not {self.cameras!r}")
+        object.__setattr__(self, "cameras", cameras)
 
 
 def world_seed(recipe: DatasetRecipe, split: str, index: int) -> int:
@@ -182,7 +195,8 @@ def render_world(scenario: Scenario, recipe: DatasetRecipe, rng: np.random.Gener
     world = build(scenario)
     road = world.road
     width, height = recipe.store_width, recipe.store_height
-    n, t = recipe.sequences_per_world * len(CAMERAS), recipe.frames
+    cameras = recipe.cameras
+    n, t = recipe.sequences_per_world * len(cameras), recipe.frames
     out = {
         "frames": np.zeros((n, t, height, width, 3), np.uint8),
         "paint": np.zeros((n, t, height, width), np.uint8),
@@ -193,7 +207,7 @@ def render_world(scenario: Scenario, recipe: DatasetRecipe, rng: np.random.Gener
         "is_rear": np.zeros(n, bool),
     }
     settings = RenderSettings.of(scenario, recipe.render_width, recipe.render_height)
-    label_cams = {c: camera_from_model(world.model, c, LABEL_WIDTH, LABEL_HEIGHT) for c in CAMERAS}
+    label_cams = {c: camera_from_model(world.model, c, LABEL_WIDTH, LABEL_HEIGHT) for c in cameras}
     reach = label_range(scenario, recipe)
     lane_r = road.lane_center_r(scenario.road.ego_lane)
     speed = float(rng.uniform(12.0, 30.0))
@@ -219,8 +233,8 @@ def render_world(scenario: Scenario, recipe: DatasetRecipe, rng: np.random.Gener
                 world.car.place(float(x), float(y), yaw, speed)
                 update_dynamic(world, t0 + k * recipe.frame_period_s)
                 update_pools(world)
-                for ci, cam in enumerate(CAMERAS):
-                    i = q * len(CAMERAS) + ci
+                for ci, cam in enumerate(cameras):
+                    i = q * len(cameras) + ci
                     rgb = camera_frame(rig, world, cam, effects[cam], rng, speed)
                     out["frames"][i, k] = rgb if rgb.shape[:2] == (height, width) else \
                         cv2.resize(rgb, (width, height), interpolation=cv2.INTER_AREA)

@@ -70,8 +70,12 @@ class EstimationConfig(EstimatorSettings):
         allowed="registered names, package.module:Class, entry points")
     # The learned detector on the rear camera, as the paper's reference is a learned one
     # (CLRNet); model #2 ("sliding_window") there errs with front model #2 and fails in traffic.
-    reference_detector: str = setting("lanenet", "The MMAE's reference (the paper's observer).",
-                                      allowed="as front_detectors")
+    # "rowanchor" (#58) is a rear model that shares no weights, architecture or training data
+    # with any front model; the default stays until a closed-loop comparison says otherwise.
+    reference_detector: str = setting(
+        "lanenet", "The MMAE's reference (the paper's observer). rowanchor: #58's row-anchor "
+        "network, independent of every front model (docs/observer.md).",
+        allowed="as front_detectors")
     reference_camera: str = setting("rear", "Camera the reference detector looks through.",
                                     choices=CAMERAS)
     paper_keeps: tuple[str, ...] = setting(

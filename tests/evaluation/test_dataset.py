@@ -2,6 +2,7 @@
 and a recipe reproduces its data bit for bit."""
 
 import dataclasses
+import json
 
 import numpy as np
 import pytest
@@ -13,7 +14,9 @@ from lanekeep.evaluation.dataset import (
     camera_from_vector,
     frame_label,
     make_shard,
+    read_recipe,
     world_seed,
+    write_recipe,
 )
 from lanekeep.evaluation.dataset_world import CONDITION_TAGS, random_scenario
 from lanekeep.scenario.schema import CameraConfig, load_scenario
@@ -169,3 +172,28 @@ def test_a_shards_content_is_its_world_and_its_frames(shard, tmp_path):
     assert 0.0 <= content.shade_share <= 1.0 and content.vehicles_per_lane_km >= 0.0
     assert content.paint_contrast_dn > 10.0  # this world's paint shows (56.5 DN on 2026-11-29)
     assert 100.0 < content.horizon_row < 620.0
+
+
+def test_recipe_cameras_default_to_both_and_old_recipes_still_load(tmp_path):
+    assert DatasetRecipe().cameras == ("front", "rear")
+    assert DatasetRecipe(cameras=["rear"]).cameras == ("rear",)  # as recipe.json stores it
+    for bad in ((), ("rear", "front"), ("side",)):
+        with pytest.raises(ValueError, match="cameras"):
+            DatasetRecipe(cameras=bad)
+    write_recipe(tmp_path, DatasetRecipe(seed=58, cameras=("rear",)), {"train": 1})
+    assert read_recipe(tmp_path)[0] == DatasetRecipe(seed=58, cameras=("rear",))
+    blob = json.loads((tmp_path / "recipe.json").read_text())
+    del blob["recipe"]["cameras"]  # a recipe.json written before the option
+    (tmp_path / "recipe.json").write_text(json.dumps(blob))
+    assert read_recipe(tmp_path)[0] == DatasetRecipe(seed=58)
+
+
+def test_rear_only_recipe_labels_the_two_camera_recipes_rear_frames(shard):
+    """`cameras=("rear",)` (#58's observer data) renders the same places, so the same labels
+    as the two-camera recipe's rear sequences; only the image noise draws differ."""
+    rear = make_shard(dataclasses.replace(SMALL, cameras=("rear",)), "test", 0)
+    both = np.flatnonzero(shard["is_rear"])
+    assert rear["is_rear"].all() and len(rear["frames"]) == len(both) == SMALL.sequences_per_world
+    for key in ("xs", "slots", "ground_y", "camera"):
+        np.testing.assert_array_equal(rear[key], shard[key][both], err_msg=key)
+    assert rear["frames"].shape == shard["frames"][both].shape

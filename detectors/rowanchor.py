@@ -1,0 +1,268 @@
+"""The row-anchor detector: #58's independent rear observer, weights file in, `LaneEstimate` out.
+
+    detector = RowAnchorDetector(camera, weights="detectors/weights/rowanchor.pt")
+    estimate = detector.detect(frame)   # ego lane, vehicle frame
+    detector.last_points                # {lane name: (N, 2) frame pixels} of that frame
+
+Selected as the MMAE's reference with `reference_detector = "rowanchor"` (scenario
+`[estimation]`) or `--reference-detector rowanchor`; it is not the default.
+
+The learned part (detectors/rowanchor_model.py) shares no weights, architecture or training
+data with any front model. What turns its points into a lane is the project's shared geometry,
+as LaneNet uses it (detectors/lanenet_decode.py): each boundary's anchor points are brought
+down to the ground through the camera model and fitted by RANSAC as a 2nd-order y(x) with the
+curvature prior, and the ego pair is refitted as one parallel lane and checked against the
+lane width; the offset is read at the camera's window's look-ahead (`detector_view`). With
+`mirror` (the default) the frame and its mirror image run as one batch of two and their reads
+are pooled, so that a left-right lean of the network cancels.
+
+A weights file is a dict: a format tag, the architecture (`RowAnchorConfig`), the state dict
+(float16: the file stays small; loaded as float32) and plain metadata, read with
+`torch.load(..., weights_only=True)`. Anything wrong with it is one `WeightsError` naming
+the file.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass
+from importlib import resources
+from pathlib import Path
+
+import cv2
+import numpy as np
+import torch
+
+from lanekeep.core.reproducibility import portable_torch
+from lanekeep.detectors.base import LaneEstimate
+from lanekeep.detectors.birds_eye import detector_view
+from lanekeep.detectors.config import DetectorsConfig, GroundWindow, load_config
+from lanekeep.detectors.lanenet_decode import (
+    CURVATURE_PRIOR_PER_M,
+    CURVATURE_PRIOR_SHAPE,
+    WIDTH_STD_M,
+    DecodeSettings,
+    Proposals,
+    ego_estimate,
+    fit_boundaries,
+)
+from lanekeep.detectors.lanenet_targets import CellGrid
+from lanekeep.detectors.rowanchor_model import (
+    LANES,
+    MIRRORED_LANES,
+    RowAnchorConfig,
+    RowAnchorNet,
+    anchor_rows,
+    bin_to_x,
+    decode,
+)
+from lanekeep.geometry.camera_model import CameraModel
+
+FORMAT = "lanekeep-rowanchor/1"
+DEFAULT_WEIGHTS = "weights/rowanchor.pt"  # inside the detectors package
+MIRROR_AGREE_BINS = 2.0  # a frame's and its mirror's points further apart are two readings
+
+
+class WeightsError(ValueError):
+    """A weights file that cannot become a RowAnchorNet; the message starts with its path."""
+
+    def __init__(self, path: str | Path, why: str) -> None:
+        super().__init__(f"{path}: {why}")
+        self.path = str(path)
+
+
+def save_weights(model: RowAnchorNet, path: str | Path, meta: dict | None = None,
+                 half: bool = True) -> None:
+    """Write the architecture, the weights (float16 with `half`) and plain metadata."""
+    state = {k: (v.half() if half and v.is_floating_point() else v)
+             for k, v in model.state_dict().items()}
+    torch.save({"format": FORMAT, "config": model.config.to_dict(), "state_dict": state,
+                "meta": dict(meta or {})}, str(path))
+
+
+def load_weights(path: str | Path) -> RowAnchorNet:
+    """The network stored in `path`, float32, in eval mode, or `WeightsError`."""
+    p = Path(path)
+    if not p.is_file():
+        raise WeightsError(p, "no such weights file")
+    if p.stat().st_size == 0:
+        raise WeightsError(p, "weights file is empty")
+    try:
+        blob = torch.load(str(p), map_location="cpu", weights_only=True)
+    except Exception as exc:  # noqa: BLE001 - any unpickling failure means the same thing
+        raise WeightsError(p, "not a torch weights file (corrupt, truncated or another format; "
+                              f"{type(exc).__name__})") from None
+    if not isinstance(blob, dict) or blob.get("format") != FORMAT:
+        raise WeightsError(p, f"not a row-anchor weights file (expected format {FORMAT!r})")
+    try:
+        model = RowAnchorNet(RowAnchorConfig.from_dict(blob["config"]))
+    except (KeyError, TypeError, ValueError) as exc:
+        raise WeightsError(p, f"unknown row-anchor architecture: {exc}") from None
+    state = blob.get("state_dict", {})
+    try:
+        model.load_state_dict({k: (v.float() if v.is_floating_point() else v)
+                               for k, v in state.items()}, strict=True)
+    except (RuntimeError, TypeError, AttributeError) as exc:
+        first = str(exc).splitlines()
+        raise WeightsError(p, "weights do not fit the row-anchor architecture: "
+                              f"{first[1].strip() if len(first) > 1 else exc}") from None
+    return model.eval()
+
+
+@contextmanager
+def _one_thread() -> Iterator[None]:
+    """One intra-op thread for the forward, as LaneNet runs (detectors/lanenet.py says why:
+    sums that do not depend on the thread count, and no wait on a busy second core)."""
+    before = torch.get_num_threads()
+    if before != 1:
+        torch.set_num_threads(1)
+    try:
+        yield
+    finally:
+        if before != 1:
+            torch.set_num_threads(before)
+
+
+@dataclass(frozen=True)
+class RowAnchorSettings:
+    """The detector's settings (a `[rowanchor]` table of the detectors TOML)."""
+
+    weights: str = ""  # "" = the shipped detectors/weights/rowanchor.pt
+    presence_threshold: float = 0.5  # an anchor point is kept above this presence probability
+    inlier_px: float = 6.0  # RANSAC residual threshold (frame pixels)
+    ransac_iterations: int = 100
+    min_points: int = 4  # anchor rows a boundary needs
+    seed: int = 0  # RANSAC's generator
+    curvature_prior_per_m: float = CURVATURE_PRIOR_PER_M  # lanenet_decode.DecodeSettings
+    curvature_prior_shape: str = CURVATURE_PRIOR_SHAPE
+    width_std_m: float = WIDTH_STD_M
+    # Ground points further than this from the camera are not fitted: a rear camera's far
+    # anchors span metres per pixel, and the offset is read 2 m behind the camera.
+    max_range_m: float = 30.0
+    # Also run the frame mirrored left-right (one batch of two) and pool both reads, so that
+    # a left-right lean the network learnt cancels (LaneNet's mirror pass, for the same
+    # reason; docs/observer.md measures what it changes).
+    mirror: bool = True
+
+    def decode(self) -> DecodeSettings:
+        return DecodeSettings(score_threshold=self.presence_threshold, inlier_px=self.inlier_px,
+                              iterations=self.ransac_iterations, min_points=self.min_points,
+                              seed=self.seed, curvature_prior_per_m=self.curvature_prior_per_m,
+                              curvature_prior_shape=self.curvature_prior_shape,
+                              width_std_m=self.width_std_m, score_power=0.0,
+                              max_range_m=self.max_range_m)
+
+
+def _pooled(position: np.ndarray, presence: np.ndarray, bins: int
+            ) -> tuple[np.ndarray, np.ndarray]:
+    """One read from a frame's (item 0) and its mirror's (item 1), each (2, lanes, anchors):
+    the mirror's lanes swapped and columns mapped back; where both passes place a point
+    within MIRROR_AGREE_BINS, the presence-weighted mean, elsewhere the more present one's;
+    the presence is the two passes' mean."""
+    lanes = position.shape[1]
+    back = list(MIRRORED_LANES[:lanes])
+    pos = np.stack([position[0], bins - position[1][back]])
+    pres = np.stack([presence[0], presence[1][back]])
+    mean = (pres * pos).sum(0) / np.maximum(pres.sum(0), 1e-12)
+    pick = np.take_along_axis(pos, pres.argmax(0)[None], 0)[0]
+    agree = np.abs(pos[0] - pos[1]) <= MIRROR_AGREE_BINS
+    return np.where(agree, mean, pick), pres.mean(0)
+
+
+class RowAnchorDetector:
+    """`Detector` protocol over the row-anchor network: one frame, no state between frames."""
+
+    name = "rowanchor"
+
+    def __init__(
+        self,
+        camera: CameraModel,
+        config: DetectorsConfig | None = None,
+        distortion: np.ndarray | None = None,
+        settings: RowAnchorSettings | None = None,
+        weights: str | Path | None = None,
+    ) -> None:
+        self.camera = camera
+        self.config = config or load_config()
+        self.settings = settings or RowAnchorSettings()
+        path = weights or self.settings.weights or resources.files("lanekeep.detectors").joinpath(
+            DEFAULT_WEIGHTS)
+        self.model = load_weights(path)
+        self.weights_path = str(path)
+        self.view, self.x_ref = detector_view(camera, self.config, distortion)
+        self.distortion = None
+        if distortion is not None and np.any(np.asarray(distortion) != 0):
+            self.distortion = np.asarray(distortion, dtype=float)
+        self._decode = self.settings.decode()
+        self.last_points: dict[str, np.ndarray] = {}
+
+    @property
+    def window(self) -> GroundWindow:
+        return self.view.window
+
+    def reset(self) -> None:
+        self.last_points = {}
+
+    def points(self, frame: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The network's read of one frame: x (lanes, anchors) in this frame's pixels and the
+        presence probability (lanes, anchors)."""
+        cfg = self.model.config
+        h, w = frame.shape[:2]
+        small = frame if (h, w) == (cfg.height, cfg.width) else cv2.resize(
+            frame, (cfg.width, cfg.height), interpolation=cv2.INTER_AREA)  # as the dataset's
+        item = torch.from_numpy(np.ascontiguousarray(small.transpose(2, 0, 1)))[None]
+        with torch.inference_mode(), portable_torch(), _one_thread():
+            if self.settings.mirror:
+                item = torch.cat([item, item.flip(-1)])
+            logits = self.model(item)
+        position, presence = decode(logits)
+        if self.settings.mirror:
+            position, presence = _pooled(position, presence, cfg.bins)
+        else:
+            position, presence = position[0], presence[0]
+        return bin_to_x(position, w, cfg.bins), presence
+
+    def proposals(self, frame: np.ndarray) -> Proposals:
+        """The anchor points above the presence threshold, as the shared fit takes them."""
+        cfg = self.model.config
+        h, w = frame.shape[:2]
+        x, presence = self.points(frame)
+        rows = anchor_rows(h, cfg.anchors)
+        lane, anchor = np.nonzero(presence > self._decode.score_threshold)
+        pts = np.stack([x[lane, anchor], rows[anchor]], -1).reshape(-1, 2)
+        half_w, half_h = w / cfg.bins / 2.0, h / cfg.anchors / 2.0
+        boxes = np.stack([pts[:, 0] - half_w, pts[:, 1] - half_h, pts[:, 0] + half_w,
+                          pts[:, 1] + half_h], -1).reshape(-1, 4)
+        scores = presence[lane, anchor].astype(np.float64)
+        props = Proposals(pts, boxes, scores, lane.astype(np.int64), np.ones(len(lane)),
+                          np.ones(len(lane)))
+        if self.distortion is not None and len(pts):
+            camera = self._camera_for(w, h)
+            und = cv2.undistortPoints(pts.reshape(-1, 1, 2).astype(np.float64), camera.K,
+                                      self.distortion, P=camera.K).reshape(-1, 2)
+            props = Proposals(und, boxes, scores, props.slots, props.slot_probs, props.paint)
+        return props
+
+    def _camera_for(self, width: int, height: int) -> CameraModel:
+        if (self.camera.width, self.camera.height) == (width, height):
+            return self.camera
+        return self.camera.scaled(width, height)
+
+    def detect(self, frame: np.ndarray) -> LaneEstimate:
+        try:
+            if frame.ndim != 3 or frame.shape[2] != 3 or min(frame.shape[:2]) < 16:
+                return LaneEstimate.invalid(f"not an RGB frame: shape {frame.shape}",
+                                            x_m=self.x_ref)
+            h, w = frame.shape[:2]
+            props = self.proposals(frame)
+            self.last_points = {LANES[s]: props.points_px[props.slots == s]
+                                for s in range(len(LANES))}
+            camera = self._camera_for(w, h)
+            grid = CellGrid(w, h, self.model.config.anchors, self.model.config.bins)
+            boundaries = fit_boundaries(props, grid, self._decode, camera)
+            rules = self.config.lane
+            return ego_estimate(boundaries, camera, self.x_ref, rules.lane_width_m,
+                                rules.width_tolerance_m, self._decode)
+        except (np.linalg.LinAlgError, FloatingPointError) as exc:  # a degenerate fit
+            return LaneEstimate.invalid(f"fit failed: {type(exc).__name__}", x_m=self.x_ref)

@@ -1,0 +1,407 @@
+"""Train the row-anchor rear observer (detectors/rowanchor_model.py, #58) on rear frames, on a
+CPU, from scratch; or score given weights on a split (`--evaluate test`).
+
+    python tools/make_dataset.py --out /work/data/observer58 --seed 58 --cameras rear \\
+        --train 300 --val 24 --test 24 --sequences-per-world 16 --frames 1 --workers 1
+    python tools/train_rowanchor.py --data /work/data/observer58 \\
+        --out detectors/weights/rowanchor.pt --checkpoint /work/data/rowanchor.ckpt.pt \\
+        --epochs 20 --seed 58 --threads 1
+    python tools/train_rowanchor.py --data /work/data/observer58 --evaluate test \\
+        --out detectors/weights/rowanchor.pt
+
+Independence: its data are rendered with recipe seed 58 (LaneNet's with seed 0), so no world,
+place or image is shared; its initial weights, shuffling and augmentation draw from `--seed`
+(58 by default). Only rear frames are used (`is_rear`), whatever the dataset holds.
+
+Seeded: the same data and arguments give the same weights on the same machine. Each epoch goes
+once over the training frames, each mirrored left-right with probability 0.5 (lanes swap
+sides) and given a random exposure, contrast, tint, blur and noise. After every epoch the
+validation split is scored and the best epoch's weights are kept (float16, < 1 MB):
+
+  point accuracy: of the labelled anchor points (lane, anchor row), the share the network
+  calls present with x within 20 px of the label at 1280x720 (TuSimple's tolerance), over
+  the ego pair (`ego`) and over all four lanes (`all`); presence precision and recall.
+
+`--evaluate SPLIT` also runs the detector (the shared ground fit) on every frame of the split
+with that sequence's own camera and reports the ego lane's offset error at the rear window's
+look-ahead (4 m behind the car) against the labels' ground truth, in centimetres (and which
+frames are off by more than FAR_CM, and the RMSE of the others);
+`--baseline lanenet` the same for today's reference on the same frames (LaneNet never saw
+these worlds either: its data are seed 0's).
+
+A JSON-lines log goes beside the weights (`.log.jsonl`): a first line with the command, seed,
+recipe and data, one line per epoch, a last line with the chosen epoch. After every epoch the
+whole training state goes to `--checkpoint`; `--resume` goes on from there (the same
+arguments give the same weights either way).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+import time
+from dataclasses import asdict
+from pathlib import Path
+
+import numpy as np
+import torch
+from torch.nn import functional as F  # noqa: N812 - the usual torch alias
+
+from lanekeep.detectors.rowanchor import (
+    RowAnchorDetector,
+    WeightsError,
+    load_weights,
+    save_weights,
+)
+from lanekeep.detectors.rowanchor_model import (
+    RowAnchorConfig,
+    RowAnchorNet,
+    bin_to_x,
+    decode,
+    mirror_targets,
+    rowanchor_loss,
+    targets,
+)
+from lanekeep.evaluation.dataset import (
+    LABEL_HEIGHT,
+    LABEL_ROWS,
+    LABEL_WIDTH,
+    camera_from_vector,
+    load_split,
+    read_recipe,
+)
+from lanekeep.scoring.metrics import ADE_POINTS_M
+
+TOLERANCE_PX = 20.0  # at 1280x720, as TuSimple counts a point
+FAR_CM = 30.0  # an offset error beyond this is a wrong lane or a failed fit, not noise
+
+
+def rear_frames(root: Path, split: str) -> dict[str, np.ndarray]:
+    """The rear frames of a split, one per stored frame: frames (N, H, W, 3), xs, slots,
+    ground_y, camera (N, ...)."""
+    data = load_split(root, split)
+    rear = np.flatnonzero(data["is_rear"])
+    t = data["frames"].shape[1]
+    out = {k: data[k][rear].reshape(len(rear) * t, *data[k].shape[2:])
+           for k in ("frames", "xs", "slots", "ground_y")}
+    out["camera"] = np.repeat(data["camera"][rear], t, axis=0)
+    out["tag"] = np.repeat(data["tag"][rear], t, axis=0)
+    return out
+
+
+def targets_of(data: dict, config: RowAnchorConfig) -> tuple[np.ndarray, np.ndarray]:
+    """Class (N, lanes, anchors) and position (N, lanes, anchors) of every frame."""
+    pairs = [targets(xs, LABEL_ROWS, slots, LABEL_WIDTH, LABEL_HEIGHT, config)
+             for xs, slots in zip(data["xs"], data["slots"], strict=True)]
+    return np.stack([p[0] for p in pairs]), np.stack([p[1] for p in pairs])
+
+
+def augment(frames: torch.Tensor, gen: torch.Generator) -> torch.Tensor:
+    """uint8 (B, 3, H, W) -> uint8 with a random exposure, contrast, tint, blur and noise per
+    frame: the loop's rear camera is none of the dataset's cameras exactly."""
+    x = frames.float()
+    b = x.shape[0]
+
+    def u(lo: float, hi: float, *shape: int) -> torch.Tensor:
+        return lo + (hi - lo) * torch.rand(b, *shape, generator=gen)
+
+    mean = x.mean(dim=(1, 2, 3), keepdim=True)
+    x = (x - mean) * u(0.6, 1.4, 1, 1, 1) + mean
+    x = x * u(0.5, 1.6, 1, 1, 1) * u(0.9, 1.1, 3, 1, 1)
+    blur = torch.rand(b, generator=gen) < 0.3
+    if blur.any():
+        k = torch.tensor([1.0, 2.0, 1.0]) / 4.0
+        kernel = (k[:, None] * k[None, :]).expand(3, 1, 3, 3)
+        x[blur] = F.conv2d(F.pad(x[blur], (1, 1, 1, 1), mode="replicate"), kernel, groups=3)
+    x = x + u(0.0, 8.0, 1, 1, 1) * torch.randn(x.shape, generator=gen)
+    return x.clamp(0.0, 255.0).round().to(torch.uint8)
+
+
+def point_scores(logits: torch.Tensor, cls: np.ndarray, pos: np.ndarray,
+                 bins: int) -> dict[str, float]:
+    """Point accuracy (ego pair, all lanes) within TOLERANCE_PX, presence precision/recall."""
+    got, presence = decode(logits)
+    present = cls < bins
+    called = presence > 0.5
+    err = np.abs(bin_to_x(got, LABEL_WIDTH, bins) - bin_to_x(np.nan_to_num(pos), LABEL_WIDTH,
+                                                              bins))
+    hit = present & called & (err < TOLERANCE_PX)
+    ego = np.zeros_like(present)
+    ego[:, :2] = True
+    return {"point_acc_ego": float(hit[ego & present].mean()),
+            "point_acc_all": float(hit[present].mean()),
+            "presence_precision": float((called & present).sum() / max(called.sum(), 1)),
+            "presence_recall": float((called & present).sum() / max(present.sum(), 1)),
+            "median_err_px_ego": float(np.median(err[ego & present & called]))
+            if (ego & present & called).any() else float("nan")}
+
+
+def run_network(model: RowAnchorNet, frames: np.ndarray, batch: int = 64) -> torch.Tensor:
+    model.eval()
+    outs = []
+    with torch.inference_mode():
+        for s in range(0, len(frames), batch):
+            outs.append(model(torch.from_numpy(frames[s:s + batch]).permute(0, 3, 1, 2)))
+    return torch.cat(outs)
+
+
+def evaluate(model: RowAnchorNet, data: dict, cls: np.ndarray, pos: np.ndarray
+             ) -> dict[str, float]:
+    logits = run_network(model, data["frames"])
+    loss, _ = rowanchor_loss(logits, torch.from_numpy(cls), torch.from_numpy(pos))
+    return {"loss": float(loss), **point_scores(logits, cls, pos, model.config.bins)}
+
+
+def true_offset(ground_y: np.ndarray, slots: np.ndarray, at_m: float) -> float | None:
+    """The car's true offset from the ego lane's centre at `at_m` behind it (NaN-free labels
+    of both ego boundaries needed): + = car left of centre."""
+    k = ADE_POINTS_M.index(at_m)
+    sides = [np.flatnonzero(slots == s) for s in (0, 1)]
+    if any(len(s) != 1 for s in sides):
+        return None
+    y = [float(ground_y[s[0], k]) for s in sides]
+    if not all(math.isfinite(v) for v in y):
+        return None
+    return -(y[0] + y[1]) / 2.0
+
+
+def offset_errors(weights: str | None, data: dict, name: str = "rowanchor",
+                  config_file: str = "") -> dict:
+    """Detector `name` (here: network + shared ground fit) on every frame with its own camera:
+    the offset error at the look-ahead, in cm, where the labels have the ego pair. Another
+    registered detector (`--baseline lanenet`: the reference today) is made with its own
+    default weights, fresh for each frame (a LaneNet keeps no state across these frames)."""
+    from lanekeep.detectors.config import load_config
+    from lanekeep.detectors.registry import make_detector
+
+    config = load_config(config_file) if config_file else None
+    errors, signed, valid, labelled, ms, by_tag, far = [], [], 0, 0, [], {}, []
+    for i in range(len(data["frames"])):
+        camera = camera_from_vector(data["camera"][i], "rear")
+        detector = make_detector(name, camera, config, weights=weights)
+        truth = true_offset(data["ground_y"][i], data["slots"][i], abs(detector.x_ref))
+        if truth is None:
+            continue
+        labelled += 1
+        t0 = time.perf_counter()
+        est = detector.detect(data["frames"][i])
+        ms.append(1000.0 * (time.perf_counter() - t0))
+        if est.valid:
+            valid += 1
+            signed.append(100.0 * (est.offset_m - truth))
+            e = abs(signed[-1])
+            errors.append(e)
+            if e > FAR_CM:
+                far.append(i)
+            by_tag.setdefault(str(data["tag"][i]), []).append(e)
+    e = np.array(errors)
+    return {"frames_with_ego_pair": labelled, "valid": valid,
+            "valid_share": valid / max(labelled, 1),
+            "offset_err_cm_median": float(np.median(e)) if len(e) else None,
+            "offset_err_cm_rmse": float(np.sqrt(np.mean(e ** 2))) if len(e) else None,
+            "offset_err_cm_p90": float(np.percentile(e, 90)) if len(e) else None,
+            "share_within_10cm": float((e < 10).sum() / max(labelled, 1)),
+            "rmse_cm_under_far": float(np.sqrt(np.mean(e[e <= FAR_CM] ** 2))) if len(e) else None,
+            "far_frames": far,
+            "bias_cm_under_far": float(np.mean(np.array(signed)[e <= FAR_CM])) if len(e) else None,
+            "detect_ms_median": float(np.median(ms)) if ms else None,
+            "median_err_cm_by_tag": {k: round(float(np.median(v)), 1)
+                                     for k, v in sorted(by_tag.items())}}
+
+
+def timing(weights: str, data: dict, repeats: int) -> dict:
+    """Median ms of one frame at 1280x720 (a stored frame scaled up, as the loop's camera
+    gives it): the area resize to 320x176, the network (as `detect` runs it: one thread, on
+    the portable convolution path) and the whole `detect` (resize, network, ground fit)."""
+    import cv2
+
+    from lanekeep.core.reproducibility import portable_torch
+
+    camera = camera_from_vector(data["camera"][0], "rear")
+    detector = RowAnchorDetector(camera, weights=weights)
+    cfg = detector.model.config
+    frame = cv2.resize(data["frames"][0], (LABEL_WIDTH, LABEL_HEIGHT),
+                       interpolation=cv2.INTER_LINEAR)
+    times: dict[str, list[float]] = {"resize": [], "network": [], "detect": []}
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        small = cv2.resize(frame, (cfg.width, cfg.height), interpolation=cv2.INTER_AREA)
+        t1 = time.perf_counter()
+        with torch.inference_mode(), portable_torch():
+            detector.model(torch.from_numpy(small.transpose(2, 0, 1).copy())[None])
+        t2 = time.perf_counter()
+        detector.detect(frame)
+        t3 = time.perf_counter()
+        for k, a, b in (("resize", t0, t1), ("network", t1, t2), ("detect", t2, t3)):
+            times[k].append(1000.0 * (b - a))
+    return {**{f"{k}_ms_median": round(float(np.median(v)), 2) for k, v in times.items()},
+            "repeats": repeats, "threads": torch.get_num_threads()}
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--data", required=True, help="dataset folder (tools/make_dataset.py)")
+    parser.add_argument("--out", default="detectors/weights/rowanchor.pt")
+    parser.add_argument("--checkpoint", default="",
+                        help="training state file (default: OUT with .ckpt before its suffix)")
+    parser.add_argument("--epochs", type=int, default=20)
+    parser.add_argument("--batch", type=int, default=32, help="frames per step")
+    parser.add_argument("--lr", type=float, default=4e-3)
+    parser.add_argument("--seed", type=int, default=58)
+    parser.add_argument("--threads", type=int, default=1)
+    parser.add_argument("--limit", type=int, default=0, help="use only N training frames")
+    parser.add_argument("--resume", action="store_true", help="go on from --checkpoint")
+    parser.add_argument("--evaluate", default="", metavar="SPLIT",
+                        help="score --out on SPLIT (val or test) and print JSON; no training")
+    parser.add_argument("--baseline", default="", metavar="NAME",
+                        help="with --evaluate: also the offset errors of detector NAME on the "
+                             "same frames (e.g. lanenet, the reference today)")
+    parser.add_argument("--detectors-config", default="", metavar="FILE",
+                        help="with --evaluate: a detectors TOML (e.g. [rowanchor] mirror = false)")
+    parser.add_argument("--time", type=int, default=0, metavar="N",
+                        help="with --evaluate: also time N frames at 1280x720")
+    args = parser.parse_args(argv)
+    torch.set_num_threads(args.threads)
+    root = Path(args.data)
+    command = " ".join(["python tools/train_rowanchor.py", *(argv or sys.argv[1:])])
+    if args.evaluate:
+        try:
+            model = load_weights(args.out)
+        except WeightsError as exc:
+            raise SystemExit(f"train_rowanchor: error: {exc}") from None
+        data = rear_frames(root, args.evaluate)
+        cls, pos = targets_of(data, model.config)
+        result = {"split": args.evaluate, "frames": len(data["frames"]), "command": command,
+                  "weights_bytes": Path(args.out).stat().st_size,
+                  **evaluate(model, data, cls, pos),
+                  **offset_errors(args.out, data, config_file=args.detectors_config)}
+        if args.baseline:
+            base = offset_errors(None, data, args.baseline, args.detectors_config)
+            result[f"baseline_{args.baseline}"] = base
+            result["far_frames_both"] = sorted(set(result["far_frames"]) & set(base["far_frames"]))
+        if args.time:
+            result["timing_1280x720"] = timing(args.out, data, args.time)
+        print(json.dumps(result, indent=1))
+        return 0
+    return train(args, root, command)
+
+
+def train(args: argparse.Namespace, root: Path, command: str) -> int:
+    from tqdm import tqdm
+
+    torch.manual_seed(args.seed)
+    start = time.perf_counter()
+    recipe, worlds = read_recipe(root)
+    config = RowAnchorConfig()
+    data, val = rear_frames(root, "train"), rear_frames(root, "val")
+    if args.limit:
+        data = {k: v[:args.limit] for k, v in data.items()}
+    cls, pos = targets_of(data, config)
+    mcls, mpos = zip(*[mirror_targets(c, p, config.bins) for c, p in zip(cls, pos, strict=True)],
+                     strict=True)
+    mcls, mpos = np.stack(mcls), np.stack(mpos)
+    vcls, vpos = targets_of(val, config)
+    n = len(data["frames"])
+    print(f"data: {n} rear training frames, {len(val['frames'])} validation; targets in "
+          f"{time.perf_counter() - start:.0f} s", file=sys.stderr)
+
+    model = RowAnchorNet(config, seed=args.seed)
+    opt = torch.optim.AdamW(model.parameters(), lr=args.lr, weight_decay=1e-4)
+    steps_per_epoch = math.ceil(n / args.batch)
+    sched = torch.optim.lr_scheduler.OneCycleLR(opt, max_lr=args.lr, pct_start=0.1,
+                                                total_steps=args.epochs * steps_per_epoch)
+    gen = torch.Generator().manual_seed(args.seed)
+    rng = np.random.default_rng(args.seed)
+    out = Path(args.out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    log_path = out.with_suffix(".log.jsonl")
+    ckpt = Path(args.checkpoint) if args.checkpoint else out.with_name(
+        out.stem + ".ckpt" + out.suffix)
+    fixed = {k: getattr(args, k) for k in ("data", "epochs", "batch", "lr", "seed", "limit")}
+    best: dict | None = None
+    first_epoch = 0
+    if args.resume and ckpt.is_file():
+        state = torch.load(str(ckpt), map_location="cpu", weights_only=True)
+        if state.get("args") != fixed:
+            changed = sorted(k for k in fixed if state.get("args", {}).get(k) != fixed[k])
+            raise SystemExit(f"train_rowanchor: error: --resume with other arguments than the "
+                             f"checkpoint's ({', '.join(changed)}): {ckpt}")
+        model.load_state_dict(state["model"])
+        opt.load_state_dict(state["opt"])
+        sched.load_state_dict(state["sched"])
+        gen.set_state(state["gen"])
+        rng.bit_generator.state = state["rng"]
+        best, first_epoch = state["best"], state["epoch"]
+        with log_path.open("a") as f:
+            f.write(json.dumps({"event": "resume", "after_epoch": first_epoch,
+                                "command": command}) + "\n")
+        print(f"resumed after epoch {first_epoch} ({ckpt})", file=sys.stderr)
+    else:
+        head = {"event": "start", "command": command, "seed": args.seed, "data": str(root),
+                "recipe": asdict(recipe), "worlds": worlds, "train_frames": n,
+                "val_frames": len(val["frames"]), "config": config.to_dict(),
+                "parameters": sum(p.numel() for p in model.parameters()),
+                "threads": args.threads, "torch": torch.__version__}
+        log_path.write_text(json.dumps(head) + "\n")
+    for epoch in range(first_epoch, args.epochs):
+        model.train()
+        order = rng.permutation(n)
+        flips = rng.random(n) < 0.5
+        sums: dict[str, float] = {}
+        t_epoch = time.perf_counter()
+        bar = tqdm(range(steps_per_epoch), desc=f"epoch {epoch + 1}/{args.epochs}",
+                   unit="step", leave=False, mininterval=30)
+        for step in bar:
+            idx = order[step * args.batch:(step + 1) * args.batch]
+            flip = torch.from_numpy(flips[idx])
+            frames = torch.from_numpy(data["frames"][idx]).permute(0, 3, 1, 2)
+            frames = torch.where(flip.view(-1, 1, 1, 1), frames.flip(-1), frames)
+            c = torch.where(flip.view(-1, 1, 1), torch.from_numpy(mcls[idx]),
+                            torch.from_numpy(cls[idx]))
+            p = torch.where(flip.view(-1, 1, 1), torch.from_numpy(mpos[idx]),
+                            torch.from_numpy(pos[idx]))
+            loss, parts = rowanchor_loss(model(augment(frames, gen)), c, p)
+            opt.zero_grad(set_to_none=True)
+            loss.backward()
+            torch.nn.utils.clip_grad_norm_(model.parameters(), 5.0)
+            opt.step()
+            sched.step()
+            for k, v in parts.items():
+                sums[k] = sums.get(k, 0.0) + v
+        scores = evaluate(model, val, vcls, vpos)
+        row = {"epoch": epoch + 1, **{f"train_{k}": v / steps_per_epoch for k, v in sums.items()},
+               **{f"val_{k}": v for k, v in scores.items()}, "lr": sched.get_last_lr()[0],
+               "epoch_s": round(time.perf_counter() - t_epoch, 1),
+               "elapsed_s": round(time.perf_counter() - start, 1)}
+        with log_path.open("a") as f:
+            f.write(json.dumps(row) + "\n")
+        print(f"epoch {epoch + 1}: loss {row['train_ce']:.3f}+{row['train_l1_bins']:.3f} val "
+              f"ego {scores['point_acc_ego']:.3f} all {scores['point_acc_all']:.3f} "
+              f"({row['epoch_s']:.0f} s)", file=sys.stderr, flush=True)
+        score = scores["point_acc_ego"] + 0.5 * scores["point_acc_all"]
+        if best is None or score > best["score"]:
+            best = {"score": score, **row}
+            meta = {"recipe": {"data": str(root), "worlds": worlds, **asdict(recipe)},
+                    "command": command, "seed": args.seed, "chosen": row}
+            save_weights(model, out, meta)
+        tmp = ckpt.with_suffix(".tmp")
+        torch.save({"model": model.state_dict(), "opt": opt.state_dict(),
+                    "sched": sched.state_dict(), "gen": gen.get_state(),
+                    "rng": rng.bit_generator.state, "best": best, "epoch": epoch + 1,
+                    "args": fixed}, str(tmp))
+        tmp.replace(ckpt)
+    total = time.perf_counter() - start
+    summary = {"event": "end", "weights": str(out), "wall_s": round(total),
+               "best_epoch": best["epoch"], "val_point_acc_ego": best["val_point_acc_ego"],
+               "val_point_acc_all": best["val_point_acc_all"],
+               "weights_bytes": out.stat().st_size}
+    with log_path.open("a") as f:
+        f.write(json.dumps(summary) + "\n")
+    print(json.dumps(summary))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
