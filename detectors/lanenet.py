@@ -30,8 +30,7 @@ with the results of `detect` bit for bit; it takes 1.1x less time than two `dete
 from __future__ import annotations
 
 import hashlib
-from collections.abc import Iterator, Sequence
-from contextlib import contextmanager
+from collections.abc import Sequence
 from dataclasses import dataclass, fields, replace
 from importlib import resources
 from pathlib import Path
@@ -66,6 +65,7 @@ from lanekeep.detectors.lanenet_model import (
     prepare_frame,
 )
 from lanekeep.detectors.lanenet_targets import SLOTS, CellGrid
+from lanekeep.detectors.network_io import WeightsError, one_torch_thread, read_weights_blob
 from lanekeep.geometry.camera_model import CameraModel
 
 FORMAT = "lanekeep-lanenet/1"
@@ -74,39 +74,6 @@ DEFAULT_WEIGHTS = "weights/lanenet.pt"  # inside the detectors package
 # Slot order of a mirrored frame's outputs: its ego-left is the frame's ego-right, and so on.
 MIRRORED_SLOTS = [SLOTS.index(n.replace("left", "?").replace("right", "left").replace("?", "right"))
                   for n in SLOTS]
-
-
-
-@contextmanager
-def _one_thread() -> Iterator[None]:
-    """One intra-op thread for the network: oneDNN's convolutions sum in an order that depends
-    on the thread count (outputs differ by ~1e-7), and in a closed loop that grows into
-    another episode; so a bench worker and the parent must run it alike. The network is small
-    enough that a second thread hardly helps (`lanekeep perf` measures it), and where the other
-    core is busy it hurts: each parallel call waits for the second thread's time slice. So
-    every torch computation of a frame runs inside this, the batch's mirror flip too (outside,
-    back-to-back frames took 3x as long, median, on a 2-core machine with its other core
-    busy). torch's intra-op thread count belongs to the calling thread (OpenMP's setting is
-    per thread; a new thread starts from the last count set anywhere), so this sets and
-    restores the count of the thread it runs on: an episode's two detection threads
-    (lanekeep/driver/detection.py) each run their network on one."""
-    before = torch.get_num_threads()
-    if before == 1:
-        yield
-        return
-    torch.set_num_threads(1)
-    try:
-        yield
-    finally:
-        torch.set_num_threads(before)
-
-
-class WeightsError(ValueError):
-    """A weights file that cannot become a LaneNet; the message starts with the file's path."""
-
-    def __init__(self, path: str | Path, why: str) -> None:
-        super().__init__(f"{path}: {why}")
-        self.path = str(path)
 
 
 def save_weights(model: LaneNet, path: str | Path, meta: dict | None = None) -> None:
@@ -118,18 +85,7 @@ def save_weights(model: LaneNet, path: str | Path, meta: dict | None = None) -> 
 def load_weights(path: str | Path) -> LaneNet:
     """The network stored in `path`, in eval mode, or `WeightsError`."""
     p = Path(path)
-    if not p.is_file():
-        raise WeightsError(p, "no such weights file")
-    if p.stat().st_size == 0:
-        raise WeightsError(p, "weights file is empty")
-    try:
-        blob = torch.load(str(p), map_location="cpu", weights_only=True)
-    except Exception as exc:  # noqa: BLE001 - any unpickling failure means the same thing
-        # torch's own text advises weights_only=False, which we never do: name the kind only.
-        raise WeightsError(p, "not a torch weights file (corrupt, truncated or another format; "
-                              f"{type(exc).__name__})") from None
-    if not isinstance(blob, dict) or blob.get("format") != FORMAT:
-        raise WeightsError(p, f"not a LaneNet weights file (expected format {FORMAT!r})")
+    blob = read_weights_blob(p, FORMAT, "LaneNet")
     try:
         model = LaneNet(LaneNetConfig.from_dict(blob["config"]))
     except (KeyError, TypeError, ValueError) as exc:
@@ -355,7 +311,7 @@ def _infer_together(detectors: list[LaneNetDetector], frames: list[np.ndarray]) 
     placed: list[tuple[LaneNetOutput | None, int]] = [(None, 0)] * len(detectors)
     # Every torch call inside: one outside would run on the process's thread count and, on
     # a machine whose other core is busy, wait milliseconds for its second thread.
-    with torch.inference_mode(), portable_torch(), _one_thread():
+    with torch.inference_mode(), portable_torch(), one_torch_thread():
         for members in groups.values():
             items, starts = [], []
             for i in members:

@@ -24,8 +24,6 @@ the file.
 
 from __future__ import annotations
 
-from collections.abc import Iterator
-from contextlib import contextmanager
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
@@ -48,6 +46,7 @@ from lanekeep.detectors.lanenet_decode import (
     fit_boundaries,
 )
 from lanekeep.detectors.lanenet_targets import CellGrid
+from lanekeep.detectors.network_io import WeightsError, one_torch_thread, read_weights_blob
 from lanekeep.detectors.rowanchor_model import (
     LANES,
     MIRRORED_LANES,
@@ -64,14 +63,6 @@ DEFAULT_WEIGHTS = "weights/rowanchor.pt"  # inside the detectors package
 MIRROR_AGREE_BINS = 2.0  # a frame's and its mirror's points further apart are two readings
 
 
-class WeightsError(ValueError):
-    """A weights file that cannot become a RowAnchorNet; the message starts with its path."""
-
-    def __init__(self, path: str | Path, why: str) -> None:
-        super().__init__(f"{path}: {why}")
-        self.path = str(path)
-
-
 def save_weights(model: RowAnchorNet, path: str | Path, meta: dict | None = None,
                  half: bool = True) -> None:
     """Write the architecture, the weights (float16 with `half`) and plain metadata."""
@@ -84,17 +75,7 @@ def save_weights(model: RowAnchorNet, path: str | Path, meta: dict | None = None
 def load_weights(path: str | Path) -> RowAnchorNet:
     """The network stored in `path`, float32, in eval mode, or `WeightsError`."""
     p = Path(path)
-    if not p.is_file():
-        raise WeightsError(p, "no such weights file")
-    if p.stat().st_size == 0:
-        raise WeightsError(p, "weights file is empty")
-    try:
-        blob = torch.load(str(p), map_location="cpu", weights_only=True)
-    except Exception as exc:  # noqa: BLE001 - any unpickling failure means the same thing
-        raise WeightsError(p, "not a torch weights file (corrupt, truncated or another format; "
-                              f"{type(exc).__name__})") from None
-    if not isinstance(blob, dict) or blob.get("format") != FORMAT:
-        raise WeightsError(p, f"not a row-anchor weights file (expected format {FORMAT!r})")
+    blob = read_weights_blob(p, FORMAT, "row-anchor")
     try:
         model = RowAnchorNet(RowAnchorConfig.from_dict(blob["config"]))
     except (KeyError, TypeError, ValueError) as exc:
@@ -108,20 +89,6 @@ def load_weights(path: str | Path) -> RowAnchorNet:
         raise WeightsError(p, "weights do not fit the row-anchor architecture: "
                               f"{first[1].strip() if len(first) > 1 else exc}") from None
     return model.eval()
-
-
-@contextmanager
-def _one_thread() -> Iterator[None]:
-    """One intra-op thread for the forward, as LaneNet runs (detectors/lanenet.py says why:
-    sums that do not depend on the thread count, and no wait on a busy second core)."""
-    before = torch.get_num_threads()
-    if before != 1:
-        torch.set_num_threads(1)
-    try:
-        yield
-    finally:
-        if before != 1:
-            torch.set_num_threads(before)
 
 
 @dataclass(frozen=True)
@@ -212,7 +179,7 @@ class RowAnchorDetector:
         small = frame if (h, w) == (cfg.height, cfg.width) else cv2.resize(
             frame, (cfg.width, cfg.height), interpolation=cv2.INTER_AREA)  # as the dataset's
         item = torch.from_numpy(np.ascontiguousarray(small.transpose(2, 0, 1)))[None]
-        with torch.inference_mode(), portable_torch(), _one_thread():
+        with torch.inference_mode(), portable_torch(), one_torch_thread():
             if self.settings.mirror:
                 item = torch.cat([item, item.flip(-1)])
             logits = self.model(item)
