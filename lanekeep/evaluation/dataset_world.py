@@ -116,7 +116,10 @@ def _camera(rng: np.random.Generator, dashcam: bool = False) -> CameraConfig:
     fov_scale = math.tan(math.radians(hfov / 2)) / nominal
     f = 640.0 / math.tan(math.radians(hfov / 2))
     horizon = float(rng.uniform(200.0, 450.0))
-    pitch = math.degrees(math.atan((359.5 - horizon) / f))
+    # Pitching up (+, the mount's sign) moves the horizon down the image. Until 2026-11-29
+    # this sign was reversed: the drawn rows 200-450 rendered at 270-519, mirrored about the
+    # centre row (docs/experiments.md, session 13, "What the dataset contains").
+    pitch = math.degrees(math.atan((horizon - 359.5) / f))
     camera = CameraConfig(
         width=640, height=360,
         read_noise_dn=float(rng.uniform(0.5, 3.0)),

@@ -60,6 +60,26 @@ def test_remounted_camera_renders_what_its_model_projects(mount):
         assert _paint_at(world, rig, "front", uv) == 0  # boundary 0: the right edge
 
 
+@pytest.mark.parametrize("seed", [3, 8])  # drawn rows 259 and 447
+def test_a_drawn_horizon_is_where_the_camera_sees_it(seed):
+    """A dataset camera drawn for horizon row h (at 720 rows) sees the ground far ahead at row
+    h, not at 720 - h: until 2026-11-29 the pitch had the opposite sign to the mount's (+ =
+    up), and the worlds' horizons spanned rows 270-519 instead of 200-450."""
+    from lanekeep.evaluation.dataset_world import _camera
+
+    rng = np.random.default_rng(seed)
+    rng.uniform(62.0, 120.0)  # the lens, then the horizon: _camera's first two draws
+    drawn = float(rng.uniform(200.0, 450.0))
+    mount = _camera(np.random.default_rng(seed))
+    base = load_scenario("clear_straight")
+    scenario = dataclasses.replace(base, camera=dataclasses.replace(
+        mount, preset="paper", roll_deg=0.0, yaw_offset_deg=0.0))
+    camera = camera_from_model(build(scenario).model, "front", 1280, 720)
+    uv, _ = camera.project(np.array([[1.0e4, 0.0, 0.0]]))
+    assert abs(drawn - 359.5) > 40.0  # a seed whose mirror image is far from it
+    assert uv[0, 1] == pytest.approx(drawn, abs=3.0)
+
+
 @pytest.mark.parametrize("key, value", [("mount_height_m", 0.3), ("fov_scale", 2.0),
                                         ("roll_deg", 45.0), ("pitch_offset_deg", -40.0)])
 def test_camera_mount_out_of_range_is_named(key, value):
