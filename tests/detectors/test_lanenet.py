@@ -32,6 +32,7 @@ from lanekeep.detectors.lanenet_targets import (
     lanenet_loss,
     slots_from_lateral,
 )
+from lanekeep.detectors.network_io import one_torch_thread
 from lanekeep.geometry.camera_model import CameraModel
 
 W, H = 1280, 720
@@ -323,11 +324,12 @@ def test_overfit_synthetic_lanes_end_to_end(tmp_path):
     batch = collate([[encode(lab, grid)] for lab in labels])
     model = LaneNet(config, seed=0)
     opt = torch.optim.Adam(model.parameters(), lr=3e-3)
-    for _ in range(150):  # sub-pixel by ~100 steps; ~0.4 s of CPU a step
-        opt.zero_grad()
-        loss, parts = lanenet_loss(model(x)[0], batch)
-        loss.backward()
-        opt.step()
+    with one_torch_thread():  # the end point must not depend on the worker's thread count
+        for _ in range(150):  # sub-pixel by ~100 steps; ~0.4 s of CPU a step
+            opt.zero_grad()
+            loss, parts = lanenet_loss(model(x)[0], batch)
+            loss.backward()
+            opt.step()
     model.eval()
     with torch.no_grad():
         out, _ = model(x)
