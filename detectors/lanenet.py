@@ -156,6 +156,8 @@ class Decoded:
 class LaneNetDetector:
     """`Detector` protocol over the spatiotemporal network (paper 000)."""
 
+    weights_format = FORMAT  # the files `--weights` may give it (registry.weights_fit)
+
     name = "lanenet"
 
     def __init__(

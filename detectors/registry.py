@@ -19,7 +19,10 @@ module and attribute names instead, and imported the first time it is made:
 
 A learned detector takes `weights=` (a file); `make_detector(..., weights=FILE)` passes it on to
 those that accept it, and `detector_weights(FILE)` scopes the same override around code that
-builds its detectors itself (an `Episode`).
+builds its detectors itself (an `Episode`). Within the scope a file goes only to the detectors of
+its format (a class's `weights_format`, e.g. LaneNet's "lanekeep-lanenet/1"): a LaneNet file
+given to a loop with the row-anchor observer as its reference reaches LaneNet, and the observer
+keeps its own.
 
 A detector outside this package needs no registration: every name taken here may also be an
 import path `package.module:Class`, or a name an installed distribution registers in the
@@ -179,6 +182,35 @@ def takes_weights(name: str) -> bool:
     return "weights" in inspect.signature(_resolve(name)).parameters
 
 
+def _file_format(path: str) -> str | None:
+    """The `format` a weights file declares, or None where it cannot be read as one (the
+    detector that loads it then names the problem)."""
+    try:
+        import torch
+
+        blob = torch.load(path, map_location="cpu", weights_only=True)
+    except Exception:  # noqa: BLE001 - unreadable for any reason: the loader says why
+        return None
+    return blob.get("format") if isinstance(blob, dict) else None
+
+
+def weights_fit(name: str, path: str) -> bool:
+    """Whether weights file `path` is of detector `name`'s format (its class's
+    `weights_format`); True for a detector that declares none and for a file whose format
+    cannot be read, so that the detector's own loader reports what is wrong with it."""
+    wanted = getattr(_resolve(name), "weights_format", None)
+    if wanted is None:
+        return True
+    found = _file_format(str(path))
+    return found is None or found == wanted
+
+
+def _scoped_weights(name: str) -> str | None:
+    """The `detector_weights` scope's file if it is of `name`'s format, else None."""
+    path = _WEIGHTS.get()
+    return path if path is not None and weights_fit(name, path) else None
+
+
 @contextmanager
 def detector_weights(path: str | None) -> Iterator[None]:
     """Within this block, detectors that take weights are made from `path` (None: their own
@@ -202,13 +234,15 @@ def make_detector(
     "front", "rear", anything else = a real dashcam). Unknown names, bad import paths and
     objects that are no Detector raise ConfigError (a ValueError).
 
-    `weights` (else the `detector_weights` scope's file) goes only to detectors that take one;
-    a learned detector without either loads its own default file. A file that cannot be
-    loaded raises the detector's error (a ValueError whose message starts with the path).
+    `weights` goes only to detectors that take one (and the `detector_weights` scope's file
+    only to those of its format); a learned detector without either loads its own default
+    file. A file that cannot be loaded raises the detector's error (a ValueError whose message
+    starts with the path).
     """
     factory = _resolve(name)
     extra = {}
-    weights = weights if weights is not None else _WEIGHTS.get()
+    if weights is None and takes_weights(name):
+        weights = _scoped_weights(name)
     if weights is not None and takes_weights(name):
         extra["weights"] = weights
     if name not in DETECTORS:  # a plugin (import path, entry point): its errors name it
@@ -256,7 +290,8 @@ def check_weights(name: str, config: DetectorsConfig | None = None,
 
     A learned detector's module provides `load_weights(path)` and `DEFAULT_WEIGHTS` (its
     shipped file, inside the detectors package); the file is, as when it is made: `weights`,
-    else the `detector_weights` scope's, else its settings' `weights`, else the shipped one.
+    else the `detector_weights` scope's if it is of this detector's format, else its
+    settings' `weights`, else the shipped one.
     Returns the file's path, or None for a detector without weights.
     Raises:
       ValueError: the detector's own error for that file (WeightsError: "PATH: why").
@@ -266,7 +301,7 @@ def check_weights(name: str, config: DetectorsConfig | None = None,
     module = importlib.import_module(_resolve(name).__module__)
     if not hasattr(module, "load_weights"):  # a plugin that loads its weights its own way
         return None
-    weights = weights if weights is not None else _WEIGHTS.get()
+    weights = weights if weights is not None else _scoped_weights(name)
     if weights is None:
         weights = (getattr(detector_settings(name, config), "weights", "")
                    or str(resources.files("lanekeep.detectors").joinpath(module.DEFAULT_WEIGHTS)))
@@ -278,13 +313,20 @@ def check_detectors_weights(names: list[str], config: DetectorsConfig | None = N
                             weights: str | None = None) -> list[str]:
     """`check_weights` for each of `names` that takes weights: the files they would load.
 
-    A `weights` file given while none of `names` takes one is still checked: it must be a
-    file of some learned detector (LaneNet's or the row-anchor observer's), so that a wrong
+    A `weights` file goes to those of `names` of its format (`weights_fit`); the others are
+    checked with their own files. It must fit one of them, or, while none of `names` takes
+    weights, some learned detector (LaneNet's or the row-anchor observer's), so that a wrong
     path on a command line is reported, not ignored.
     Raises:
       ValueError: the first bad file's error ("PATH: why").
     """
     learned = [n for n in dict.fromkeys(names) if takes_weights(n)]
+    if learned and weights is not None:
+        fitting = [n for n in learned if weights_fit(n, weights)]
+        if not fitting:  # the first one's loader names what the file is not
+            check_weights(learned[0], config, weights)
+        return [path for n in learned
+                if (path := check_weights(n, config, weights if n in fitting else None))]
     if not learned and weights is not None:
         errors = []
         for n in (n for n in known_detectors() if takes_weights(n)):

@@ -140,6 +140,8 @@ def _pooled(position: np.ndarray, presence: np.ndarray, bins: int
 class RowAnchorDetector:
     """`Detector` protocol over the row-anchor network: one frame, no state between frames."""
 
+    weights_format = FORMAT  # the files `--weights` may give it (registry.weights_fit)
+
     name = "rowanchor"
 
     def __init__(
