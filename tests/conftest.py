@@ -6,7 +6,9 @@ their start state before every test, so that no test sees what another left behi
 results do not depend on the order tests run in.
 """
 
+import json
 import os
+import time
 
 import pytest
 from shared_runs import set_root
@@ -52,3 +54,20 @@ def pytest_collection_modifyitems(config, items):
     the workers start on the long runs and the short tests fill the end, so that no worker
     waits alone on one long run at the end."""
     items.sort(key=lambda item: item.get_closest_marker("slow") is None)
+
+
+# Where CI's wall time goes: with LANEKEEP_TEST_TIMELINE=FILE every test appends a line (its
+# worker, id, start and end in Unix seconds, setup and teardown included), from which a
+# worker's idle tail or a wait on another worker's shared run (tests/shared_runs.py) shows.
+_TIMELINE = os.environ.get("LANEKEEP_TEST_TIMELINE")
+
+
+@pytest.hookimpl(hookwrapper=True)
+def pytest_runtest_protocol(item, nextitem):
+    start = time.time()
+    yield
+    if _TIMELINE:
+        line = {"worker": os.environ.get("PYTEST_XDIST_WORKER", "main"), "test": item.nodeid,
+                "start": start, "end": time.time()}
+        with open(_TIMELINE, "a", encoding="utf-8") as f:
+            f.write(json.dumps(line) + "\n")
