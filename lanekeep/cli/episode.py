@@ -416,6 +416,7 @@ def add_display_options(p: argparse.ArgumentParser) -> None:
 
 def add_weights_option(p: argparse.ArgumentParser) -> None:
     p.add_argument("--weights", metavar="FILE", default=None,
-                   help="weights of the learned detector (lanenet) wherever a scenario uses it "
-                        "(default: the shipped detectors/weights/lanenet.pt); loaded before "
-                        "anything runs, a bad file is one error line and exit 2")
+                   help="weights for the learned detectors of the file's format (lanenet, "
+                        "rowanchor) wherever a scenario uses them (default: their shipped "
+                        "files); loaded before anything runs, a bad file is one error line "
+                        "and exit 2")
