@@ -63,7 +63,12 @@ def check_weights_option(scenarios: list[Scenario], weights: str | None) -> list
     """
     from lanekeep.detectors.registry import check_detectors_weights, known_detectors
 
-    names = [name for sc in scenarios
-             for name in (*sc.estimation.front_detectors, sc.estimation.reference_detector)
-             if name in known_detectors()]
-    return check_detectors_weights(names, None, weights)
+    checked: list[str] = []
+    for sc in scenarios:  # each with its own detectors settings (a `[lanenet] weights` table)
+        names = [name for name in (*sc.estimation.front_detectors,
+                                   sc.estimation.reference_detector)
+                 if name in known_detectors()]
+        checked += check_detectors_weights(names, sc.detectors, weights)
+    if not scenarios and weights is not None:
+        checked += check_detectors_weights([], None, weights)
+    return list(dict.fromkeys(checked))

@@ -250,6 +250,20 @@ def test_run_rejects_a_bad_weights_file_before_any_output(tmp_path, capsys, case
     assert not out.exists() and not (tmp_path / "out.rrd").exists()
 
 
+def test_run_checks_the_weights_a_detectors_table_names_before_any_output(tmp_path, capsys):
+    """`--detectors-config` with `[lanenet] weights = "..."`: the up-front check loads that
+    file, not the shipped one (until 2026-11-29 it checked the shipped file, and a missing
+    configured one failed only when the episode built its detectors)."""
+    missing = tmp_path / "nowhere" / "lanenet.pt"
+    config_file = tmp_path / "detectors.toml"
+    config_file.write_text(f"[lanenet]\nweights = {json.dumps(str(missing))}\n")
+    out = tmp_path / "out.json"
+    code = main(["run", "clear_straight", "--seconds", "1", "--detectors-config",
+                 str(config_file), "--json", str(out)])
+    one_error_line(capsys, code, start=f"lanekeep run: error: {missing}: no such weights file")
+    assert not out.exists()
+
+
 def test_bench_and_perf_reject_a_bad_weights_file(tmp_path, capsys):
     path = _bad_weights(tmp_path, "garbage")
     code = main(["bench", "clear_straight", "--seconds", "1", "--workers", "1",
