@@ -256,12 +256,14 @@ def build_set(condition: str, recipe: EvalRecipe) -> dict[str, np.ndarray]:
 
 
 def renderer_fingerprint() -> str:
-    """Hash of the code and models that draw a set (every module of the lanekeep package, its
-    subpackages included, and the MJCF files): a cached set made by other code is rendered
-    again rather than silently scored (any change counts, so a cache outlives no edit of the
-    package). Only this folder's modules were hashed once, and the world, camera and scenario
-    code had moved to lanekeep/world, lanekeep/sensing and lanekeep/scenario: a changed
-    renderer then read the old renders."""
+    """Hash of the code and models that draw a set: every package module this one reaches
+    through its imports (lanekeep/core/import_closure.py: the world, camera, scenario and
+    dataset code) and the MJCF files. A cached set made by other code is rendered again rather
+    than silently scored. Only this folder's modules were hashed once, and the world, camera
+    and scenario code had moved to lanekeep/world, lanekeep/sensing and lanekeep/scenario: a
+    changed renderer then read the old renders. Then the whole package was, until 2026-11-29:
+    an edit of a detector or a metric made every cached set unreadable, and documents scored
+    by two checkouts unpairable, though their sets were the same pixels."""
     digest = hashlib.sha256()
     for name, path in fingerprinted_files():
         digest.update(name.encode())
@@ -270,12 +272,17 @@ def renderer_fingerprint() -> str:
 
 
 def fingerprinted_files() -> list[tuple[str, Path]]:
-    """(name, path) of every file `renderer_fingerprint` hashes, sorted by name."""
-    import lanekeep
+    """(name, path) of every file `renderer_fingerprint` hashes, sorted by name: sources as
+    their path inside the package (e.g. "world/build.py"), MJCF files as "mjcf/NAME"."""
+    from lanekeep.core.import_closure import import_closure
     from lanekeep.mjcf import CAR_XML
 
-    root = Path(lanekeep.__file__).resolve().parent
-    paths = [(p.relative_to(root).as_posix(), p) for p in root.rglob("*.py")]
+    paths = []
+    for name, path in import_closure(__name__).items():
+        parts = name.split(".")[1:]
+        if path.name == "__init__.py":
+            parts.append("__init__")
+        paths.append(("/".join(parts) + ".py" if parts else "__init__.py", path))
     paths += [(f"mjcf/{p.name}", p) for p in Path(CAR_XML).parent.glob("*.xml")]
     return sorted(paths)
 
