@@ -18,7 +18,8 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 
 DEFAULT_DETECTORS = "hough,sliding_window,lanenet"
-TABLE_COLUMNS = (("ap", "AP", "{:.3f}"), ("iou", "IoU", "{:.3f}"), ("f1", "F1", "{:.3f}"),
+TABLE_COLUMNS = (("ap", "AP", "{:.3f}"), ("ap_ego", "APego", "{:.3f}"),
+                 ("iou", "IoU", "{:.3f}"), ("f1", "F1", "{:.3f}"),
                  ("iou_ego", "IoUego", "{:.3f}"), ("ade_cm", "ADE cm", "{:.1f}"),
                  ("fde_cm", "FDE cm", "{:.1f}"), ("offset_err_cm", "off cm", "{:.1f}"),
                  ("valid", "valid", "{:.2f}"), ("ms", "ms", "{:.1f}"))
@@ -153,7 +154,9 @@ def table(results: dict) -> str:
                 f"{(fmt.format(s[key]) if s[key] is not None and s[key] == s[key] else '-'):>8}"
                 for key, _, fmt in TABLE_COLUMNS)
             lines.append(f"{condition if k == 0 else '':<13} {name:<15}{cells}")
-    lines.append("AP: proposals vs marking boxes at IoU 0.5; IoU/F1: 30 px lane masks, Hungarian "
+    lines.append("AP: proposals vs marking boxes at IoU 0.5 (APego: the ego boundaries' boxes "
+                 "only, an ego-lane model's like-for-like figure); IoU/F1: 30 px lane masks, "
+                 "Hungarian "
                  "pairs; ADE/FDE/off: ego boundaries 4-20 m, valid frames only; ms: per 1280x720 "
                  "frame (lanekeep/evaluation/lane_metrics.py)")
     return "\n".join(lines)

@@ -61,7 +61,7 @@ def test_the_table_shows_a_dash_where_nothing_was_scored():
     results = {"night": {"detectors": {"hough": scored,
                                        "lanenet": {**scored, "ade_cm": None, "ms": math.nan}}}}
     lines = table(results).splitlines()
-    assert lines[0].split()[:4] == ["condition", "detector", "AP", "IoU"]
+    assert lines[0].split()[:5] == ["condition", "detector", "AP", "APego", "IoU"]
     assert lines[2].split()[:3] == ["night", "hough", "0.500"]
     lanenet = lines[3].split()
     assert lanenet[0] == "lanenet" and lanenet.count("-") == 2

@@ -84,11 +84,28 @@ def test_perfect_prediction_scores_ap_1_iou_1_ade_0():
     assert s["gt_boxes"] > 60 and s["gt_lanes"] == 12
     assert s["ap"] == pytest.approx(1.0)
     assert s["iou"] == pytest.approx(1.0) and s["iou_ego"] == pytest.approx(1.0)
+    # every lane proposed: the other lanes' boxes are false positives against the ego ones
+    assert 0.0 < s["ego_box_share"] < 1.0 and s["ap_ego"] < 1.0
     assert s["f1"] == pytest.approx(1.0)
     assert s["ade_cm"] == pytest.approx(0.0, abs=1e-4)
     assert s["fde_cm"] == pytest.approx(0.0, abs=1e-4)
     assert s["offset_err_cm"] == pytest.approx(0.0, abs=1e-4)
     assert s["valid"] == 1.0 and s["ms"] == 1.0
+
+
+def test_an_ego_only_model_is_bounded_by_the_ego_share_and_whole_on_ap_ego():
+    """A perfect model of the ego lane alone: AP at most the ego boundaries' share of all
+    boxes (it cannot recall the others), AP-ego 1."""
+    cam = _camera()
+    xs, slots, gy = _truth(cam)
+    ego = np.isin(slots, (0, 1))
+    pred = _perfect(xs[ego], slots[ego])
+    tally = Tally()
+    tally.add(FramePrediction(pred.boxes, pred.scores, pred.lanes, _estimate()), xs, slots, gy,
+              ms=1.0)
+    s = tally.summary()
+    assert s["ap_ego"] == pytest.approx(1.0)
+    assert s["ap"] == pytest.approx(s["ego_box_share"]) and s["ego_box_share"] < 1.0
 
 
 def test_shifted_estimate_has_the_known_ade_and_offset_error():
