@@ -6,7 +6,9 @@
 Runs one detector over one condition's set as `lanekeep eval` does (a fresh detector state per
 sequence, frames upscaled to 1280x720), and prints what the mean hides: the share of frames
 with no estimate and why (each reason counted), the offset error's median, 90th percentile and
-worst frames, and how many frames err by more than 10 cm. The worst frames (invalid ones
+worst frames, how many frames err by more than 10 cm, and what the detector's confidence says
+about that (`calibration`: per confidence band of the valid frames, the share within 10 cm; a
+confidence that means something rises with it). The worst frames (invalid ones
 first when asked with --invalid) go to --out as PNGs: the labelled ego boundaries in green,
 the detector's left / right in red / blue, its reason or offset error written on the frame.
 
@@ -49,7 +51,8 @@ def frame_errors(detector: str, condition: str, recipe: EvalRecipe, cache: str |
             est = pred.estimate
             err = offset_error(est, data["ground_y"][q, t], data["slots"][q, t])
             records.append({"q": q, "t": t, "valid": est.valid, "reason": est.reason,
-                            "error_m": err, "pred": pred, "frame": frame})
+                            "error_m": err, "confidence": float(est.confidence),
+                            "pred": pred, "frame": frame})
     return records, data
 
 
@@ -76,6 +79,25 @@ def _polyline(image: np.ndarray, xs: np.ndarray, colour: tuple[int, int, int]) -
         cv2.polylines(image, [pts], False, colour, 3)
 
 
+CALIBRATION_BANDS = (0.0, 0.2, 0.4, 0.6, 0.8, 1.0001)  # confidence bands, the last holds 1
+CALIBRATION_OK_M = 0.10  # "right" for the calibration table: the ego offset within 10 cm
+
+
+def calibration(records: list[dict]) -> list[dict]:
+    """Per confidence band of the valid, scored frames: how many, and the share whose offset
+    error is within CALIBRATION_OK_M. A confidence the MMAE or a tracker could take at its word
+    would give shares that rise with the band (ideally near the band's confidence)."""
+    scored = [r for r in records if r["valid"] and np.isfinite(r["error_m"])]
+    conf = np.array([r["confidence"] for r in scored], float)
+    ok = np.array([r["error_m"] <= CALIBRATION_OK_M for r in scored], bool)
+    rows = []
+    for lo, hi in zip(CALIBRATION_BANDS[:-1], CALIBRATION_BANDS[1:], strict=True):
+        band = (conf >= lo) & (conf < hi)
+        rows.append({"from": lo, "to": min(hi, 1.0), "frames": int(band.sum()),
+                     "share_ok": float(ok[band].mean()) if band.any() else float("nan")})
+    return rows
+
+
 def summary(records: list[dict]) -> str:
     n = len(records)
     invalid = collections.Counter(r["reason"] for r in records if not r["valid"])
@@ -90,6 +112,10 @@ def summary(records: list[dict]) -> str:
                      f"{100 * np.median(errs):.1f}, p90 {100 * np.quantile(errs, 0.9):.1f}, "
                      f"max {100 * errs.max():.1f}; > 10 cm on {np.mean(errs > 0.1):.0%}, "
                      f"> 5 cm on {np.mean(errs > 0.05):.0%}")
+        bands = [f"{b['from']:.1f}-{b['to']:.1f}: {b['frames']} frames, "
+                 + (f"{b['share_ok']:.0%} within {100 * CALIBRATION_OK_M:.0f} cm"
+                    if b["frames"] else "-") for b in calibration(records)]
+        lines.append("confidence band -> share right: " + "; ".join(bands))
     return "\n".join(lines)
 
 

@@ -1,0 +1,23 @@
+"""lanekeep/tuning/classical_errors.py's calibration table: per confidence band of the valid
+frames, the share whose ego offset is within 10 cm (what a detector's confidence says)."""
+
+import math
+
+from lanekeep.tuning.classical_errors import calibration, summary
+
+
+def _record(valid: bool, confidence: float, error_m: float) -> dict:
+    return {"valid": valid, "reason": "" if valid else "no lines", "confidence": confidence,
+            "error_m": error_m}
+
+
+def test_calibration_counts_each_band_and_the_share_within_10_cm():
+    records = [_record(True, 0.9, 0.02), _record(True, 0.95, 0.30), _record(True, 1.0, 0.05),
+               _record(True, 0.1, 0.50), _record(False, 0.9, math.nan),
+               _record(True, 0.5, math.nan)]  # unscored (no labelled ego pair): left out
+    bands = calibration(records)
+    assert [b["frames"] for b in bands] == [1, 0, 0, 0, 3]
+    assert bands[0]["share_ok"] == 0.0 and math.isnan(bands[1]["share_ok"])
+    assert bands[-1]["to"] == 1.0 and bands[-1]["share_ok"] == 2 / 3  # confidence 1 included
+    text = summary(records)
+    assert "0.8-1.0: 3 frames, 67% within 10 cm" in text and "0.2-0.4: 0 frames, -" in text
