@@ -57,7 +57,8 @@ def pytest_collection_modifyitems(config, items):
 
 
 # Where CI's wall time goes: with LANEKEEP_TEST_TIMELINE=FILE every test appends a line (its
-# worker, id, start and end in Unix seconds, setup and teardown included), from which a
+# worker, id, start and end in Unix seconds, setup and teardown included; tools/timeline_report.py
+# reads it), from which a
 # worker's idle tail or a wait on another worker's shared run (tests/shared_runs.py) shows.
 _TIMELINE = os.environ.get("LANEKEEP_TEST_TIMELINE")
 
