@@ -39,6 +39,7 @@ condition, the seeds, the dataset format); files are written to a temporary name
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import json
 from dataclasses import asdict, dataclass, replace
@@ -255,6 +256,7 @@ def build_set(condition: str, recipe: EvalRecipe) -> dict[str, np.ndarray]:
     return out
 
 
+@functools.cache  # once per process (~0.4 s): the code a process runs does not change under it
 def renderer_fingerprint() -> str:
     """Hash of the code and models that draw a set: every package module this one reaches
     through its imports (lanekeep/core/import_closure.py: the world, camera, scenario and
