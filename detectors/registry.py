@@ -241,10 +241,10 @@ def make_detector(
     """
     factory = _resolve(name)
     extra = {}
-    if weights is None and takes_weights(name):
-        weights = _scoped_weights(name)
-    if weights is not None and takes_weights(name):
-        extra["weights"] = weights
+    if takes_weights(name):
+        weights = weights if weights is not None else _scoped_weights(name)
+        if weights is not None:
+            extra["weights"] = weights
     if name not in DETECTORS:  # a plugin (import path, entry point): its errors name it
         extra.update(_inherited_settings(factory, config))
         detector = plugins.build(name, plugins.DETECTORS, factory, camera, config=config,
