@@ -32,6 +32,9 @@ class LaneEstimate:
         confidence: 0..1, the detector's own belief (e.g. share of windows with paint).
         image_points: pixel points (N, 2) per side ("left"/"right") the fit came from.
         reason: why the estimate is invalid, for logs.
+        others: boundary polynomials of the other lanes' lines the detector found beside the
+            ego lane (neighbouring lanes), for evaluations that count every lane; the ego
+            lane's own are `left` and `right`. Empty when it reports the ego lane only.
     """
 
     valid: bool
@@ -42,11 +45,12 @@ class LaneEstimate:
     confidence: float = 0.0
     image_points: dict[str, np.ndarray] = field(default_factory=dict)
     reason: str = ""
+    others: tuple[np.ndarray, ...] = ()
 
     def __post_init__(self) -> None:
         if self.valid:
             numbers = [self.offset_m, self.x_m, self.confidence]
-            for side in (self.left, self.right):
+            for side in (self.left, self.right, *self.others):
                 if side is not None:
                     numbers.extend(np.asarray(side, dtype=float).ravel().tolist())
             if not all(math.isfinite(v) for v in numbers):

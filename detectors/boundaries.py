@@ -112,8 +112,10 @@ def assemble(
     camera: CameraModel,
     confidence: float,
     lane_width_m: float | None = None,
+    others: tuple[Boundary, ...] = (),
 ) -> LaneEstimate:
-    """Offset at `x_ref` from the two boundaries, or from one and the lane width."""
+    """Offset at `x_ref` from the two boundaries, or from one and the lane width; `others`
+    (the other lanes' lines found, `lane_lines.choose_lanes`) are passed on as they are."""
     width = lane_width_m or rules.lane_width_m
     left, right = (b if plausible(b, x_ref, rules, other) else None
                    for b, other in ((left, right), (right, left)))
@@ -161,6 +163,7 @@ def assemble(
         right=None if right is None else right.coeffs.copy(),
         confidence=float(np.clip(confidence, 0.0, 1.0)),
         image_points=image_points,
+        others=tuple(b.coeffs.copy() for b in others),
     )
 
 

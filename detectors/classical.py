@@ -1,7 +1,8 @@
 """What the paper's two classical models share: construction, the image stage, assembly.
 
 A classical detector is its binarisation of the region of interest (`binarise`) and its way of
-finding the two boundaries in the binary bird's-eye view (`find_boundaries`); everything
+finding the lane lines in the binary bird's-eye view (`find_boundaries`: the car's two and the
+other lanes', detectors/lane_lines.py); everything
 around them, the ground window and look-ahead, the shared image stage (crop, scale, rain
 streaks, noise tests, warp) and the assembly into a `LaneEstimate`, is here once. Models that
 read the same frame share its region of interest (`image_stage.SHARED_ROIS`).
@@ -13,7 +14,7 @@ import numpy as np
 
 from lanekeep.detectors.base import LaneEstimate
 from lanekeep.detectors.birds_eye import detector_view
-from lanekeep.detectors.boundaries import Boundary, assemble, support_confidence
+from lanekeep.detectors.boundaries import assemble, support_confidence
 from lanekeep.detectors.config import DetectorsConfig, GroundWindow, load_config
 from lanekeep.detectors.image_stage import (
     SHARED_ROIS,
@@ -24,6 +25,7 @@ from lanekeep.detectors.image_stage import (
     reject_noise,
     warped_roi,
 )
+from lanekeep.detectors.lane_lines import LaneLines
 from lanekeep.detectors.vehicle_mask import VehicleFilter
 from lanekeep.geometry.camera_model import CameraModel
 from lanekeep.geometry.lane_poly import LanePoly
@@ -93,8 +95,9 @@ class ClassicalDetector:
         arrays are shared with the other models: read them, never write)."""
         raise NotImplementedError
 
-    def find_boundaries(self, bev: np.ndarray) -> tuple[Boundary | None, Boundary | None]:
-        """(left, right) boundaries in the binary bird's-eye view, None where not found."""
+    def find_boundaries(self, bev: np.ndarray) -> LaneLines:
+        """The car's (left, right) boundaries in the binary bird's-eye view (None where not
+        found) and the other lanes' lines."""
         raise NotImplementedError
 
     def remember(self, estimate: LaneEstimate) -> None:
@@ -132,10 +135,11 @@ class ClassicalDetector:
             estimate = LaneEstimate.invalid(noise, self.x_ref)
             self.remember(estimate)  # a noisy frame drops the fit, not the measured width
             return estimate
-        left, right = self.find_boundaries(bev)
+        lines = self.find_boundaries(bev)
         width = self.lane_width_m if self.bird_eye_paint else None
-        estimate = assemble(left, right, self.x_ref, self.config.lane, self.camera,
-                            support_confidence(left, right, self.view), width)
+        estimate = assemble(lines.left, lines.right, self.x_ref, self.config.lane, self.camera,
+                            support_confidence(lines.left, lines.right, self.view), width,
+                            lines.others)
         if self.bird_eye_paint:
             self._measure_width(estimate)
         self.remember(estimate)

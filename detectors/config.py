@@ -136,6 +136,10 @@ class LaneRules:
     max_heading_deg: float = 20.0  # a boundary's direction at the look-ahead, from the car's
     max_extrapolation: float = 1.5  # a short lone boundary reaches this many spans at most
     inlier_m: float = 0.25  # points further from a boundary's fit are refitted without; 0 = off
+    # Lane lines run parallel: a line found whose direction (at the near edge of the view)
+    # differs from the best-supported lines' by more than this is no lane line (a sliding
+    # track that jumped between lines, a vehicle's edge); detectors/lane_lines.py.
+    max_divergence_deg: float = 6.0
 
     def __post_init__(self) -> None:
         if not self.lane_width_m > 0:
@@ -358,6 +362,12 @@ def _as_table(config) -> dict:
     """A settings dataclass as the TOML table that would spell it out in full."""
     return {f.name: _as_table(v) if is_dataclass(v := getattr(config, f.name)) else v
             for f in fields(config) if f.metadata.get("toml", True)}
+
+
+def config_table(config: DetectorsConfig) -> dict:
+    """Every setting of `config` as the detectors table that spells it out in full (with the
+    registered detectors' own tables): what a record of a run's settings holds."""
+    return {**_as_table(config), **{name: dict(t) for name, t in config.tables.items()}}
 
 
 def _merged(defaults: dict, overrides: dict) -> dict:

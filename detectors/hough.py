@@ -21,6 +21,7 @@ import numpy as np
 from lanekeep.detectors.boundaries import Boundary, fit_boundary, parallel
 from lanekeep.detectors.classical import ClassicalDetector
 from lanekeep.detectors.image_stage import RegionOfInterest
+from lanekeep.detectors.lane_lines import LaneLines, choose_lanes
 from lanekeep.detectors.paper_thresholds import model1_paint
 from lanekeep.detectors.ridge import paint_ridges
 from lanekeep.geometry.lane_poly import LanePoly
@@ -122,12 +123,13 @@ class HoughDetector(ClassicalDetector):
         x1, y1, x2, y2 = np.repeat(seg, counts, axis=0).T
         return np.stack([x1 + t * (x2 - x1), y1 + t * (y2 - y1)], axis=1)
 
-    def boundaries(self, seg: np.ndarray) -> tuple[Boundary | None, Boundary | None]:
-        """Seed a boundary per side near the car, grow both with continuing segments, fit them."""
+    def lines(self, seg: np.ndarray) -> list[Boundary]:
+        """Every line in the view: seed one per cluster of near segments (by their lateral
+        position at the near edge), grow each with the segments that continue its fit, fit."""
         cfg, rules, w = self.config.hough, self.config.lane, self.view.window
         near, d = w.x_near_m, w.direction
         if len(seg) == 0:
-            return None, None
+            return []
         dx, dy = seg[:, 2] - seg[:, 0], seg[:, 3] - seg[:, 1]
         slope = dy / dx
         length = np.hypot(dx, dy)
@@ -140,64 +142,56 @@ class HoughDetector(ClassicalDetector):
         cum = np.cumsum(length[pool][order])
         heading = float(slope[pool][order][np.searchsorted(cum, cum[-1] / 2.0)])
         y_near = seg[:, 1] + (near - seg[:, 0]) * heading
-        width = rules.lane_width_m
         used = np.zeros(len(seg), bool)
-        points: list[np.ndarray | None] = []
-        for side in (1.0, -1.0):
-            lateral = side * y_near
-            cand = np.flatnonzero(
-                near_seg
-                & (lateral >= rules.min_half_width * width)
-                & (lateral <= rules.max_half_width * width)
-            )
-            cand = cand[np.argsort(lateral[cand])]
-            members = None  # the nearest cluster (lateral, at the near edge) long enough
-            start = 0
-            for i in range(1, len(cand) + 1):
-                if i == len(cand) or lateral[cand[i]] - lateral[cand[i - 1]] > cfg.cluster_m:
-                    group = cand[start:i]
-                    if length[group].sum() >= 2.0 * cfg.min_length_m:
-                        members = group
-                        break
-                    start = i
-            if members is None:
-                points.append(None)
-                continue
-            used[members] = True
-            points.append(self._samples(seg[members]))
-        # Grow outwards: a segment joins the side whose current fit it continues best. A
-        # side's fit and reach change only when a segment joins it, so they are kept until
-        # then (the fit is the grow loop's cost: one per side per segment otherwise).
+        points: list[np.ndarray] = []
+        cand = np.flatnonzero(near_seg)
+        cand = cand[np.argsort(y_near[cand])]
+        start = 0
+        for i in range(1, len(cand) + 1):
+            if i == len(cand) or y_near[cand[i]] - y_near[cand[i - 1]] > cfg.cluster_m:
+                group = cand[start:i]
+                if length[group].sum() >= 2.0 * cfg.min_length_m:
+                    used[group] = True
+                    points.append(self._samples(seg[group]))
+                start = i
+        # Grow outwards: a segment joins the line whose current fit it continues best. A
+        # line's fit and reach change only when a segment joins it, so they are kept until
+        # then (the fit is the grow loop's cost: one per line per segment otherwise).
         x_cam = float(self.camera.position_m[0])
         weighted = not self.bird_eye_paint
-        fits = [None if p is None else fit_boundary(p, rules, x_cam, weighted)
-                for p in points]
-        current = [None if p is None else self._provisional(f, p, heading)
-                   for f, p in zip(fits, points, strict=True)]
-        reached = [None if p is None else float((d * p[:, 0]).max()) for p in points]
+        fits = [fit_boundary(p, rules, x_cam, weighted) for p in points]
+        current = [self._provisional(f, p, heading) for f, p in zip(fits, points, strict=True)]
+        reached = [float((d * p[:, 0]).max()) for p in points]
         for j in np.argsort(dist):
             if used[j]:
                 continue
-            best, best_side = np.inf, -1
+            best, best_line = np.inf, -1
             x1, y1, x2, y2 = seg[j]
             far = max(d * x1, d * x2)
             for k, coeffs in enumerate(current):
-                if coeffs is None:
-                    continue
                 reach = max(0.0, far - reached[k])
                 tol = cfg.grow_tolerance_m + 0.03 * reach
                 lane = LanePoly.of(coeffs)
                 res = max(abs(y1 - lane.y(x1)), abs(y2 - lane.y(x2)))
                 if res < tol and res < best:
-                    best, best_side = res, k
-            if best_side >= 0:
+                    best, best_line = res, k
+            if best_line >= 0:
                 used[j] = True
-                pts = np.concatenate([points[best_side], self._samples(seg[j : j + 1])])
-                points[best_side] = pts
-                fits[best_side] = fit_boundary(pts, rules, x_cam, weighted)
-                current[best_side] = self._provisional(fits[best_side], pts, heading)
-                reached[best_side] = float((d * pts[:, 0]).max())
-        return parallel(fits[0], fits[1], rules, x_cam)
+                pts = np.concatenate([points[best_line], self._samples(seg[j : j + 1])])
+                points[best_line] = pts
+                fits[best_line] = fit_boundary(pts, rules, x_cam, weighted)
+                current[best_line] = self._provisional(fits[best_line], pts, heading)
+                reached[best_line] = float((d * pts[:, 0]).max())
+        return [f for f in fits if f is not None]
+
+    def boundaries(self, seg: np.ndarray) -> LaneLines:
+        """The car's lane and the other lane lines among the segments' lines."""
+        rules, w = self.config.lane, self.view.window
+        chosen = choose_lanes(self.lines(seg), w.x_near_m, rules, self.lane_width_m,
+                              self.config.hough.cluster_m)
+        left, right = parallel(chosen.left, chosen.right, rules,
+                               float(self.camera.position_m[0]))
+        return LaneLines(left, right, chosen.others)
 
     @staticmethod
     def _provisional(fit: Boundary | None, pts: np.ndarray, heading: float) -> np.ndarray:
@@ -207,5 +201,5 @@ class HoughDetector(ClassicalDetector):
         x0, y0 = pts.mean(axis=0)
         return np.array([y0 - heading * x0, heading, 0.0])
 
-    def find_boundaries(self, bev: np.ndarray) -> tuple[Boundary | None, Boundary | None]:
+    def find_boundaries(self, bev: np.ndarray) -> LaneLines:
         return self.boundaries(self.segments(bev))

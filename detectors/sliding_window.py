@@ -22,6 +22,7 @@ from lanekeep.detectors.boundaries import Boundary, fit_boundary, parallel
 from lanekeep.detectors.classical import ClassicalDetector
 from lanekeep.detectors.edge_pairs import edge_pair_paint
 from lanekeep.detectors.image_stage import RegionOfInterest
+from lanekeep.detectors.lane_lines import LaneLines, choose_lanes
 from lanekeep.detectors.paper_thresholds import model2_paint
 from lanekeep.geometry.lane_poly import LanePoly
 
@@ -111,22 +112,25 @@ class SlidingWindowDetector(ClassicalDetector):
         np.clip(scaled, 0, 255, out=scaled)
         return scaled.astype(np.uint8), gain
 
-    def _starts(self, bev: np.ndarray) -> list[float | None]:
-        """Histogram peak column per side (left, right) nearest the car, or None.
+    def _starts(self, bev: np.ndarray) -> list[float]:
+        """Histogram peak columns across the view, the strongest first.
 
-        The histogram sums the near part of the view; a side without a peak there (a dashed
-        line in its gap) is looked for again over the whole view.
+        The histogram sums the near part of the view; the whole view's peaks are added where
+        the near part has none within a cluster's width (a dashed line in its gap there).
         """
-        cfg = self.config.sliding_window
+        cfg, w = self.config.sliding_window, self.view.window
         rows = int(round(self.view.rows * cfg.histogram_fraction))
         out = self._peaks(bev[-rows:])
-        if None in out:
-            again = self._peaks(bev)
-            out = [a if a is not None else b for a, b in zip(out, again, strict=True)]
-        return out
+        gap = self.config.hough.cluster_m / w.m_per_col
+        for col, count in self._peaks(bev):
+            if all(abs(col - c) > gap for c, _ in out):
+                out.append((col, count))
+        return [c for c, _ in sorted(out, key=lambda p: -p[1])]
 
-    def _peaks(self, part: np.ndarray) -> list[float | None]:
-        cfg, rules, w = self.config.sliding_window, self.config.lane, self.view.window
+    def _peaks(self, part: np.ndarray) -> list[tuple[float, float]]:
+        """(column, smoothed count) of the histogram's local maxima with `min_peak_pixels`
+        or more."""
+        cfg, w = self.config.sliding_window, self.view.window
         hist = (part > 0).sum(axis=0).astype(float)
         k = max(1, int(round(0.3 / w.m_per_col)))
         hist = np.convolve(hist, np.ones(k), mode="same")
@@ -134,22 +138,29 @@ class SlidingWindowDetector(ClassicalDetector):
         # cut the reach short): a column at least that high is a local maximum.
         padded = np.pad(hist, k, constant_values=-np.inf)
         local_max = np.lib.stride_tricks.sliding_window_view(padded, 2 * k + 1).max(axis=1)
-        out: list[float | None] = []
-        for side in (1.0, -1.0):
-            lateral = side * self._near_y
-            ok = ((lateral >= rules.min_half_width * rules.lane_width_m)
-                  & (lateral <= rules.max_half_width * rules.lane_width_m)
-                  & (hist >= cfg.min_peak_pixels))
-            idx = np.flatnonzero(ok)
-            if len(idx) == 0:
-                out.append(None)
-                continue
-            # Local maxima among the allowed columns; take the nearest to the car.
-            peaks = idx[hist[idx] >= local_max[idx]]
-            if len(peaks) == 0:
-                peaks = idx[[np.argmax(hist[idx])]]
-            out.append(float(peaks[np.argmin(lateral[peaks])]))
-        return out
+        peaks = np.flatnonzero((hist >= cfg.min_peak_pixels) & (hist >= local_max))
+        if len(peaks) == 0:
+            return []
+        # A flat top is one peak: keep the first column of each run of adjacent ones.
+        peaks = peaks[np.concatenate([[True], np.diff(peaks) > k])]
+        return [(float(c), float(hist[c])) for c in peaks]
+
+    def _explained(self, col: float, lines: list[Boundary]) -> bool:
+        """Whether a histogram peak at `col` lies on a line already found: within a cluster's
+        width of it on some row the histogram summed (a line slanting across the view, in a
+        turn or at a heading, piles up peaks all along its way)."""
+        cfg, w = self.config.sliding_window, self.view.window
+        if not lines:
+            return False
+        rows = np.arange(self.view.rows - int(round(self.view.rows * cfg.histogram_fraction)),
+                         self.view.rows)
+        x, _ = self.view.to_ground(np.zeros(len(rows)), rows)
+        gap = self.config.hough.cluster_m / w.m_per_col
+        for b in lines:
+            cols, _ = self.view.to_pixels(x, b.lane.y(x))
+            if np.min(np.abs(cols - col)) <= gap:
+                return True
+        return False
 
     def _slide(self, start_col: float, ys: np.ndarray, xs: np.ndarray) -> np.ndarray:
         """Indices of the bird's-eye pixels (ys rows, xs cols) the sliding windows collect.
@@ -174,35 +185,37 @@ class SlidingWindowDetector(ClassicalDetector):
                 centre += step  # keep drifting the way the line was going
         return np.concatenate(taken) if taken else np.zeros(0, int)
 
-    def boundaries(self, bev: np.ndarray) -> tuple[Boundary | None, Boundary | None]:
-        cfg, rules = self.config.sliding_window, self.config.lane
+    def boundaries(self, bev: np.ndarray) -> LaneLines:
+        """The car's lane and the other lane lines: each remembered boundary looked for in a
+        band around its last fit, every other line from a histogram peak by sliding windows."""
+        cfg, rules, w = self.config.sliding_window, self.config.lane, self.view.window
         ys, xs = np.nonzero(bev)
         gx, gy = self.view.to_ground(xs, ys)
         x_cam = float(self.camera.position_m[0])
         weighted = not self.bird_eye_paint
-        fits: list[Boundary | None] = [None, None]
-        starts = None
-        for k, side in enumerate((1.0, -1.0)):
-            prev = self._previous[k]
-            if prev is not None:
-                band = np.abs(gy - LanePoly.of(prev).y(gx)) <= cfg.search_margin_m
-                if band.sum() >= cfg.min_fit_pixels:
-                    fits[k] = fit_boundary(np.stack([gx[band], gy[band]], 1), rules, x_cam,
-                                           weighted)
-                    if fits[k] is not None:
-                        continue
-            if starts is None:
-                starts = self._starts(bev)
-            if starts[k] is None:
+        found: list[Boundary] = []
+        for prev in self._previous:
+            if prev is None:
                 continue
-            idx = self._slide(starts[k], ys, xs)
+            band = np.abs(gy - LanePoly.of(prev).y(gx)) <= cfg.search_margin_m
+            if band.sum() >= cfg.min_fit_pixels:
+                fit = fit_boundary(np.stack([gx[band], gy[band]], 1), rules, x_cam, weighted)
+                if fit is not None:
+                    found.append(fit)
+        gap = self.config.hough.cluster_m
+        for start in self._starts(bev):
+            if self._explained(start, found):
+                continue  # that line is found already
+            idx = self._slide(start, ys, xs)
             if len(idx) >= cfg.min_fit_pixels:
                 fit = fit_boundary(np.stack([gx[idx], gy[idx]], 1), rules, x_cam, weighted)
-                ok = fit is not None and side * fit.lane.y(self.view.window.x_near_m) > 0
-                fits[k] = fit if ok else None
-        return parallel(fits[0], fits[1], rules, x_cam)
+                if fit is not None:
+                    found.append(fit)
+        chosen = choose_lanes(found, w.x_near_m, rules, self.lane_width_m, gap)
+        left, right = parallel(chosen.left, chosen.right, rules, x_cam)
+        return LaneLines(left, right, chosen.others)
 
-    def find_boundaries(self, bev: np.ndarray) -> tuple[Boundary | None, Boundary | None]:
+    def find_boundaries(self, bev: np.ndarray) -> LaneLines:
         return self.boundaries(bev)
 
     def remember(self, estimate: LaneEstimate) -> None:

@@ -68,11 +68,12 @@ def estimate_lanes(
     estimate: LaneEstimate, camera: CameraModel, h_samples: list[int],
     x_range: tuple[float, float],
 ) -> list[list[int]]:
-    """The estimate's boundaries (left, right; those found) as TuSimple lanes."""
+    """The estimate's boundaries (left, right: those found; then the other lanes' lines it
+    found, `LaneEstimate.others`) as TuSimple lanes."""
     if not estimate.valid:
         return []
     lanes = []
-    for coeffs in (estimate.left, estimate.right):
+    for coeffs in (estimate.left, estimate.right, *estimate.others):
         if coeffs is not None:
             xs = boundary_xs(np.asarray(coeffs), camera, h_samples, x_range)
             if any(x != ABSENT for x in xs):

@@ -1,14 +1,16 @@
 """`lanekeep eval`: every detector on the fixed test sets of every condition; table and JSON.
 
     lanekeep eval [--detectors hough,sliding_window,lanenet] [--weights FILE] [--json FILE]
+                  [--detectors-config FILE]
                   [--quick] [--frames N] [--stateless] [--split test|tuning] [--cache DIR]
                   [--conditions clear,night,...]
 
 Thin: the sets, the scoring loop, the table and the JSON document are
 lanekeep/evaluation/detector_eval.py's (the sets lanekeep/evaluation/eval_sets.py's, the metrics
 lanekeep/evaluation/lane_metrics.py's).
-Bad input (an unknown detector or condition, an unreadable weights file, an output that cannot
-be written) is one "lanekeep eval: error:" line and exit 2, before anything is rendered.
+Bad input (an unknown detector or condition, an unreadable weights file or detectors file, an
+output that cannot be written) is one "lanekeep eval: error:" line and exit 2, before anything
+is rendered.
 """
 
 from __future__ import annotations
@@ -31,7 +33,8 @@ def cmd_eval(args: argparse.Namespace) -> int:
     try:
         if args.frames is not None and args.frames < 1:
             raise BadInput(f"--frames must be at least 1, got {args.frames}")
-        plan = plan_eval(args.detectors, args.conditions, args.weights, args.json, args.cache)
+        plan = plan_eval(args.detectors, args.conditions, args.weights, args.json, args.cache,
+                         args.detectors_config)
     except BadInput as err:
         if getattr(args, "debug", False):
             raise
@@ -42,7 +45,7 @@ def cmd_eval(args: argparse.Namespace) -> int:
     recipe = dataclasses.replace(recipe, split=args.split)
     results = evaluate(plan.conditions, plan.detectors, plan.weights, recipe, args.cache or None,
                        progress=lambda m: print(m, file=sys.stderr, flush=True),
-                       stateless=args.stateless)
+                       stateless=args.stateless, config=plan.config)
     print(table(results))
     if args.json:
         write_json(args.json, eval_document(plan, recipe, args.quick, results, args.stateless))
@@ -64,6 +67,10 @@ def register(subparsers) -> None:
                         "half_shade, night, rain, fog, snow, worn, occlusion_40, occlusion_60")
     p.add_argument("--weights", metavar="FILE", default=None,
                    help="LaneNet weights (default: the shipped detectors/weights/lanenet.pt)")
+    p.add_argument("--detectors-config", metavar="FILE", default=None,
+                   help="a detectors TOML file (the keys of detectors/detectors.toml, e.g. "
+                        "[hough] binarisation = \"ridge\") that the classical detectors run "
+                        "with instead of the shipped settings (recorded in --json)")
     p.add_argument("--json", metavar="FILE", default=None, help="write the results as JSON")
     p.add_argument("--quick", action="store_true",
                    help="one world and one sequence per condition (tests, smoke runs)")

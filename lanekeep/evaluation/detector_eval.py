@@ -54,8 +54,8 @@ def check_writable(path: str, what: str, folder: bool) -> None:
 class DetectorRunner:
     """One detector over the sets: built per camera, reset per sequence, timed per frame."""
 
-    def __init__(self, name: str, weights: str | None) -> None:
-        self.name, self.weights = name, weights
+    def __init__(self, name: str, weights: str | None, config=None) -> None:
+        self.name, self.weights, self.config = name, weights, config
         self._made: dict[bytes, object] = {}
         self.warm = False
 
@@ -66,7 +66,8 @@ class DetectorRunner:
         key = camera.K.tobytes() + camera.position_m.tobytes() + camera.rotation.tobytes()
         if key not in self._made:
             self._made[key] = (LaneNetDetector(camera, weights=self.weights)
-                               if self.name == "lanenet" else make_detector(self.name, camera))
+                               if self.name == "lanenet"
+                               else make_detector(self.name, camera, self.config))
         return self._made[key]
 
     def start(self, camera, first_frame) -> None:
@@ -100,10 +101,11 @@ class DetectorRunner:
 
 def evaluate(conditions: list[str], detectors: list[str], weights: str | None, recipe,
              cache: str | None, progress: Callable[[str], None] | None = None,
-             stateless: bool = False) -> dict:
+             stateless: bool = False, config=None) -> dict:
     """Scores per condition per detector, with what made each set (the JSON's `conditions`).
     `stateless`: each detector reset before every frame, not only before each sequence (what
-    it gives without its memory of earlier frames: LaneNet without its recurrent state)."""
+    it gives without its memory of earlier frames: LaneNet without its recurrent state).
+    `config`: the detectors' settings (a `DetectorsConfig`; None: the shipped ones)."""
     import cv2
     import numpy as np
 
@@ -111,7 +113,7 @@ def evaluate(conditions: list[str], detectors: list[str], weights: str | None, r
     from lanekeep.evaluation.eval_sets import load_set, occlusion_share
     from lanekeep.evaluation.lane_metrics import Tally
 
-    runners = [DetectorRunner(n, weights) for n in detectors]
+    runners = [DetectorRunner(n, weights, config) for n in detectors]
     out = {}
     for condition in conditions:
         t0 = time.perf_counter()
@@ -180,17 +182,22 @@ def check_weights(weights: str | None, detectors: list[str]) -> str | None:
 
 @dataclass(frozen=True)
 class EvalPlan:
-    """What `eval` scores, checked: the detectors, the conditions and the weights file."""
+    """What `eval` scores, checked: the detectors, the conditions, the weights file and the
+    detectors' settings file (None: the shipped settings) with what it loads to."""
 
     detectors: list[str]
     conditions: list[str]
     weights: str | None
+    detectors_config: str | None = None
+    config: object = None  # the loaded DetectorsConfig when a file was given
 
 
 def plan_eval(detectors: str, conditions: str, weights: str | None,
-              json_path: str | None = None, cache: str | None = None) -> EvalPlan:
+              json_path: str | None = None, cache: str | None = None,
+              detectors_config: str | None = None) -> EvalPlan:
     """The comma-separated detector and condition names ("all": every condition) checked, the
-    outputs writable, the weights loadable; BadInput (one line) otherwise."""
+    outputs writable, the weights loadable, the detectors file readable with known keys;
+    BadInput (one line) otherwise."""
     from lanekeep.detectors.registry import known_detectors
     from lanekeep.evaluation.eval_sets import CONDITIONS
 
@@ -201,7 +208,22 @@ def plan_eval(detectors: str, conditions: str, weights: str | None,
         check_writable(json_path, "--json", folder=False)
     if cache:
         check_writable(cache, "--cache", folder=True)
-    return EvalPlan(names, chosen, check_weights(weights, names))
+    return EvalPlan(names, chosen, check_weights(weights, names), detectors_config,
+                    load_detectors_config(detectors_config))
+
+
+def load_detectors_config(path: str | None):
+    """The `--detectors-config` file's settings (None: none given), or BadInput naming the
+    option, the file and what is wrong with it (the same check as `run`'s option)."""
+    if path is None:
+        return None
+    from lanekeep.core.config_io import ConfigError
+    from lanekeep.loop.overrides import PluginOverrides
+
+    try:
+        return PluginOverrides(detectors_config=path).detectors()
+    except ConfigError as err:
+        raise BadInput(str(err)) from None
 
 
 def eval_document(plan: EvalPlan, recipe, quick: bool, results: dict,
@@ -212,4 +234,15 @@ def eval_document(plan: EvalPlan, recipe, quick: bool, results: dict,
     return {"schema_version": SCHEMA_VERSION, "lanekeep_version": lanekeep_version(),
             "command": "eval", "quick": bool(quick), "stateless": bool(stateless),
             "recipe": asdict(recipe),
-            "weights": plan.weights, "detectors": plan.detectors, "conditions": results}
+            "weights": plan.weights, "detectors": plan.detectors,
+            "detectors_config": detectors_config_record(plan), "conditions": results}
+
+
+def detectors_config_record(plan: EvalPlan) -> dict | None:
+    """The settings file's path and the settings it gave, in full (None: the shipped ones), so
+    that a JSON says which settings its numbers belong to even after the file changed."""
+    if plan.detectors_config is None:
+        return None
+    from lanekeep.detectors.config import config_table
+
+    return {"path": plan.detectors_config, "settings": config_table(plan.config)}

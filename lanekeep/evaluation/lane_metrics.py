@@ -16,7 +16,8 @@ precision-recall curve made monotone (VOC's all-point interpolation). LaneNet's 
 all its cells with objectness above 0.05 (`detectors.lanenet.CANDIDATE_SCORE`), as a detector's
 AP is taken over all its confidences; its boundaries are fitted to those above 0.5. Equal boxes
 in one band overlap by IoU >= 0.5 when |dx| <= cell width / 3 (about 10.7 px). Classical
-detectors make no proposals, so theirs are made from their two fitted boundaries: each boundary
+detectors make no proposals, so theirs are made from their fitted boundaries (the ego pair and
+the other lanes' lines they report, `LaneEstimate.others`): each boundary
 projected into the image over the range `lanekeep detect` draws it (camera x + 1 m to 1.3x the
 far edge of its ground window), one cell-sized box per band it crosses, every box scored by the
 estimate's confidence. Ties in confidence keep frame order.
@@ -200,9 +201,9 @@ class FramePrediction:
 
 def estimate_prediction(estimate: LaneEstimate, camera: CameraModel,
                         x_range: tuple[float, float], grid: CellGrid) -> FramePrediction:
-    """A classical detector's frame as proposals and lanes: its two boundaries (see above)."""
+    """A classical detector's frame as proposals and lanes: its boundaries (see above)."""
     lanes, boxes = [], [np.zeros((0, 4))]
-    sides = (estimate.left, estimate.right) if estimate.valid else ()
+    sides = (estimate.left, estimate.right, *estimate.others) if estimate.valid else ()
     for coeffs in sides:
         if coeffs is None:
             continue

@@ -32,6 +32,7 @@ from lanekeep.evaluation.eval_sets import CONDITIONS, EvalRecipe, load_set
 from lanekeep.evaluation.lane_metrics import EGO_SLOTS, offset_error
 
 TRUTH, LEFT, RIGHT = (0, 220, 0), (0, 0, 255), (255, 80, 0)  # BGR
+OTHER_TRUTH, OTHER = (0, 110, 0), (0, 220, 255)  # the other lanes' lines: labelled, reported
 
 
 def frame_errors(detector: str, condition: str, recipe: EvalRecipe, cache: str | None
@@ -57,15 +58,18 @@ def frame_errors(detector: str, condition: str, recipe: EvalRecipe, cache: str |
 
 
 def draw(record: dict, data: dict) -> np.ndarray:
-    """The frame (BGR) with the labelled ego boundaries and the detector's boundaries."""
+    """The frame (BGR) with the labelled boundaries (ego bright green, others dark green) and
+    the detector's (its left red, right blue, the other lanes' lines it reports yellow)."""
     out = record["frame"][..., ::-1].copy()
     xs, slots = data["xs"][record["q"], record["t"]], data["slots"][record["q"], record["t"]]
     for k, slot in enumerate(slots):
-        if slot in EGO_SLOTS:
-            _polyline(out, xs[k], TRUTH)
-    for lane, colour in zip(record["pred"].lanes, (LEFT, RIGHT), strict=False):
-        _polyline(out, lane, colour)
+        if slot >= 0:
+            _polyline(out, xs[k], TRUTH if slot in EGO_SLOTS else OTHER_TRUTH)
     est = record["pred"].estimate
+    # A classical estimate's lanes are its left and right (those found), then its others.
+    colours = [c for c, side in ((LEFT, est.left), (RIGHT, est.right)) if side is not None]
+    for k, lane in enumerate(record["pred"].lanes):
+        _polyline(out, lane, colours[k] if k < len(colours) else OTHER)
     text = (f"offset error {100 * record['error_m']:.1f} cm at x={est.x_m:.1f} m, "
             f"confidence {est.confidence:.2f}" if est.valid else f"invalid: {est.reason}")
     cv2.putText(out, text, (20, 40), cv2.FONT_HERSHEY_SIMPLEX, 0.9, (255, 255, 255), 2)

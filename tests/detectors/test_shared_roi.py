@@ -78,6 +78,9 @@ def _same_estimate(a, b) -> bool:
         if f.name == "image_points":
             if set(x) != set(y) or not all(np.array_equal(x[k], y[k]) for k in x):
                 return False
+        elif f.name == "others":
+            if len(x) != len(y) or not all(np.array_equal(u, v) for u, v in zip(x, y, strict=True)):
+                return False
         elif isinstance(x, np.ndarray) or isinstance(y, np.ndarray):
             if x is None or y is None or not np.array_equal(x, y):
                 return False
