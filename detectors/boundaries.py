@@ -62,6 +62,16 @@ def fit_boundary(xy: np.ndarray, rules: LaneRules, camera_x_m: float = 0.0,
     return Boundary(coeffs, len(xy), span, xy)
 
 
+def take_direction(short: Boundary, long: Boundary, camera_x_m: float = 0.0) -> Boundary:
+    """`short` with the direction and curvature of `long` and only its own lateral position
+    (weighted to its points nearest the camera, where a pixel is most precise)."""
+    x, y = short.points_xy[:, 0], short.points_xy[:, 1]
+    c = long.coeffs
+    w = 1.0 / np.maximum(np.abs(x - camera_x_m), 1.0) ** 2
+    c0 = float(np.sum(w * (y - c[1] * x - c[2] * x * x)) / np.sum(w))
+    return replace(short, coeffs=np.array([c0, c[1], c[2]]))
+
+
 def parallel(
     left: Boundary | None, right: Boundary | None, rules: LaneRules, camera_x_m: float = 0.0
 ) -> tuple[Boundary | None, Boundary | None]:
@@ -69,18 +79,10 @@ def parallel(
     and curvature of a long one and keeps only its own lateral position."""
     if left is None or right is None:
         return left, right
-
-    def refit(short: Boundary, long: Boundary) -> Boundary:
-        x, y = short.points_xy[:, 0], short.points_xy[:, 1]
-        c = long.coeffs
-        w = 1.0 / np.maximum(np.abs(x - camera_x_m), 1.0) ** 2
-        c0 = float(np.sum(w * (y - c[1] * x - c[2] * x * x)) / np.sum(w))
-        return replace(short, coeffs=np.array([c0, c[1], c[2]]))
-
     if left.x_span_m < rules.quadratic_span_m and right.x_span_m >= 2.0 * left.x_span_m:
-        left = refit(left, right)
+        left = take_direction(left, right, camera_x_m)
     elif right.x_span_m < rules.quadratic_span_m and left.x_span_m >= 2.0 * right.x_span_m:
-        right = refit(right, left)
+        right = take_direction(right, left, camera_x_m)
     return left, right
 
 

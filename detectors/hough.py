@@ -18,10 +18,10 @@ import math
 import cv2
 import numpy as np
 
-from lanekeep.detectors.boundaries import Boundary, fit_boundary, parallel
+from lanekeep.detectors.boundaries import Boundary, fit_boundary
 from lanekeep.detectors.classical import ClassicalDetector
 from lanekeep.detectors.image_stage import RegionOfInterest
-from lanekeep.detectors.lane_lines import LaneLines, choose_lanes
+from lanekeep.detectors.lane_lines import LaneLines, aligned, choose_lanes
 from lanekeep.detectors.paper_thresholds import model1_paint
 from lanekeep.detectors.ridge import paint_ridges
 from lanekeep.geometry.lane_poly import LanePoly
@@ -189,9 +189,7 @@ class HoughDetector(ClassicalDetector):
         rules, w = self.config.lane, self.view.window
         chosen = choose_lanes(self.lines(seg), w.x_near_m, rules, self.lane_width_m,
                               self.config.hough.cluster_m)
-        left, right = parallel(chosen.left, chosen.right, rules,
-                               float(self.camera.position_m[0]))
-        return LaneLines(left, right, chosen.others)
+        return aligned(chosen, rules, float(self.camera.position_m[0]))
 
     @staticmethod
     def _provisional(fit: Boundary | None, pts: np.ndarray, heading: float) -> np.ndarray:

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from lanekeep.detectors.boundaries import Boundary
+from lanekeep.detectors.boundaries import Boundary, take_direction
 from lanekeep.detectors.config import LaneRules
 
 
@@ -112,6 +112,26 @@ def _lane_widths_away(y: float, pair: tuple[Boundary | None, Boundary | None],
     gap = min(abs(y - a) for a in anchors)
     lanes = round(gap / width_m)
     return lanes >= 1 and abs(gap - lanes * width_m) <= 0.5 * rules.width_tolerance_m * lanes
+
+
+def aligned(lines: LaneLines, rules: LaneRules, camera_x_m: float = 0.0) -> LaneLines:
+    """Lane lines are parallel: every short line (under `rules.quadratic_span_m`, a dash or
+    two) takes the direction and curvature of the longest line found (when that one is at
+    least twice as long) and keeps only its own lateral position. A lone dash's own slope
+    is a poor guide 15 m away; the longest line's, from the same frame, is a good one."""
+    found = [b for b in (lines.left, lines.right, *lines.others) if b is not None]
+    if len(found) < 2:
+        return lines
+    longest = max(found, key=lambda b: b.x_span_m)
+
+    def align(b: Boundary | None) -> Boundary | None:
+        if (b is None or b is longest or b.x_span_m >= rules.quadratic_span_m
+                or longest.x_span_m < 2.0 * b.x_span_m):
+            return b
+        return take_direction(b, longest, camera_x_m)
+
+    return LaneLines(align(lines.left), align(lines.right),
+                     tuple(align(b) for b in lines.others))
 
 
 def as_coeffs(others: tuple[Boundary, ...]) -> tuple[np.ndarray, ...]:

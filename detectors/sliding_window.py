@@ -18,11 +18,11 @@ import cv2
 import numpy as np
 
 from lanekeep.detectors.base import LaneEstimate
-from lanekeep.detectors.boundaries import Boundary, fit_boundary, parallel
+from lanekeep.detectors.boundaries import Boundary, fit_boundary
 from lanekeep.detectors.classical import ClassicalDetector
 from lanekeep.detectors.edge_pairs import edge_pair_paint
 from lanekeep.detectors.image_stage import RegionOfInterest
-from lanekeep.detectors.lane_lines import LaneLines, choose_lanes
+from lanekeep.detectors.lane_lines import LaneLines, aligned, choose_lanes
 from lanekeep.detectors.paper_thresholds import model2_paint
 from lanekeep.geometry.lane_poly import LanePoly
 
@@ -212,8 +212,7 @@ class SlidingWindowDetector(ClassicalDetector):
                 if fit is not None:
                     found.append(fit)
         chosen = choose_lanes(found, w.x_near_m, rules, self.lane_width_m, gap)
-        left, right = parallel(chosen.left, chosen.right, rules, x_cam)
-        return LaneLines(left, right, chosen.others)
+        return aligned(chosen, rules, x_cam)
 
     def find_boundaries(self, bev: np.ndarray) -> LaneLines:
         return self.boundaries(bev)
