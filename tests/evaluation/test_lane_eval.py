@@ -1,6 +1,7 @@
 """`lanekeep eval`: the metrics on synthetic frames with known answers, the occluders, the test
 sets' seeds and forced conditions, and the command (strict JSON, bad input -> exit 2)."""
 
+import dataclasses
 import json
 import math
 from pathlib import Path
@@ -172,6 +173,25 @@ def test_classical_estimate_becomes_the_labels_boxes_within_its_range():
     assert len(tp) > 30 and tp.sum() >= len(tp) - 2
 
 
+def test_the_other_lanes_lines_of_a_classical_estimate_are_scored_too():
+    """A classical estimate that reports the neighbouring lanes' lines (`others`) is scored on
+    them: every labelled boundary recalled, AP 1 where its ego pair alone is bounded by the
+    ego boundaries' share of the boxes."""
+    cam = _camera()
+    xs, slots, gy = _truth(cam)
+    ego_only = _estimate()
+    every = dataclasses.replace(ego_only, others=tuple(np.array([y, 0.0, 0.0])
+                                                       for y in LANES_Y[2:]))
+    scores = {}
+    for name, est in (("ego", ego_only), ("every", every)):
+        tally = Tally()
+        tally.add(estimate_prediction(est, cam, (4.0, 80.0), eval_grid()), xs, slots, gy, 1.0)
+        scores[name] = tally.summary()
+    assert scores["every"]["ap"] > 0.97 and scores["every"]["iou"] > 0.9
+    assert scores["ego"]["ap"] < scores["ego"]["ego_box_share"] + 0.01
+    assert scores["every"]["ade_cm"] == scores["ego"]["ade_cm"]  # the ego pair is unchanged
+
+
 def _paint(t: int = 3) -> np.ndarray:
     """Two slanted painted lines over the lower half of a 176x320 frame, moving down a bit."""
     paint = np.zeros((t, 176, 320), np.uint8)
@@ -258,6 +278,14 @@ def test_eval_bad_input_is_one_line_and_exit_2(tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith(f"lanekeep eval: error: {bad}")
     assert main(["eval", "--conditions", "sunny", "--detectors", "hough"]) == 2
+    capsys.readouterr()
+    typo = tmp_path / "typo.toml"
+    typo.write_text("[hough]\nbinarisaton = \"ridge\"\n")
+    for config, named in ((typo, "hough.binarisaton: unknown key"),
+                          (tmp_path / "missing.toml", "missing.toml")):
+        assert main(["eval", "--detectors", "hough", "--detectors-config", str(config)]) == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and "--detectors-config" in err[0] and named in err[0]
 
 
 def _strict(path: Path) -> dict:
@@ -285,6 +313,16 @@ def test_eval_quick_writes_strict_json_and_reuses_its_cache(tmp_path, capsys):
     assert main(argv) == 0  # from the cache: the same sets, the same scores
     assert sorted(p.name for p in cache.iterdir()) == files
     assert _untimed(_strict(out)["conditions"]) == _untimed(doc["conditions"])
+    assert doc["detectors_config"] is None  # the shipped settings
+    # Other settings, from a file: the same sets, the file's settings recorded in full.
+    settings = tmp_path / "ridge.toml"
+    settings.write_text("[hough]\nbinarisation = \"ridge\"\n")
+    assert main([*argv, "--detectors-config", str(settings)]) == 0
+    assert sorted(p.name for p in cache.iterdir()) == files
+    record = _strict(out)["detectors_config"]
+    assert record["path"] == str(settings)
+    assert record["settings"]["hough"]["binarisation"] == "ridge"
+    assert record["settings"]["lane"]["lane_width_m"] > 0  # every setting, not only the file's
 
 
 def _untimed(conditions: dict) -> dict:
