@@ -76,9 +76,11 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("folder")
     parser.add_argument("--detector", action="append", choices=known_detectors())
     parser.add_argument("--weights", default=None, help="LaneNet weights (default: shipped)")
+    parser.add_argument("--detectors-config", metavar="FILE", default=None,
+                        help="a detectors TOML file to run with (default: the shipped one)")
     args = parser.parse_args(argv)
     folder = Path(args.folder)
-    config = load_config()
+    config = load_config(args.detectors_config)
     dash = config.dashcam
     for name in args.detector or known_detectors():
         overall, ego = [], []
