@@ -16,6 +16,7 @@ y left are drawn in world coordinates):
     cameras/{cam}/segmentation            marking mask (optional layer)
     cameras/{cam}/lanes/{model}/points    pixels each detector fitted (LaneEstimate.image_points)
     cameras/{cam}/lanes/{model}/boundaries  its left/right polynomials projected by the camera
+    cameras/{cam}/lanes/{model}/others    the other lanes' lines it reports (LaneEstimate.others)
     cameras/{cam}/lanes/truth             the true ego-lane boundaries projected (green)
     cameras/front/lanes/output/centre     centre of the lane the controller follows (red)
     world/road/boundaries                 static: every lane boundary
@@ -251,6 +252,7 @@ class RerunRecorder:
         self._vehicles_drawn = False
         self._selected: int | None = None
         self._valid: dict[str, bool] = {}
+        self._had_others: dict[str, bool] = {}  # entity paths that hold other lanes' lines
         self._queue: queue.Queue = queue.Queue(maxsize=self.QUEUE_STEPS)
         self._writer = threading.Thread(target=self._write_loop, name="rerun-recorder",
                                         daemon=True)
@@ -475,6 +477,20 @@ class RerunRecorder:
         x_range = camera_x_range(cameras["front"])
         yield OUTPUT, "front", None if centre is None else [poly_points(centre, x_range)]
 
+    def _log_others(self, base: str, camera, estimate, rgb) -> None:
+        """The other lanes' lines a detector reports beside the ego pair, thinner than the
+        pair (cleared on a step without them, so a stale line never stays drawn)."""
+        x_range = camera_x_range(camera)
+        strips = [s for c in estimate.others
+                  for s in pixel_strips(camera, poly_points(c, x_range))]
+        if strips:
+            self._rec.log(f"{base}/others",
+                          self._rr.LineStrips2D(strips, colors=[rgb], radii=1.0))
+        elif self._had_others.pop(base, False):
+            self._rec.log(f"{base}/others", self._rr.Clear(recursive=False))
+        if strips:
+            self._had_others[base] = True
+
     def _log_cameras(self, step, truth: _Truth) -> None:
         rr, rec, cameras = self._rr, self._rec, self._view.cameras
         for cam_name, frame in step.frames.items():
@@ -496,6 +512,8 @@ class RerunRecorder:
                                     colors=[rgb],
                                     radii=1.5 if name == OUTPUT else 2.0))
             estimate = step.estimates.get(name)
+            if estimate is not None:
+                self._log_others(base, camera, estimate, rgb)
             points = [np.asarray(p, dtype=float).reshape(-1, 2)
                       for p in (estimate.image_points.values() if estimate else ())]
             points = [p[:: max(1, len(p) // MAX_POINTS_PER_SIDE)] for p in points]

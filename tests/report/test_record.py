@@ -452,3 +452,21 @@ def test_view_url_is_bound_to_localhost_and_asks_for_webgl():
     # WebGL: the default WebGPU renderer crashed in a browser with software GL.
     assert web_url(9090, 9876) == ("http://127.0.0.1:9090/?url=rerun%2Bhttp%3A%2F%2F"
                                    "127.0.0.1%3A9876%2Fproxy&renderer=webgl")
+
+
+def test_the_other_lanes_lines_a_detector_reports_are_drawn_and_cleared(fake, tmp_path):
+    """A detector's `others` (the neighbouring lanes' lines) go to `.../others`, drawn on the
+    steps that have them and cleared on a step without them."""
+    half = fake.scenario.road.lane_width_m / 2
+    plain = make_step(fake, 0).estimates["hough"]
+    with_others = dataclasses.replace(plain, others=(np.array([3 * half, 0.0, 0.0]),
+                                                     np.array([-3 * half, 0.0, 0.0])))
+    steps = [make_step(fake, i, estimates={**make_step(fake, i).estimates, "hough": e})
+             for i, e in enumerate((with_others, plain, with_others))]
+    data = read_back(record(fake, tmp_path / "o.rrd", steps))
+    entity = "/cameras/front/lanes/hough/others"
+    assert steps_of(data, entity, "LineStrips2D:strips") == [0, 2]
+    assert len(value_at(data, entity, "LineStrips2D:strips", 0)) >= 2
+    cleared = [c for c in data[entity] if c.startswith("Clear")]
+    assert cleared and [s for c in cleared for s, _ in data[entity][c]] == [1]
+    assert not data["/cameras/front/lanes/sliding_window/others"]  # it reported none
