@@ -4,11 +4,13 @@ Pipeline per frame: crop the image below the ground window's far edge and work a
 resolution; binarise by brightness against the road beside each pixel on both sides (a ridge
 test relative to the local light, so that shaded paint passes and a shoulder's edge does not)
 and a dark floor; warp to the bird's-eye view of the camera model; find segments with OpenCV's
-probabilistic Hough transform; keep segments near the driving direction, seed one boundary per
-side from the segments nearest the car (clustered by their lateral position at the near edge)
-and grow each boundary outwards with segments that continue its fit; fit y(x) per side. The
-offset is the lane centre at the view's row nearest the car. Being brightness-based, it takes
-sunlit gaps between hard shadows for paint, which is the weakness the paper reports.
+probabilistic Hough transform; keep segments near the driving direction, seed one line per
+cluster of the segments nearest the car (clustered by their lateral position at the near edge,
+across the whole view) and grow each line outwards with segments that continue its fit; fit
+y(x) per line; the car's pair and the other lanes' lines among them by lane geometry
+(detectors/lane_lines.py). The offset is the lane centre at the view's row nearest the car.
+Being brightness-based, it takes sunlit gaps between hard shadows for paint, which is the
+weakness the paper reports.
 """
 
 from __future__ import annotations

@@ -4,12 +4,14 @@ Pipeline per frame: (undistortion folded into the bird's-eye warp when the camer
 distortion model) ROI below the ground window's far edge at reduced resolution; binary =
 (Sobel-x of HLS lightness) | (white: high lightness) | (yellow: hue in range and saturated),
 all on a bright ridge; what other vehicles cover dropped (detectors/vehicle_mask.py);
-bird's-eye warp; a column histogram of the near part of the view gives one start per side
-(the peak nearest the car within the expected lane half-width); windows slide from the near
-edge outwards, re-centring on their pixels; a 2nd-order y(x) per boundary in the
-vehicle frame; the offset at the look-ahead. With a previous fit, pixels are taken in a band
-around it instead (`reset()` forgets it). Fixed-size windows lose a boundary that bends out of
-them faster than they can follow, which is this model's weakness in sharp turns.
+bird's-eye warp; a column histogram of the near part of the view gives the starts (every
+peak across the view, the strongest first, skipping those on a line already found); windows
+slide from the near edge outwards, re-centring on their pixels; a 2nd-order y(x) per line in
+the vehicle frame; the car's pair and the other lanes' lines among them by lane geometry
+(detectors/lane_lines.py); the offset at the look-ahead. With a previous fit, the car's
+boundaries are first looked for in a band around it (`reset()` forgets it). Fixed-size
+windows lose a boundary that bends out of them faster than they can follow, which is this
+model's weakness in sharp turns.
 """
 
 from __future__ import annotations
