@@ -18,7 +18,8 @@ few chessboards); each bad input is one "lanekeep CMD: error:" line.
 A detector that sees every boundary (LaneNet: `detector.last.boundaries`) reports them all: in
 TuSimple output as lanes ordered left to right, in JSON as "boundaries" with their slot names,
 in overlays each in its own colour with its slot name; the classical detectors report their ego
-pair.
+pair and, in JSON as "others" (polynomials like "left" and "right") and in the TuSimple lanes
+and overlays after the pair, the other lanes' lines they found.
 """
 
 from __future__ import annotations

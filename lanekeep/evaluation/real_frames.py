@@ -109,6 +109,7 @@ class FrameResult:
             "offset_m": estimate.offset_m, "x_m": estimate.x_m,
             "left": None if estimate.left is None else [float(c) for c in estimate.left],
             "right": None if estimate.right is None else [float(c) for c in estimate.right],
+            "others": [[float(c) for c in coeffs] for coeffs in estimate.others],
             "reason": estimate.reason,
             "horizon_row": self.horizon, "run_time_ms": round(self.ms, 2),
         }
