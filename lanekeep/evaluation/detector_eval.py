@@ -217,13 +217,19 @@ def load_detectors_config(path: str | None):
     option, the file and what is wrong with it (the same check as `run`'s option)."""
     if path is None:
         return None
+    import tomllib
+
     from lanekeep.core.config_io import ConfigError
-    from lanekeep.loop.overrides import PluginOverrides
+    from lanekeep.detectors.config import load_config
 
     try:
-        return PluginOverrides(detectors_config=path).detectors()
+        return load_config(path)
+    except OSError as err:
+        raise BadInput(f"--detectors-config: {path}: {err.strerror or err}") from None
+    except tomllib.TOMLDecodeError as err:
+        raise BadInput(f"--detectors-config: {path}: invalid TOML: {err}") from None
     except ConfigError as err:
-        raise BadInput(str(err)) from None
+        raise BadInput(f"--detectors-config: {err}") from None
 
 
 def eval_document(plan: EvalPlan, recipe, quick: bool, results: dict,
