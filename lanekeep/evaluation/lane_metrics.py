@@ -23,11 +23,12 @@ far edge of its ground window), one cell-sized box per band it crosses, every bo
 estimate's confidence. Ties in confidence keep frame order.
 
 AP-ego: the same, against the boxes of the labelled ego-left / ego-right boundaries only (every
-other proposal is a false positive there). A model that reports only the ego lane, as the paper's
-two classical models do, cannot recall the other boundaries' boxes, so its AP is bounded by
-`ego_box_share` (the ego boundaries' share of all boxes: about 0.72 on the clear set, 2026-11-29);
-AP-ego is its like-for-like figure. A model that proposes every lane (LaneNet) is scored on all of
-them by AP; its AP-ego counts its other lanes against it.
+other proposal is a false positive there). A model that reports only the ego lane (the paper's
+two classical models did until 2026-11-30; a plug-in may) cannot recall the other boundaries'
+boxes, so its AP is bounded by `ego_box_share` (the ego boundaries' share of all boxes: about
+0.72 on the clear set, 2026-11-29); AP-ego is its like-for-like figure. A model that reports
+every lane (LaneNet; the classical models with `LaneEstimate.others`) is scored on all of them
+by AP; its AP-ego counts its other lanes against it.
 
 IoU / F1 (CULane's lane IoU). Each boundary, predicted or labelled, is drawn as a 30 px wide
 polyline through its x at the label rows (every 5 px) on a 1280x720 mask. Predicted and labelled
