@@ -144,6 +144,9 @@ class LaneRules:
     def __post_init__(self) -> None:
         if not self.lane_width_m > 0:
             raise InvalidValue("lane_width_m", f"must be > 0, got {self.lane_width_m}")
+        if not 0 <= self.max_divergence_deg < 90:
+            raise InvalidValue("max_divergence_deg",
+                               f"must be in [0, 90) degrees, got {self.max_divergence_deg}")
 
 
 @dataclass(frozen=True)

@@ -79,3 +79,13 @@ def test_an_unknown_key_fails_with_one_line_naming_it(tmp_path, text, key):
     message = str(info.value)
     assert info.value.key == key
     assert message.startswith(f"{path}: {key}: unknown key (known keys: ") and "\n" not in message
+
+
+@pytest.mark.parametrize("value", [-1.0, 90.0])
+def test_a_lane_line_divergence_outside_its_range_is_one_line_naming_it(tmp_path, value):
+    path = tmp_path / "mine.toml"
+    path.write_text(f"[lane]\nmax_divergence_deg = {value}\n")
+    with pytest.raises(ConfigError) as info:
+        load_config(path)
+    message = str(info.value)
+    assert "lane.max_divergence_deg" in message and "\n" not in message
