@@ -133,7 +133,3 @@ def aligned(lines: LaneLines, rules: LaneRules, camera_x_m: float = 0.0) -> Lane
     return LaneLines(align(lines.left), align(lines.right),
                      tuple(align(b) for b in lines.others))
 
-
-def as_coeffs(others: tuple[Boundary, ...]) -> tuple[np.ndarray, ...]:
-    """The other lines as the coefficient arrays a `LaneEstimate` carries."""
-    return tuple(b.coeffs.copy() for b in others)

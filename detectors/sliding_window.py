@@ -39,10 +39,12 @@ class SlidingWindowDetector(ClassicalDetector):
     def __init__(self, *args, **kwargs) -> None:
         super().__init__(*args, **kwargs)
         self._previous: list[np.ndarray | None] = [None, None]
-        # Lateral position (m) at the near edge of each bird's-eye column (the camera's left
-        # is +): fixed by the view, read by every histogram search.
-        cols = np.arange(self.view.cols)
-        _, self._near_y = self.view.to_ground(cols, np.full(len(cols), self.view.rows - 1))
+        # Ground x (m) of each row the histogram sums (the near part of the view): fixed by
+        # the view, read for every peak `_explained` tests.
+        n = self.view.rows - int(round(self.view.rows * self.config.sliding_window
+                                       .histogram_fraction))
+        rows = np.arange(n, self.view.rows)
+        self._histogram_x, _ = self.view.to_ground(np.zeros(len(rows)), rows)
 
     def reset(self) -> None:
         """Forget the previous frame's fit and the measured width."""
@@ -151,13 +153,10 @@ class SlidingWindowDetector(ClassicalDetector):
         """Whether a histogram peak at `col` lies on a line already found: within a cluster's
         width of it on some row the histogram summed (a line slanting across the view, in a
         turn or at a heading, piles up peaks all along its way)."""
-        cfg, w = self.config.sliding_window, self.view.window
         if not lines:
             return False
-        rows = np.arange(self.view.rows - int(round(self.view.rows * cfg.histogram_fraction)),
-                         self.view.rows)
-        x, _ = self.view.to_ground(np.zeros(len(rows)), rows)
-        gap = self.config.hough.cluster_m / w.m_per_col
+        x = self._histogram_x
+        gap = self.config.hough.cluster_m / self.view.window.m_per_col
         for b in lines:
             cols, _ = self.view.to_pixels(x, b.lane.y(x))
             if np.min(np.abs(cols - col)) <= gap:
