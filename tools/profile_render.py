@@ -11,8 +11,9 @@ start plus `--ahead` metres along its lane (the first frames of an episode).
 
 Variants: the scene as built (`as built`), then without one thing: MuJoCo's skybox, the
 ground plane, the road surface meshes, the shoulders, the roadside props, the translucent
-overlays (group 5: shadows, filtered paint, puddles), the paint geometry (group 1), and the
-haze and fog scene flags. A large saving names what to make cheaper; a saving that changes
+overlays (group 5: shadows, filtered paint, puddles), and each kind of them on its own (cast
+shadows, vehicles' contact shadows, filtered paint, puddles, vehicles' light glows), the paint
+geometry (group 1), and the haze and fog scene flags. A large saving names what to make cheaper; a saving that changes
 many pixels is not one to take (`--frames` writes each variant's frames).
 """
 
@@ -64,6 +65,12 @@ def _variants(world, rig) -> dict[str, Toggle]:
         "no shoulders": hide(lambda i, n: n.startswith("shoulder")),
         "no roadside props": hide(lambda i, n: n.startswith("props") and group[i] == 0),
         "no translucent overlays": hide(lambda i, n: group[i] == 5),
+        "no cast shadows": hide(lambda i, n: group[i] == 5 and "shadow" in n
+                                and "contact" not in n),
+        "no contact shadows": hide(lambda i, n: n.endswith("contact_shadow")),
+        "no filtered paint": hide(lambda i, n: group[i] == 5 and n.startswith("marking")),
+        "no puddles": hide(lambda i, n: n == "cond_puddles"),
+        "no vehicle glows": hide(lambda i, n: n.endswith("_glow")),
         "no paint geometry": hide(lambda i, n: group[i] == 1),
         "no haze": flag("mjRND_HAZE", False),
         "no fog": flag("mjRND_FOG", False),

@@ -81,9 +81,10 @@ def add_props(spec: mujoco.MjSpec, scenario: Scenario, road: Road, to_sun: np.nd
         transmission = shade_transmission(cfg.shadow_darkness, scenario.conditions)
         if props.casters:
             _add_shadows(spec, props, to_sun, info, transmission)
-        if props.tree_shadows and add_soft_shadows(
-                spec, "props_shadow_trees", props.tree_shadows, to_sun, transmission,
-                np.random.default_rng([scenario.seed, TREE_SHADE_SEED])):
+        if props.tree_shadows and to_sun[2] > 0.0:
+            # The shade zones stay where the sun puts them even when too faint to draw.
+            add_soft_shadows(spec, "props_shadow_trees", props.tree_shadows, to_sun,
+                             transmission, np.random.default_rng([scenario.seed, TREE_SHADE_SEED]))
             info.shadow_polygons.extend(cast_shadow(points, to_sun)
                                         for group in props.tree_shadows for points in group)
 

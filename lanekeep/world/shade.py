@@ -92,6 +92,16 @@ def shade_transmission(darkness: float, conditions: Conditions) -> float:
     return float(umbra_transmission(conditions) ** (max(darkness, 0.0) / DARKNESS_UMBRA))
 
 
+def changes_no_pixel(transmission: float, layers: int = 1) -> bool:
+    """Whether an overlay that keeps `transmission` of the light, in `layers` nested passes,
+    is too faint to change an 8-bit pixel: its per-pass alpha, as a texel, rounds to 0. Such
+    an overlay still costs the rasteriser its whole area (a cast shadow under an overcast
+    sky at a low sun: case 5's dusk rain keeps 0.99998 of the light under shadows 100 m
+    long, which cost 60% of its render, tools/profile_render.py), so it is not drawn."""
+    per_pass = 1.0 - math.sqrt(max(transmission, 0.0) ** (1.0 / layers))
+    return 255.0 * per_pass / TRANSLUCENT_ALPHA < 0.5
+
+
 def grown(poly: np.ndarray, by_m: float) -> np.ndarray:
     """A convex CCW polygon (n, 2) grown by `by_m` (shrunk if < 0; corners of a grown one are
     rounded); an empty (0, 2) array when shrinking leaves nothing."""
@@ -148,6 +158,8 @@ def add_shadow_overlay(spec: mujoco.MjSpec, name: str, polygons: list[np.ndarray
     polygons that are already disjoint: for many small casters (poles, crowns, signs), whose
     pieces the nested layers would grow and split again at a cost of seconds a world."""
     offsets = layer_offsets_m() if soft else np.zeros(1)
+    if changes_no_pixel(transmission, len(offsets)):
+        return 0
     share = 1.0 / len(offsets)  # of the log-transmission, per layer
     material = f"{name}_shade"
     if dapple is not None:
@@ -247,8 +259,9 @@ def soft_shadow_atlas(groups: list[list[np.ndarray]], to_sun: np.ndarray, transm
 def add_soft_shadows(spec: mujoco.MjSpec, name: str, groups: list[list[np.ndarray]],
                      to_sun: np.ndarray, transmission: float, rng: np.random.Generator) -> bool:
     """One overlay geom `name` (GROUP_SHADOW) with the soft shadows of `groups`
-    (soft_shadow_atlas); False when there is nothing to cast."""
-    if not groups or to_sun[2] <= 0.0:
+    (soft_shadow_atlas); False when there is nothing to cast or its shade would change no
+    pixel (`changes_no_pixel`)."""
+    if not groups or to_sun[2] <= 0.0 or changes_no_pixel(transmission):
         return False
     rgba, mesh = soft_shadow_atlas(groups, to_sun, transmission, rng)
     material = f"{name}_shade"

@@ -191,3 +191,21 @@ def test_a_speed_bump_in_the_shade_is_shaded():
     leaf = shade_transmission(zone.darkness, scenario.conditions)
     assert np.percentile(ratio, 25) == pytest.approx(leaf, rel=0.15)
     assert np.median(ratio) < 0.5 * (1.0 + leaf)
+
+
+def test_a_shadow_too_faint_to_change_a_pixel_is_not_drawn_and_its_shade_stays_recorded():
+    """Case 5's dusk rain keeps 0.99998 of the light under its props' shadows: no 8-bit pixel
+    changes, so no overlay geom is added (they cost 60% of its render), while the shade
+    zones the scoring and the paint read stay. Heavy rain's 0.988 (1.5 levels) is drawn."""
+    from lanekeep.world.shade import changes_no_pixel
+
+    assert changes_no_pixel(1.0 - 1e-5) and not changes_no_pixel(0.988)
+    assert not changes_no_pixel(0.995) and changes_no_pixel(0.995, layers=3)
+    scenario = load_scenario("case5_wet_rain_turn")
+    assert changes_no_pixel(shade_transmission(scenario.roadside.shadow_darkness,
+                                               scenario.conditions))
+    world = build(scenario)
+    names = [mujoco.mj_id2name(world.model, mujoco.mjtObj.mjOBJ_GEOM, i) or ""
+             for i in range(world.model.ngeom)]
+    assert not [n for n in names if n.startswith("props_shadow")]
+    assert world.conditions.shadow_polygons  # the trees' and poles' shade, where the sun puts it
