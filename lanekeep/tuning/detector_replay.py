@@ -67,7 +67,10 @@ def record(scenario_path: str, out: Path, seconds: float | None, closed_loop: bo
         for f in frames.values():
             f.flush()
     np.save(out / "truth.npy", truth)
-    (out / "meta.json").write_text(json.dumps({"scenario": str(scenario_path),
+    # A file's absolute path (a shipped name as it is): `score` may run from another folder.
+    where = Path(scenario_path)
+    name = str(where.resolve()) if where.is_file() else scenario_path
+    (out / "meta.json").write_text(json.dumps({"scenario": name,
                                                "x_refs": x_refs, "steps": steps}))
 
 
