@@ -16,6 +16,9 @@ model's weakness in sharp turns.
 
 from __future__ import annotations
 
+import math
+from dataclasses import dataclass
+
 import cv2
 import numpy as np
 
@@ -29,6 +32,19 @@ from lanekeep.detectors.paper_thresholds import model2_paint
 from lanekeep.geometry.lane_poly import LanePoly
 
 _KERNEL_3X3 = np.ones((3, 3), np.uint8)  # the ridge's dilation
+
+
+@dataclass(frozen=True)
+class _Windows:
+    """One frame's sliding windows over its bird's-eye pixels (in row order): each window's
+    first and past-the-last pixel, the window of each pixel (n_windows for a pixel in none),
+    and each window's pixel count and column sum cumulated over the columns (k, cols + 1)."""
+
+    firsts: np.ndarray
+    ends: np.ndarray
+    of_pixel: np.ndarray
+    counts: np.ndarray
+    col_sums: np.ndarray
 
 
 class SlidingWindowDetector(ClassicalDetector):
@@ -116,7 +132,7 @@ class SlidingWindowDetector(ClassicalDetector):
         np.clip(scaled, 0, 255, out=scaled)
         return scaled.astype(np.uint8), gain
 
-    def _starts(self, bev: np.ndarray) -> list[float]:
+    def _starts(self, ys: np.ndarray, xs: np.ndarray) -> list[float]:
         """Histogram peak columns across the view, the strongest first.
 
         The histogram sums the near part of the view; the whole view's peaks are added where
@@ -124,24 +140,26 @@ class SlidingWindowDetector(ClassicalDetector):
         """
         cfg, w = self.config.sliding_window, self.view.window
         rows = int(round(self.view.rows * cfg.histogram_fraction))
-        out = self._peaks(bev[-rows:])
+        near = np.searchsorted(ys, self.view.rows - rows)  # pixels in row order
+        out = self._peaks(np.bincount(xs[near:], minlength=self.view.cols))
         gap = self.config.hough.cluster_m / w.m_per_col
-        for col, count in self._peaks(bev):
+        for col, count in self._peaks(np.bincount(xs, minlength=self.view.cols)):
             if all(abs(col - c) > gap for c, _ in out):
                 out.append((col, count))
         return [c for c, _ in sorted(out, key=lambda p: -p[1])]
 
-    def _peaks(self, part: np.ndarray) -> list[tuple[float, float]]:
-        """(column, smoothed count) of the histogram's local maxima with `min_peak_pixels`
-        or more."""
+    def _peaks(self, counts: np.ndarray) -> list[tuple[float, float]]:
+        """(column, smoothed count) of the local maxima, with `min_peak_pixels` or more, of
+        a histogram of paint pixels per column."""
         cfg, w = self.config.sliding_window, self.view.window
-        hist = (part > 0).sum(axis=0).astype(float)
+        hist = counts.astype(float)
         k = max(1, int(round(0.3 / w.m_per_col)))
         hist = np.convolve(hist, np.ones(k), mode="same")
         # The largest count within k columns either side of each column (the view's edges
-        # cut the reach short): a column at least that high is a local maximum.
-        padded = np.pad(hist, k, constant_values=-np.inf)
-        local_max = np.lib.stride_tricks.sliding_window_view(padded, 2 * k + 1).max(axis=1)
+        # cut the reach short): a column at least that high is a local maximum. A grey
+        # dilation along the row (float32 holds these whole counts exactly).
+        local_max = cv2.dilate(hist.astype(np.float32)[None, :], np.ones((1, 2 * k + 1), np.uint8),
+                               borderType=cv2.BORDER_CONSTANT, borderValue=-1.0)[0]
         peaks = np.flatnonzero((hist >= cfg.min_peak_pixels) & (hist >= local_max))
         if len(peaks) == 0:
             return []
@@ -155,36 +173,66 @@ class SlidingWindowDetector(ClassicalDetector):
         turn or at a heading, piles up peaks all along its way)."""
         if not lines:
             return False
-        x = self._histogram_x
         gap = self.config.hough.cluster_m / self.view.window.m_per_col
-        for b in lines:
-            cols, _ = self.view.to_pixels(x, b.lane.y(x))
-            if np.min(np.abs(cols - col)) <= gap:
-                return True
-        return False
+        return any(np.min(np.abs(self._histogram_cols(b) - col)) <= gap for b in lines)
 
-    def _slide(self, start_col: float, ys: np.ndarray, xs: np.ndarray) -> np.ndarray:
-        """Indices of the bird's-eye pixels (ys rows, xs cols) the sliding windows collect.
+    def _histogram_cols(self, line: Boundary) -> np.ndarray:
+        """The bird's-eye column of `line` on each row the histogram sums (kept per line: every
+        later peak asks again)."""
+        cols = self._line_cols.get(id(line))
+        if cols is None:
+            x = self._histogram_x
+            cols, _ = self.view.to_pixels(x, line.lane.y(x))
+            self._line_cols[id(line)] = cols
+        return cols
 
-        `ys` ascend (np.nonzero's row-major order), so a window's rows are one slice of them.
-        """
-        cfg, w = self.config.sliding_window, self.view.window
-        margin = cfg.margin_m / w.m_per_col
-        height = self.view.rows / cfg.n_windows
-        bottoms = self.view.rows - np.arange(cfg.n_windows) * height
+    def _windows(self, ys: np.ndarray, xs: np.ndarray) -> _Windows:
+        """The sliding windows' rows, the pixels in each and their counts per column: once a
+        frame, for every slide (`_slide`)."""
+        n_windows = self.config.sliding_window.n_windows
+        height = self.view.rows / n_windows
+        bottoms = self.view.rows - np.arange(n_windows) * height
         firsts = np.searchsorted(ys, bottoms - height)  # each window's first pixel (row >= top)
         ends = np.searchsorted(ys, bottoms)  # and the first past it (row >= bottom)
+        cols = self.view.cols
+        of_pixel = np.full(len(xs), n_windows)
+        for k, (first, end) in enumerate(zip(firsts, ends, strict=True)):
+            of_pixel[first:end] = k
+        # Each pixel counted in its window's row of columns (a leading empty column; the
+        # pixels in no window in a last row, dropped).
+        counts = np.bincount(of_pixel * (cols + 1) + xs + 1, minlength=(n_windows + 1) * (cols + 1))
+        counts = counts.reshape(n_windows + 1, cols + 1)[:n_windows]
+        # Cumulated along the row after a leading 0: a band of columns' count and column sum
+        # are two differences.
+        col_sums = np.cumsum(counts * np.arange(-1, cols), axis=1)
+        return _Windows(firsts, ends, of_pixel, np.cumsum(counts, axis=1), col_sums)
+
+    def _slide(self, start_col: float, windows: _Windows, xs: np.ndarray) -> np.ndarray:
+        """Indices of the bird's-eye pixels (columns `xs`) the sliding windows collect, the
+        near window's first: from the near edge outwards, each window takes the pixels within
+        the margin of its centre and re-centres on their mean column when there are enough
+        of them, else keeps drifting the way the line was going."""
+        cfg, w = self.config.sliding_window, self.view.window
+        margin = cfg.margin_m / w.m_per_col
+        n_windows, last = len(windows.firsts), windows.counts.shape[1] - 2
+        lows = np.ones(n_windows + 1, np.int64)  # each window's columns lows..highs; none
+        highs = np.zeros(n_windows + 1, np.int64)  # for the pixels in no window
         centre, step = start_col, 0.0
-        taken = []
-        for first, end in zip(firsts, ends, strict=True):
-            inside = first + np.flatnonzero(np.abs(xs[first:end] - centre) <= margin)
-            taken.append(inside)
-            if len(inside) >= cfg.min_pixels:
-                new = float(xs[inside].mean())
+        for k in range(n_windows):
+            lo = max(math.ceil(centre - margin), 0)
+            hi = min(math.floor(centre + margin), last)
+            n = int(windows.counts[k, hi + 1] - windows.counts[k, lo]) if hi >= lo else 0
+            lows[k], highs[k] = lo, hi
+            if n >= cfg.min_pixels:
+                new = float(windows.col_sums[k, hi + 1] - windows.col_sums[k, lo]) / n
                 step, centre = new - centre, new
             else:
-                centre += step  # keep drifting the way the line was going
-        return np.concatenate(taken) if taken else np.zeros(0, int)
+                centre += step
+        inside = np.flatnonzero((xs >= lows[windows.of_pixel]) & (xs <= highs[windows.of_pixel]))
+        # Rows ascend, so the far window's pixels come first: put the near window's first.
+        cuts_first = np.searchsorted(inside, windows.firsts)
+        cuts_end = np.searchsorted(inside, windows.ends)
+        return np.concatenate([inside[a:b] for a, b in zip(cuts_first, cuts_end, strict=True)])
 
     def boundaries(self, bev: np.ndarray) -> LaneLines:
         """The car's lane and the other lane lines: each remembered boundary looked for in a
@@ -204,10 +252,12 @@ class SlidingWindowDetector(ClassicalDetector):
                 if fit is not None:
                     found.append(fit)
         gap = self.config.hough.cluster_m
-        for start in self._starts(bev):
+        windows = self._windows(ys, xs)
+        self._line_cols: dict[int, np.ndarray] = {}
+        for start in self._starts(ys, xs):
             if self._explained(start, found):
                 continue  # that line is found already
-            idx = self._slide(start, ys, xs)
+            idx = self._slide(start, windows, xs)
             if len(idx) >= cfg.min_fit_pixels:
                 fit = fit_boundary(np.stack([gx[idx], gy[idx]], 1), rules, x_cam, weighted)
                 if fit is not None:
