@@ -319,7 +319,8 @@ def safety_table(docs: list[dict]) -> str:
         value, ci = d.get(f"{key}_mean"), d.get(f"{key}_mean_ci95")
         if value is None or ci is None:
             return "-"
-        return f"{value:.1f} [{ci[0]:.1f}, {ci[1]:.1f}]".replace("nan", "-")
+        # One episode with a value has no interval: its bounds are null in strict JSON.
+        return f"{number(value)} [{number(ci[0])}, {number(ci[1])}]".replace("nan", "-")
 
     for d in docs:
         collided = d.get("collided_episodes")

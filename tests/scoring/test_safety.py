@@ -320,3 +320,17 @@ def test_a_parked_vehicle_ahead_ends_the_episode_with_a_collision(monkeypatch):
     assert results[-1].collision in results[-1].events
     assert results[0].safety.gap_m == pytest.approx(8.0, abs=1.6)  # 15 m/s for 0.1 s
     assert not judge(report, CriteriaConfig()).passed
+
+
+def test_one_episode_with_a_time_to_collision_has_no_interval_and_the_table_says_so():
+    """Three seeds, one closing on a vehicle ahead: its mean has no interval (null bounds in
+    the bench's strict JSON), and the safety table prints dashes instead of stopping the
+    bench with a traceback after its JSON was written (seen 2026-11-30 on the tuning
+    scenarios, tune_traffic_lead_van_three_lanes)."""
+    reports = [report(0, min_ttc_s=2.5, min_gap_m=9.0), report(1, min_gap_m=12.0),
+               report(2, min_gap_m=10.0)]
+    doc = bench_docs({"x": reports})["x"]
+    assert doc["min_ttc_s_mean"] == pytest.approx(2.5)
+    assert doc["min_ttc_s_mean_ci95"] == [None, None]
+    line = next(x for x in safety_table([doc]).splitlines() if x.startswith("x "))
+    assert "2.5 [-, -]" in line
