@@ -206,10 +206,14 @@ class LaneEstimator:
         self._hold(detections)
         self._measure_lane_width(detections.values())
         centres = {name: self.centre_of(detections[name]) for name in self.names}
-        tracked, status = self._track(centres, ego)
+        reference_centre = self._usable_reference(reference)
+        tracked, status = self._track(centres, ego, reference_centre, events)
         lap("track")
         selection, reference_x = self._select(reference, tracked, detections, ego, events)
         selected, centre = self._output(centres, tracked, status, selection)
+        if centre is None and reference_centre is not None and self.settings.reference_fallback:
+            centre = reference_centre
+            events.append("no front lane: the output is the rear reference's")
         offset, x_m = self._offset(selected, centre, detections, tracked, status)
         lap("mmae")
         return EstimatorOutput(tracked, status, selection, selected, centre, offset, x_m,
@@ -253,23 +257,59 @@ class LaneEstimator:
         return None
 
     # -- the stages ----------------------------------------------------------------------------
-    def _track(self, centres: dict[str, np.ndarray | None], ego: EgoMotion
+    def _track(self, centres: dict[str, np.ndarray | None], ego: EgoMotion,
+               reference: np.ndarray | None, events: list[str]
                ) -> tuple[dict[str, np.ndarray | None], dict[str, str]]:
         """Predict and update each model's tracker with its detection's centre line. A
         detection the gate rejects but another model's detection corroborates restarts that
         track: the track, not the two detectors, has lost the road (a tight turn's onset
-        outruns the constant-rate model)."""
+        outruns the constant-rate model). A track starts or restarts only from a lane that
+        meets the rear reference's at the car (`_meets_reference`)."""
         noise = [self.tracker_configs[name].coefficient_r for name in centres]
         agreed = dict(zip(centres, corroborated(list(centres.values()), noise), strict=True))
         tracked, status = {}, {}
         for name, tracker in self.trackers.items():
             tracker.predict(ego.dt_s, ego.speed_mps, ego.yaw_rate_rps, ego.lateral_speed_mps)
-            result = tracker.update_coefficients(centres[name])
-            if result.status is UpdateStatus.GATED and agreed[name]:
-                result = tracker.restart(centres[name])
+            centre = centres[name]
+            meets = self._meets_reference(centre, reference)
+            if centre is not None and not tracker.valid and not meets:
+                events.append(f"{name}: track start refused: its lane "
+                              f"{self._gap_at_car(centre, reference):.2f} m from the "
+                              f"reference's at the car")
+                centre = None  # a miss: the lost track waits for a lane the reference confirms
+            result = tracker.update_coefficients(centre)
+            if result.status is UpdateStatus.GATED and agreed[name] and meets:
+                result = tracker.restart(centre)
             status[name] = result.status.value
             tracked[name] = tracker.coefficients
         return tracked, status
+
+    def _usable_reference(self, reference: LaneEstimate) -> np.ndarray | None:
+        """The rear reference's centre line where it can stand for the car's lane (a front
+        track's start, the fallback output): valid and, with the width check on, as wide as
+        the lane measured in front."""
+        centre = self.centre_of(reference)
+        if centre is None:
+            return None
+        width = self._pair_width(reference, 0.0)
+        tolerance = self.settings.reference_width_tolerance_m
+        if width is not None and tolerance is not None \
+                and abs(width - self.lane_width_m) > tolerance:
+            return None
+        return centre
+
+    @staticmethod
+    def _gap_at_car(centre: np.ndarray, reference: np.ndarray) -> float:
+        """How far apart two centre lines are at the car (x = 0), m."""
+        return abs(float(centre[0]) - float(reference[0]))
+
+    def _meets_reference(self, centre: np.ndarray | None, reference: np.ndarray | None) -> bool:
+        """Whether a front lane may start a track: no reference to ask, or the two meet at
+        the car within `track_start_gate_lane_widths` of the measured lane width."""
+        gate = self.settings.track_start_gate_lane_widths
+        if centre is None or reference is None or gate is None:
+            return True
+        return self._gap_at_car(centre, reference) <= gate * self.lane_width_m
 
     def _select(self, reference: LaneEstimate, tracked, detections: dict[str, LaneEstimate],
                 ego: EgoMotion, events: list[str]) -> tuple[MMAEOutput, float]:

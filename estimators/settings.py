@@ -113,6 +113,28 @@ class EstimatorSettings:
         0.2, "A rear reading whose lane is further than this from the width the front detectors "
         "measure is taken as missed (it read a wrong line); paper mode compares every reading.",
         bounds=(0.01, 10.0))
+    # A front model that found the next lane's lines (a cut-in car over the car's own paint,
+    # a shadow's edge) can keep them for longer than its track coasts (1 s); its lost track
+    # then starts on them, or two such models agree and restart theirs, and the loop steers
+    # into the next lane (case 3 seed 8, highway_cut_in seed 22, two-model loop, 2026-11-30).
+    # The rear camera sees the road the car is on: a front lane that does not meet the
+    # reference's at the car is not the car's lane. A quarter of a lane width lies midway
+    # between a right start (0) and the nearest wrong one (half a lane: a pair one line off).
+    track_start_gate_lane_widths: float | None = setting(
+        0.25, "A front track (re)starts from a detection only where its lane meets the rear "
+        "reference's at the car (x = 0) within this share of the measured lane width, while "
+        "the reference has a lane (after its width check); unset: any detection starts it "
+        "(the paper's; paper mode).", bounds=(0.01, 1.0))
+    # In traffic a classical front model can lose the lane for seconds (a cut-in car over
+    # the paint); with none left the PID holds the wheel straight and a curve takes the car
+    # out of its lane. The rear camera still sees the lane the car is on. Both this and the
+    # start check above, 2026-11-30 (docs/experiments.md, session 16): the default loop on
+    # the tuning scenarios x 3 seeds equivalent (fused RMSE +0.1% [-0.3, +0.5]; the fallback
+    # never taken), the two-model loop's departures there 3 -> 2 of 30 (inconclusive).
+    reference_fallback: bool = setting(
+        True, "While no front model has a lane, the output is the rear reference's lane "
+        "(after its width check) instead of none (the wheel held straight); the paper's "
+        "loop has no such output (paper mode).", allowed="true, false")
     # Re-decided 2026-11-27 with `output` above: alone, "uniform" was indistinguishable (fused
     # RMSE +0.03 cm [-0.01, +0.06]); together with the paper's other two choices, worse.
     mmae_prior: str = setting("precision", "The MMAE's probabilities before the reference has "

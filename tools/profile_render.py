@@ -13,8 +13,9 @@ Variants: the scene as built (`as built`), then without one thing: MuJoCo's skyb
 ground plane, the road surface meshes, the shoulders, the roadside props, the translucent
 overlays (group 5: shadows, filtered paint, puddles), and each kind of them on its own (cast
 shadows, vehicles' contact shadows, filtered paint, puddles, vehicles' light glows), the paint
-geometry (group 1), and the haze and fog scene flags. A large saving names what to make cheaper; a saving that changes
-many pixels is not one to take (`--frames` writes each variant's frames).
+geometry (group 1), and the haze and fog scene flags. A large saving names what to make
+cheaper; a saving that changes many pixels is not one to take (`--frames` writes each
+variant's frames).
 """
 
 from __future__ import annotations

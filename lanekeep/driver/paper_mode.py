@@ -67,6 +67,8 @@ ESTIMATOR_CHOICES: dict[str, dict[str, object]] = {
     "probability_floor": {"probability_floor": FINITE_FLOOR, "missing_model": "hold"},
     "mmae_prior": {"mmae_prior": "uniform"},
     "reference_width_check": {"reference_width_tolerance_m": None},
+    "track_start_check": {"track_start_gate_lane_widths": None},
+    "reference_fallback": {"reference_fallback": False},
     "output": {"output": "select", "prefer_accepted": False},
     "pid_input": {"model_lane": "detection", "output_at": "nearest_row"},
 }

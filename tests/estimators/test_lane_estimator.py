@@ -293,3 +293,82 @@ def test_an_estimator_built_on_its_own_runs_the_loop_an_episode_runs():
     assert EstimationConfig().estimator_settings() == EstimatorSettings()
     assert estimator_settings(EstimationConfig()) == EstimatorSettings()
     assert EstimatorSettings().output == "precision"  # re-decided over seeds: docs/statistics.md
+
+
+def test_a_track_starts_only_on_a_lane_that_meets_the_rear_reference_at_the_car():
+    """A front model that reads the next lane (its centre half a lane width off, a pair one
+    line over) does not start its track while the rear reference sees the car's lane; the
+    model beside it that agrees with the reference does, and an event says why. With no
+    reference lane to ask, the same detection starts the track, as it always did."""
+    estimator = LaneEstimator(NAMES, _settings(), reference_x_m=-4.0)
+    for k in range(5):
+        out = estimator.update({"hough": _lane(WIDTH / 2), "sliding_window": _lane(0.05)},
+                               _pair(0.0, WIDTH), _ego(k))
+        assert out.tracked["hough"] is None and out.tracked["sliding_window"] is not None
+    assert any("hough: track start refused: its lane 1.85 m" in e for e in out.events)
+    out = estimator.update({"hough": _lane(0.3), "sliding_window": _lane(0.05)},
+                           _pair(0.0, WIDTH), _ego(5))
+    assert out.tracker_status["hough"] == "initialized"  # 0.3 m: within a quarter lane
+    blind = LaneEstimator(NAMES, _settings(), reference_x_m=-4.0)
+    out = blind.update({"hough": _lane(WIDTH / 2), "sliding_window": _lane(0.05)},
+                       LaneEstimate.invalid("no lane"), _ego(0))
+    assert out.tracker_status["hough"] == "initialized"
+
+
+def test_two_models_that_agree_on_the_next_lane_do_not_restart_their_tracks():
+    """Both front models jump to the next lane's lines together (a cut-in car over the
+    car's own paint): they corroborate each other, but the rear reference still sees the
+    car's lane, so the gated tracks coast on instead of restarting there. Without the check
+    (paper mode) they restart."""
+    def run(gate):
+        estimator = LaneEstimator(NAMES, _settings(track_start_gate_lane_widths=gate), -4.0)
+        for k in range(10):
+            estimator.update({n: _lane(0.0) for n in NAMES}, _pair(0.0, WIDTH), _ego(k))
+        return estimator.update({n: _lane(WIDTH / 2) for n in NAMES}, _pair(0.0, WIDTH),
+                                _ego(10))
+
+    checked = run(0.25)
+    assert set(checked.tracker_status.values()) == {"gated"}
+    assert abs(checked.centre[0]) < 0.05
+    unchecked = run(None)
+    assert set(unchecked.tracker_status.values()) == {"restarted"}
+
+
+def test_the_track_start_check_is_a_setting_paper_mode_leaves_out():
+    from lanekeep.driver.paper_mode import estimator_settings
+    from lanekeep.scenario.schema import EstimationConfig, InvalidValue
+
+    assert estimator_settings(EstimationConfig()).track_start_gate_lane_widths == 0.25
+    paper = EstimationConfig(mode="paper")
+    assert estimator_settings(paper).track_start_gate_lane_widths is None
+    kept = EstimationConfig(mode="paper", paper_keeps=("track_start_check",))
+    assert estimator_settings(kept).track_start_gate_lane_widths == 0.25
+    with pytest.raises(InvalidValue, match="track_start_gate_lane_widths"):
+        EstimationConfig(track_start_gate_lane_widths=2.0)
+
+
+def test_with_no_front_lane_the_fallback_steers_by_the_rear_reference():
+    """Both front models lose the lane (a cut-in car over the paint): with the fallback on,
+    the output is the rear reference's lane, where without it there is none (the wheel
+    held straight); a reference of the wrong width (its width check) is no fallback."""
+    def step(fallback: bool, reference: LaneEstimate):
+        estimator = LaneEstimator(NAMES, _settings(reference_fallback=fallback,
+                                                   reference_width_tolerance_m=0.2), -4.0)
+        none = LaneEstimate.invalid("paint hidden")
+        return estimator.update({n: none for n in NAMES}, reference, _ego(0))
+
+    out = step(True, _pair(0.3, WIDTH))
+    np.testing.assert_allclose(out.centre, [0.3, 0.0, 0.0])
+    assert abs(out.offset_m - (-0.3)) < 1e-9
+    assert "no front lane: the output is the rear reference's" in out.events
+    assert step(False, _pair(0.3, WIDTH)).centre is None
+    assert step(True, _pair(0.3, WIDTH - 0.5)).centre is None
+
+
+def test_the_reference_fallback_is_a_setting_paper_mode_leaves_out():
+    from lanekeep.driver.paper_mode import estimator_settings
+    from lanekeep.scenario.schema import EstimationConfig
+
+    assert estimator_settings(EstimationConfig(reference_fallback=True)).reference_fallback
+    paper = EstimationConfig(mode="paper", reference_fallback=True)
+    assert estimator_settings(paper).reference_fallback is False
