@@ -8,14 +8,18 @@ that reads only the observation (the MMAE output's lane and the wheel-speed sign
 import argparse
 import sys
 
+# lanekeep before numpy and Gymnasium: it pins numpy's kernels as they load, so that this
+# loop computes what the CLI and another machine compute (docs/reproducibility.md); it also
+# registers "lanekeep/LaneKeep-v0".
+import lanekeep  # noqa: F401
+
+# isort: split
 import numpy as np
 
 try:
     import gymnasium
 except ModuleNotFoundError:  # one line, not a traceback
     sys.exit("gym_loop.py: error: needs Gymnasium: pip install -e '.[gym]'")
-
-import lanekeep  # noqa: F401, E402  (registers "lanekeep/LaneKeep-v0")
 
 
 def policy(obs: dict, target_speed_mps: float) -> np.ndarray:

@@ -12,6 +12,11 @@ and right boundary by side, and a parabola is fitted to each. It meets the `Dete
 import argparse
 import dataclasses
 
+# lanekeep before numpy: it pins numpy's kernels as they load, so that this run computes what
+# the CLI and another machine compute (docs/reproducibility.md).
+import lanekeep  # noqa: F401
+
+# isort: split
 import numpy as np
 
 from lanekeep.detectors.base import LaneEstimate

@@ -38,9 +38,10 @@ os.environ.setdefault("MUJOCO_GL", "egl")
 
 # Every numeric library capped at AVX2 before it loads, so that two machines give the same
 # numbers (lanekeep/core/reproducibility.py; LANEKEEP_PIN=0 opts out).
-from lanekeep.core.reproducibility import pin_kernels as _pin_kernels  # noqa: E402
+from lanekeep.core import reproducibility as _reproducibility  # noqa: E402
 
-_pin_kernels()
+_reproducibility.pin_kernels()
+_reproducibility.warn_if_loaded_before_pin()
 
 __version__ = "0.1.0"
 

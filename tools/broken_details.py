@@ -40,6 +40,9 @@ import sys
 from collections.abc import Callable
 from pathlib import Path
 
+import lanekeep  # noqa: F401  (first: it pins numpy's, torch's and OpenCV's kernels)
+
+# isort: split
 import cv2
 import mujoco
 import numpy as np

@@ -19,6 +19,9 @@ import math
 import sys
 from pathlib import Path
 
+import lanekeep  # noqa: F401  (first: it pins numpy's, torch's and OpenCV's kernels)
+
+# isort: split
 import numpy as np
 
 from lanekeep.evaluation.dataset_content import (

@@ -36,9 +36,11 @@ import json
 import math
 import sys
 
+import lanekeep  # noqa: F401  (first: it pins numpy's, torch's and OpenCV's kernels)
+
+# isort: split
 import numpy as np
 
-import lanekeep  # noqa: F401  (the GL backend and kernel pins before MuJoCo loads)
 from lanekeep.driver.driver import REFERENCE
 from lanekeep.loop.episode import Episode
 from lanekeep.scenario.schema import load_scenario, shipped_scenarios

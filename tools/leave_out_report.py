@@ -20,6 +20,9 @@ import re
 import sys
 from pathlib import Path
 
+import lanekeep  # noqa: F401  (first: it pins numpy's, torch's and OpenCV's kernels)
+
+# isort: split
 import numpy as np
 
 from lanekeep.evaluation.eval_compare import EvalMismatch, compare_evals

@@ -17,6 +17,9 @@ import sys
 import time
 from pathlib import Path
 
+import lanekeep  # noqa: F401  (first: it pins numpy's, torch's and OpenCV's kernels)
+
+# isort: split
 import numpy as np
 
 from lanekeep.core.files import atomic_path

@@ -21,6 +21,9 @@ import argparse
 import sys
 from pathlib import Path
 
+import lanekeep  # noqa: F401  (first: it pins numpy's, torch's and OpenCV's kernels)
+
+# isort: split
 import cv2
 import mujoco
 import numpy as np

@@ -31,6 +31,9 @@ from concurrent.futures import ProcessPoolExecutor
 from dataclasses import replace
 from pathlib import Path
 
+import lanekeep  # noqa: F401  (first: it pins numpy's, torch's and OpenCV's kernels)
+
+# isort: split
 import numpy as np
 
 from lanekeep.geometry.lane_poly import LanePoly

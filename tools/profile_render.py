@@ -26,6 +26,9 @@ import time
 from collections.abc import Callable
 from pathlib import Path
 
+import lanekeep  # noqa: F401  (first: it pins numpy's, torch's and OpenCV's kernels)
+
+# isort: split
 import numpy as np
 
 Toggle = tuple[Callable[[], None], Callable[[], None]]
@@ -193,7 +196,6 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--frames", type=Path, default=None,
                         help="write each variant's frames here (PNG)")
     args = parser.parse_args(argv)
-    import lanekeep  # noqa: F401 - sets MUJOCO_GL=egl before mujoco loads
     for name in args.scenarios:
         result = profile(name, args.renders, args.rounds, args.ahead, args.frames)
         print(table(name, result), end="\n\n", flush=True)

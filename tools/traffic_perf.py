@@ -15,6 +15,9 @@ from __future__ import annotations
 import argparse
 import time
 
+import lanekeep  # noqa: F401  (first: it pins numpy's, torch's and OpenCV's kernels)
+
+# isort: split
 import numpy as np
 
 from lanekeep.traffic.flow import TrafficFlow

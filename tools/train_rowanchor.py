@@ -45,6 +45,9 @@ import time
 from dataclasses import asdict
 from pathlib import Path
 
+import lanekeep  # noqa: F401  (first: it pins numpy's, torch's and OpenCV's kernels)
+
+# isort: split
 import numpy as np
 import torch
 from torch.nn import functional as F  # noqa: N812 - the usual torch alias

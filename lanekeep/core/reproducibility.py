@@ -62,6 +62,23 @@ CV_CPU_AVX_512F = 13  # cv::CPU_AVX_512F
 # Which libraries had loaded before the pin (their variables were read already).
 _loaded_before_pin: list[str] = []
 
+def warn_if_loaded_before_pin() -> None:
+    """One warning when `import lanekeep` came after numpy, torch or OpenCV with pinning on:
+    those already read their variables, so this process computes with the CPU's own kernels
+    and its episodes need not match the CLI's or another machine's to the bit (a user's
+    `import numpy as np` above `import lanekeep` drove highway_cut_in seed 26 to a fused RMSE
+    of 25.51 cm where the CLI gives 25.39). Reports record it too (`loaded_before_pin`)."""
+    if not pinning_enabled() or not _loaded_before_pin:
+        return
+    import warnings
+
+    names = ", ".join(_loaded_before_pin)
+    warnings.warn(f"lanekeep: {names} loaded before lanekeep, so its kernels are not pinned to "
+                  "AVX2 and results may differ from the CLI's and another machine's: import "
+                  f"lanekeep first (or set {PIN_ENV}=0 to choose unpinned kernels)",
+                  RuntimeWarning, stacklevel=3)
+
+
 def pinning_enabled() -> bool:
     return os.environ.get(PIN_ENV, "1").strip().lower() not in ("0", "false", "no", "off")
 

@@ -78,6 +78,26 @@ def test_numpy_loaded_before_lanekeep_is_reported_as_unpinned():
     assert settings["loaded_before_pin"] == ["numpy"]
 
 
+def _import_warnings(code: str, **env_changes: str) -> str:
+    env = {k: v for k, v in os.environ.items() if k not in repro.PINNED and k != repro.PIN_ENV}
+    env.update(env_changes)
+    done = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True,
+                          text=True, timeout=120, check=True)
+    return done.stderr
+
+
+def test_numpy_before_lanekeep_warns_once_naming_it_and_lanekeep_first_is_quiet():
+    """numpy read its variables before the pin: the user's episodes would silently differ
+    from the CLI's (one line, pointing at their import)."""
+    late = _import_warnings("import numpy\nimport lanekeep")
+    assert late.count("RuntimeWarning") == 1 and "numpy loaded before lanekeep" in late, late
+    assert "<string>:2" in late  # the user's `import lanekeep` line
+    assert "RuntimeWarning" not in _import_warnings("import lanekeep\nimport numpy")
+    # unpinned by choice: nothing to warn about
+    assert "RuntimeWarning" not in _import_warnings("import numpy\nimport lanekeep",
+                                                    **{repro.PIN_ENV: "0"})
+
+
 def test_every_document_carries_its_settings():
     doc = with_metadata({}, load_scenario("clear_straight"))
     assert set(doc["reproducibility"]) >= {"pinned", "renderer", "torch", "opencv", "numpy",

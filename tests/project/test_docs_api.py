@@ -41,6 +41,40 @@ def test_the_page_has_its_examples():
     assert len(BLOCKS) >= 10, f"docs/api.md has {len(BLOCKS)} python blocks"
 
 
+NUMERIC = re.compile(r"^(?:import|from) (numpy|torch|cv2|gymnasium)\b", re.MULTILINE)
+LANEKEEP = re.compile(r"^(?:import|from) lanekeep\b", re.MULTILINE)
+
+
+def imports_lanekeep_first(code: str) -> bool:
+    """Whether `import lanekeep` (or a `from lanekeep...`) comes before any numeric library's
+    import: pasted into a fresh script, such a block runs on the pinned kernels
+    (lanekeep/core/reproducibility.py), as the CLI does. These blocks share one process here,
+    so the order is checked as written."""
+    numeric, first = NUMERIC.search(code), LANEKEEP.search(code)
+    return numeric is None or (first is not None and first.start() < numeric.start())
+
+
+def test_the_rule_reads_import_order():
+    assert imports_lanekeep_first("import lanekeep\nimport numpy as np\n")
+    assert imports_lanekeep_first("import math\n")
+    assert not imports_lanekeep_first("import numpy as np\nfrom lanekeep.loop import x\n")
+
+
+# The examples and tools a user runs as scripts (a plug-in module such as
+# examples/sabotage.py is imported by lanekeep's own CLI, after lanekeep).
+SCRIPTS = sorted(str(p.relative_to(ROOT)) for folder in ("examples", "tools")
+                 for p in (ROOT / folder).rglob("*.py")
+                 if "__main__" in p.read_text(encoding="utf-8"))
+
+
+@pytest.mark.parametrize("source", [*(f"docs/api.md block {i}" for i in range(len(BLOCKS))),
+                                    *SCRIPTS])
+def test_every_example_imports_lanekeep_before_numpy(source: str) -> None:
+    code = (BLOCKS[int(source.rsplit(" ", 1)[1])] if source.startswith("docs/")
+            else (ROOT / source).read_text(encoding="utf-8"))
+    assert imports_lanekeep_first(code), f"{source}: import lanekeep before numpy, torch, cv2"
+
+
 @pytest.mark.parametrize("index", range(len(BLOCKS)),
                          ids=[f"{i}:{_label(c)}" for i, c in enumerate(BLOCKS)])
 def test_docs_api_example_runs(index: int, tmp_path: Path, monkeypatch) -> None:

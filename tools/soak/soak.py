@@ -22,9 +22,11 @@ import sys
 import time
 from pathlib import Path
 
+import lanekeep  # noqa: F401  (first: it pins numpy's, torch's and OpenCV's kernels)
+
+# isort: split
 import numpy as np
 
-import lanekeep  # noqa: F401 - MUJOCO_GL before mujoco
 from lanekeep.loop.episode import Episode, StepResult
 from lanekeep.scenario.schema import load_scenario
 
