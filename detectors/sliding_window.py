@@ -61,6 +61,9 @@ class SlidingWindowDetector(ClassicalDetector):
                                        .histogram_fraction))
         rows = np.arange(n, self.view.rows)
         self._histogram_x, _ = self.view.to_ground(np.zeros(len(rows)), rows)
+        # This frame's found lines' histogram columns, by the line's id (`_histogram_cols`);
+        # emptied at each frame's line search, while those lines are alive.
+        self._line_cols: dict[int, np.ndarray] = {}
 
     def reset(self) -> None:
         """Forget the previous frame's fit and the measured width."""
@@ -253,7 +256,7 @@ class SlidingWindowDetector(ClassicalDetector):
                     found.append(fit)
         gap = self.config.hough.cluster_m
         windows = self._windows(ys, xs)
-        self._line_cols: dict[int, np.ndarray] = {}
+        self._line_cols.clear()
         for start in self._starts(ys, xs):
             if self._explained(start, found):
                 continue  # that line is found already
