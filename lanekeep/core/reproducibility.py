@@ -59,8 +59,16 @@ OPENCV_AVX512: dict[str, tuple[str, ...]] = {
 }
 CV_CPU_AVX_512F = 13  # cv::CPU_AVX_512F
 
-# Which libraries had loaded before the pin (their variables were read already).
+# The pinned variables each library reads when it loads (cv2's: only where this CPU has
+# AVX-512, see `pin_kernels`).
+_READ_AT_IMPORT: dict[str, tuple[str, ...]] = {
+    "numpy": ("NPY_DISABLE_CPU_FEATURES", "OPENBLAS_CORETYPE"),
+    "torch": ("ONEDNN_MAX_CPU_ISA", "MKL_CBWR", "ATEN_CPU_CAPABILITY"),
+    "cv2": (),
+}
+# Which libraries had loaded before the pin without their variables set (they read others).
 _loaded_before_pin: list[str] = []
+
 
 def warn_if_loaded_before_pin() -> None:
     """One warning when `import lanekeep` came after numpy, torch or OpenCV with pinning on:
@@ -73,8 +81,9 @@ def warn_if_loaded_before_pin() -> None:
     import warnings
 
     names = ", ".join(_loaded_before_pin)
-    warnings.warn(f"lanekeep: {names} loaded before lanekeep, so its kernels are not pinned to "
-                  "AVX2 and results may differ from the CLI's and another machine's: import "
+    whose = "its" if len(_loaded_before_pin) == 1 else "their"
+    warnings.warn(f"lanekeep: {names} loaded before lanekeep, so {whose} kernels are not pinned "
+                  "to AVX2 and results may differ from the CLI's and another machine's: import "
                   f"lanekeep first (or set {PIN_ENV}=0 to choose unpinned kernels)",
                   RuntimeWarning, stacklevel=3)
 
@@ -88,10 +97,14 @@ def pin_kernels() -> None:
     of these variables are kept. Call before numpy, torch, cv2 and the renderer load."""
     if not pinning_enabled():
         return
-    _loaded_before_pin[:] = [m for m in ("numpy", "torch", "cv2") if m in sys.modules]
+    opencv = opencv_disable(_cpu_flags())
+    reads = {**_READ_AT_IMPORT, "cv2": ("OPENCV_CPU_DISABLE",) if opencv else ()}
+    # A library loaded already read its variables: unpinned unless each was set before it
+    # loaded (a spawned worker inherits its parent's pins; a user may export them).
+    _loaded_before_pin[:] = [m for m, keys in reads.items() if m in sys.modules
+                             and any(k not in os.environ for k in keys)]
     for key, value in PINNED.items():
         os.environ.setdefault(key, value)
-    opencv = opencv_disable(_cpu_flags())
     if opencv:
         os.environ.setdefault("OPENCV_CPU_DISABLE", opencv)
 

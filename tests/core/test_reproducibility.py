@@ -98,6 +98,22 @@ def test_numpy_before_lanekeep_warns_once_naming_it_and_lanekeep_first_is_quiet(
                                                     **{repro.PIN_ENV: "0"})
 
 
+def test_numpy_first_with_the_pins_already_in_the_environment_is_pinned_and_quiet():
+    """A spawned worker inherits its parent's pins (and a user may export them): numpy read
+    the pinned values, whatever the import order."""
+    code = ("import numpy\nimport lanekeep, json\n"
+            "from lanekeep.core.reproducibility import settings_now\n"
+            "print(json.dumps(settings_now(renderer=False)))")
+    env = {k: v for k, v in os.environ.items() if k not in repro.PINNED and k != repro.PIN_ENV}
+    env.update(repro.PINNED)
+    done = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True,
+                          text=True, timeout=120, check=True)
+    assert "RuntimeWarning" not in done.stderr, done.stderr
+    settings = json.loads(done.stdout.strip().splitlines()[-1])
+    assert settings["pinned"] is True and settings["loaded_before_pin"] == []
+    assert not [t for t in settings["numpy"]["simd"] if "512" in t or t == "X86_V4"]
+
+
 def test_every_document_carries_its_settings():
     doc = with_metadata({}, load_scenario("clear_straight"))
     assert set(doc["reproducibility"]) >= {"pinned", "renderer", "torch", "opencv", "numpy",
