@@ -59,12 +59,11 @@ OPENCV_AVX512: dict[str, tuple[str, ...]] = {
 }
 CV_CPU_AVX_512F = 13  # cv::CPU_AVX_512F
 
-# The pinned variables each library reads when it loads (cv2's: only where this CPU has
-# AVX-512, see `pin_kernels`).
+# The pinned variables numpy and torch read when they load (OpenCV's, OPENCV_CPU_DISABLE,
+# exists only where this CPU has AVX-512: `pin_kernels` adds it).
 _READ_AT_IMPORT: dict[str, tuple[str, ...]] = {
     "numpy": ("NPY_DISABLE_CPU_FEATURES", "OPENBLAS_CORETYPE"),
     "torch": ("ONEDNN_MAX_CPU_ISA", "MKL_CBWR", "ATEN_CPU_CAPABILITY"),
-    "cv2": (),
 }
 # Which libraries had loaded before the pin without their variables set (they read others).
 _loaded_before_pin: list[str] = []
