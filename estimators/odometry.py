@@ -58,10 +58,11 @@ class DeadReckoning:
 
         The motion handed on (speed, yaw rate, sideslip) is the period's, the same trapezoid
         the pose advances by: the tracks are carried over the period between two frames, and
-        the sample at its end alone leads that motion by half a period. On a car swinging
-        across its lane (two-model loop, tune_traffic_truck_alongside seed 108) the true lane
-        carried one step with the end sample missed the next at 4 m by 3.4 cm rms, with the
-        period's mean by 1.5 cm (docs/experiments.md, session 18)."""
+        the sample at its end alone leads that motion by half a period. On the traffic
+        tuning drives of the two-model loop, whose cars swing across their lanes, the true
+        lane carried one step missed the next at 4 m by 2.07 cm rms with the end sample and
+        by 0.54 cm with the period's mean (tools/ego_carry_check.py; docs/experiments.md,
+        session 18)."""
         if not (math.isfinite(speed_mps) and math.isfinite(yaw_rate_rps)):
             speed_mps, yaw_rate_rps = (self._previous or (0.0, 0.0))
         v, r = speed_mps, yaw_rate_rps  # the first call: no period yet, the sample
