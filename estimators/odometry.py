@@ -19,8 +19,7 @@ from dataclasses import dataclass
 class EgoMotion:
     """What the estimator knows of the car's motion at this step.
 
-    `speed_mps`, `yaw_rate_rps` and `lateral_speed_mps` (the means over the period just
-    driven) predict the tracks over `dt_s`;
+    `speed_mps`, `yaw_rate_rps` and `lateral_speed_mps` predict the tracks over `dt_s`;
     `pose` (x, y, yaw in the odometry frame, dead-reckoned) carries the models' past lane
     points to where the rear reference looks now; `travelled_m` is the odometer.
     """
@@ -54,18 +53,9 @@ class DeadReckoning:
 
     def update(self, speed_mps: float, yaw_rate_rps: float) -> EgoMotion:
         """Advance by one period with the signals sampled at its end (trapezoidal in speed and
-        yaw rate between this sample and the last); the first call only sets the origin.
-
-        The motion handed on (speed, yaw rate, sideslip) is the period's, the same trapezoid
-        the pose advances by: the tracks are carried over the period between two frames, and
-        the sample at its end alone leads that motion by half a period. On the traffic
-        tuning drives of the two-model loop, whose cars swing across their lanes, the true
-        lane carried one step missed the next at 4 m by 2.07 cm rms with the end sample and
-        by 0.54 cm with the period's mean (tools/ego_carry_check.py; docs/experiments.md,
-        session 18)."""
+        yaw rate between this sample and the last); the first call only sets the origin."""
         if not (math.isfinite(speed_mps) and math.isfinite(yaw_rate_rps)):
             speed_mps, yaw_rate_rps = (self._previous or (0.0, 0.0))
-        v, r = speed_mps, yaw_rate_rps  # the first call: no period yet, the sample
         if self._previous is not None:
             v0, r0 = self._previous
             v, r = 0.5 * (v0 + speed_mps), 0.5 * (r0 + yaw_rate_rps)
@@ -78,4 +68,5 @@ class DeadReckoning:
                          yaw + r * dt)
             self.travelled_m += abs(forward)
         self._previous = (speed_mps, yaw_rate_rps)
-        return EgoMotion(self.dt_s, v, r, self.lateral_speed_mps(r), self.pose, self.travelled_m)
+        return EgoMotion(self.dt_s, speed_mps, yaw_rate_rps,
+                         self.lateral_speed_mps(yaw_rate_rps), self.pose, self.travelled_m)

@@ -47,23 +47,3 @@ def test_reset_returns_to_the_origin():
         odometry.update(10.0, 0.1)
     odometry.reset()
     assert odometry.pose == (0.0, 0.0, 0.0) and odometry.travelled_m == 0.0
-
-
-def test_the_motion_handed_on_is_the_periods_not_its_end_sample():
-    """The tracks are carried over the period between two frames: a yaw rate ramping from 0.1
-    to 0.3 rad/s over it turned the car by 0.2 rad/s x dt, not 0.3 x dt; the speed and the
-    sideslip are the period's too, the same the pose advanced by."""
-    dt, lever = 0.1, 1.4
-    odometry = DeadReckoning(dt, lever)
-    odometry.update(10.0, 0.1)
-    ego = odometry.update(12.0, 0.3)
-    assert ego.yaw_rate_rps == pytest.approx(0.2)
-    assert ego.speed_mps == pytest.approx(11.0)
-    assert ego.lateral_speed_mps == pytest.approx(0.2 * lever)
-    assert ego.pose[2] == pytest.approx(ego.yaw_rate_rps * dt)
-
-
-def test_the_first_sample_is_handed_on_as_it_is():
-    """Before a period has been driven there is no mean: the sample stands for the motion."""
-    ego = DeadReckoning(0.1, 1.4).update(15.0, 0.05)
-    assert (ego.speed_mps, ego.yaw_rate_rps) == (15.0, 0.05)

@@ -24,7 +24,6 @@ SCRIPTS = {
     "compare_estimation.py": "estimation",
     "contact_sheet.py": "contact_sheet",
     "drive_video.py": "drive_video",
-    "ego_carry_check.py": "ego_carry",
     "measure_antialiasing.py": "antialiasing",
     "measure_detector_noise.py": "detector_noise",
     "measure_roll_coupling.py": "roll_coupling",
