@@ -264,19 +264,22 @@ class LaneEstimator:
         detection the gate rejects but another model's detection corroborates restarts that
         track: the track, not the two detectors, has lost the road (a tight turn's onset
         outruns the constant-rate model). A track starts or restarts only from a lane that
-        meets the rear reference's at the car (`_meets_reference`)."""
+        meets the rear reference's at the car (`_meets_reference`); with
+        `track_reference_check = "updates"` every detection a track takes must."""
         noise = [self.tracker_configs[name].coefficient_r for name in centres]
         agreed = dict(zip(centres, corroborated(list(centres.values()), noise), strict=True))
         tracked, status = {}, {}
+        every_update = self.settings.track_reference_check == "updates"
         for name, tracker in self.trackers.items():
             tracker.predict(ego.dt_s, ego.speed_mps, ego.yaw_rate_rps, ego.lateral_speed_mps)
             centre = centres[name]
             meets = self._meets_reference(centre, reference)
-            if centre is not None and not tracker.valid and not meets:
-                events.append(f"{name}: track start refused: its lane "
+            if centre is not None and not meets and (not tracker.valid or every_update):
+                what = "update" if tracker.valid else "start"
+                events.append(f"{name}: track {what} refused: its lane "
                               f"{self._gap_at_car(centre, reference):.2f} m from the "
                               f"reference's at the car")
-                centre = None  # a miss: the lost track waits for a lane the reference confirms
+                centre = None  # a miss: the track waits for a lane the reference confirms
             result = tracker.update_coefficients(centre)
             if result.status is UpdateStatus.GATED and agreed[name] and meets:
                 result = tracker.restart(centre)

@@ -31,8 +31,9 @@ PAPER_DEVIATIONS: dict[str, str] = {
     "mmae_prior": "ours: probabilities start by each model's measured precision; paper: equal",
     "reference_width_check": "ours: a rear reading of the wrong lane width is ignored; "
                              "paper: every reading counts",
-    "track_start_check": "ours: a front track starts only from a lane that meets the rear "
-                         "reference's at the car; paper: any detection starts it",
+    "track_start_check": "ours: a front track starts, and takes a detection, only from a "
+                         "lane that meets the rear reference's at the car; paper: any "
+                         "detection starts it and its gate alone decides",
     "reference_fallback": "ours: with no front lane the output is the rear reference's; "
                           "paper: none, the wheel held straight",
     "output": "ours: the tracks fused by precision and probability; paper: the likeliest model",

@@ -318,20 +318,52 @@ def test_a_track_starts_only_on_a_lane_that_meets_the_rear_reference_at_the_car(
 def test_two_models_that_agree_on_the_next_lane_do_not_restart_their_tracks():
     """Both front models jump to the next lane's lines together (a cut-in car over the
     car's own paint): they corroborate each other, but the rear reference still sees the
-    car's lane, so the gated tracks coast on instead of restarting there. Without the check
-    (paper mode) they restart."""
-    def run(gate):
-        estimator = LaneEstimator(NAMES, _settings(track_start_gate_lane_widths=gate), -4.0)
+    car's lane, so the tracks coast on instead of restarting there: gated, where only a
+    start is checked; missed (refused before the gate), where every update is. Without the
+    check (paper mode) they restart."""
+    def run(gate, check="updates"):
+        settings = _settings(track_start_gate_lane_widths=gate, track_reference_check=check)
+        estimator = LaneEstimator(NAMES, settings, -4.0)
         for k in range(10):
             estimator.update({n: _lane(0.0) for n in NAMES}, _pair(0.0, WIDTH), _ego(k))
         return estimator.update({n: _lane(WIDTH / 2) for n in NAMES}, _pair(0.0, WIDTH),
                                 _ego(10))
 
-    checked = run(0.25)
-    assert set(checked.tracker_status.values()) == {"gated"}
-    assert abs(checked.centre[0]) < 0.05
+    for check, status in (("starts", "gated"), ("updates", "missed")):
+        checked = run(0.25, check)
+        assert set(checked.tracker_status.values()) == {status}
+        assert abs(checked.centre[0]) < 0.05
     unchecked = run(None)
     assert set(unchecked.tracker_status.values()) == {"restarted"}
+
+
+def test_with_every_update_checked_a_coasting_track_takes_no_lane_the_reference_disowns():
+    """A coasting track's gate widens with its covariance, so after most of a second it takes
+    a lane well off the one it held (case 3 seed 3, two-model loop: a pair half a lane over).
+    With `track_reference_check = "updates"` such a detection must meet the rear reference's
+    lane at the car, as a start must: it is a miss and the track coasts on; a detection that
+    meets it is taken. (A gate of a tenth of a lane, so that the coasted gate can reach past
+    it here.)"""
+    def after_a_coast(check: str, c0: float):
+        estimator = LaneEstimator(NAMES, _settings(track_reference_check=check,
+                                                   track_start_gate_lane_widths=0.1), -4.0)
+        for k in range(10):
+            estimator.update({n: _lane(0.0) for n in NAMES}, _pair(0.0, WIDTH), _ego(k))
+        for k in range(10, 19):
+            estimator.update({n: LaneEstimate.invalid("no lane") for n in NAMES},
+                             _pair(0.0, WIDTH), _ego(k))
+        return estimator.update({"hough": LaneEstimate.invalid("no lane"),
+                                 "sliding_window": _lane(c0)}, _pair(0.0, WIDTH), _ego(19))
+
+    assert after_a_coast("starts", 0.6).tracker_status["sliding_window"] == "updated"
+    refused = after_a_coast("updates", 0.6)
+    assert refused.tracker_status["sliding_window"] == "missed"
+    assert abs(refused.tracked["sliding_window"][0]) < 0.05
+    assert "sliding_window: track update refused: its lane 0.60 m from the reference's at " \
+           "the car" in refused.events
+    assert after_a_coast("updates", 0.2).tracker_status["sliding_window"] == "updated"
+    with pytest.raises(ValueError, match="track_reference_check"):
+        EstimatorSettings(track_reference_check="every")
 
 
 def test_the_track_start_check_is_a_setting_paper_mode_leaves_out():
@@ -339,6 +371,7 @@ def test_the_track_start_check_is_a_setting_paper_mode_leaves_out():
     from lanekeep.scenario.schema import EstimationConfig, InvalidValue
 
     assert estimator_settings(EstimationConfig()).track_start_gate_lane_widths == 0.25
+    assert estimator_settings(EstimationConfig()).track_reference_check == "updates"
     paper = EstimationConfig(mode="paper")
     assert estimator_settings(paper).track_start_gate_lane_widths is None
     kept = EstimationConfig(mode="paper", paper_keeps=("track_start_check",))
