@@ -6,6 +6,8 @@ open-loop way to tune the detectors on the tuning scenarios (never on the shippe
         /tmp/lk/replay/van --seconds 25
     python -m lanekeep.tuning.detector_replay score /tmp/lk/replay/van
     python -m lanekeep.tuning.detector_replay score /tmp/lk/replay/van --config my.toml
+    python -m lanekeep.tuning.detector_replay score /tmp/lk/replay/shade --steps 128:209 \\
+        --per-step errors.json
 
 `record` drives the scenario once (a scenario file, e.g. a tuning scenario's, or a shipped
 scenario's name) and keeps every front and rear frame (raw uint8 .npy, about 2.8 MB a frame)
@@ -19,7 +21,9 @@ reference) in order, so the sliding windows' memory of the last fit plays as in 
 prints per detector: RMSE and the 95th percentile of the offset error, the share of valid
 frames, the share of gross errors (over GROSS_M) and the detector's time per frame. `--config
 FILE` scores a candidate detectors TOML (a partial file: the rest keeps the tuned defaults)
-instead of the shipped one. A replay scores detection, not control.
+instead of the shipped one; `--steps FIRST:END` scores a stretch of the drive (a shaded one),
+`--per-step FILE` writes each detector's error at every step scored. A replay scores
+detection, not control.
 
 tools/tuning/detector_replay.py runs the same command line from a clone.
 """
@@ -94,10 +98,48 @@ def lookaheads(cameras) -> dict[str, float]:
     return {f"{d}@{c}": float(make_detector(d, cameras[c]).x_ref) for d, c in JOBS}
 
 
-def score(folder: Path, config_path: str | Path | None = None) -> dict[str, dict[str, float]]:
+def step_range(spec: str | None, steps: int) -> range:
+    """The recorded steps `--steps FIRST:END` names (END exclusive, either side may be left
+    out, as a Python slice: `128:209` is the shaded stretch of tune_right_turn_shade_bumps);
+    None: every step. Raises ValueError naming the problem."""
+    if spec is None:
+        return range(steps)
+    first, sep, end = spec.partition(":")
+    try:
+        if not sep:
+            raise ValueError
+        bounds = slice(int(first) if first else None, int(end) if end else None)
+    except ValueError:
+        raise ValueError(f"--steps must be FIRST:END (step indices), got {spec!r}") from None
+    chosen = range(steps)[bounds]
+    if len(chosen) == 0:
+        raise ValueError(f"--steps {spec} holds none of the recording's {steps} steps")
+    return chosen
+
+
+def summarise(errors: list[float | None], wall_s: float) -> dict[str, float]:
+    """A detector's statistics over its per-step offset errors (m; None = no valid lane)."""
+    found = [e for e in errors if e is not None]
+    err = np.abs(np.asarray(found)) if found else np.zeros(1)
+    n = max(len(errors), 1)
+    return {
+        "rmse_cm": float(np.sqrt(np.mean(err ** 2)) * 100),
+        "p95_cm": float(np.percentile(err, 95) * 100),
+        "max_cm": float(err.max() * 100),
+        "valid_pct": 100.0 * len(found) / n,
+        "gross_pct": 100.0 * float(np.sum(err > GROSS_M)) / n,
+        "ms": 1000.0 * wall_s / n,
+    }
+
+
+def score(folder: Path, config_path: str | Path | None = None, steps: str | None = None,
+          per_step: dict[str, list[float | None]] | None = None) -> dict[str, dict[str, float]]:
     """Per-detector error statistics over a recording (see the module docstring), with the
     detectors' thresholds from `config_path` (None: the shipped detectors.toml), so that a
-    candidate tuning is scored without editing the shipped file."""
+    candidate tuning is scored without editing the shipped file. `steps` (`step_range`)
+    scores a stretch of the drive only (the detectors still start at its first step);
+    `per_step`, when given, receives each detector's offset error at every scored step (m,
+    None where it had no lane), to find where a detector fails."""
     from lanekeep.detectors.config import load_config
     from lanekeep.detectors.registry import make_detector
     from lanekeep.scenario.schema import load_scenario
@@ -111,29 +153,23 @@ def score(folder: Path, config_path: str | Path | None = None) -> dict[str, dict
                                                   scenario.camera.height)) as rig:
         cameras = dict(rig.cameras)
     truth = np.load(folder / "truth.npy")
+    chosen = step_range(steps, len(truth))
     frames = {name: np.load(folder / f"{name}.npy", mmap_mode="r") for name in ("front", "rear")}
     config = load_config(config_path)
     out = {}
     for j, (name, cam) in enumerate(JOBS):
         detector = make_detector(name, cameras[cam], config=config)
-        errors, valid, wall = [], 0, 0.0
-        for i in range(len(truth)):
+        errors: list[float | None] = []
+        wall = 0.0
+        for i in chosen:
             frame = np.ascontiguousarray(frames[cam][i])
             t0 = time.perf_counter()
             est = detector.detect(frame)
             wall += time.perf_counter() - t0
-            if est.valid:
-                valid += 1
-                errors.append(est.offset_m - truth[i, j])
-        err = np.abs(np.asarray(errors)) if errors else np.zeros(1)
-        out[f"{name}@{cam}"] = {
-            "rmse_cm": float(np.sqrt(np.mean(err ** 2)) * 100),
-            "p95_cm": float(np.percentile(err, 95) * 100),
-            "max_cm": float(err.max() * 100),
-            "valid_pct": 100.0 * valid / len(truth),
-            "gross_pct": 100.0 * float(np.sum(err > GROSS_M)) / len(truth),
-            "ms": 1000.0 * wall / len(truth),
-        }
+            errors.append(float(est.offset_m - truth[i, j]) if est.valid else None)
+        out[f"{name}@{cam}"] = summarise(errors, wall)
+        if per_step is not None:
+            per_step[f"{name}@{cam}"] = errors
     return out
 
 
@@ -152,6 +188,11 @@ def main(argv: list[str] | None = None) -> int:
     sco.add_argument("folders", type=Path, nargs="+")
     sco.add_argument("--config", type=Path,
                      help="detectors TOML to score (default: the shipped detectors.toml)")
+    sco.add_argument("--steps", metavar="FIRST:END",
+                     help="score only these recorded steps (END exclusive; e.g. 128:209)")
+    sco.add_argument("--per-step", type=Path, metavar="FILE",
+                     help="write each detector's offset error at every scored step (JSON, "
+                          "metres, null where it had no lane), per folder")
     args = parser.parse_args(argv)
     if args.command == "score" and args.config is not None:
         try:  # a bad candidate file: one line, before any frame is scored
@@ -161,13 +202,36 @@ def main(argv: list[str] | None = None) -> int:
     if args.command == "record":
         record(args.scenario, args.out, args.seconds, args.closed_loop)
         return 0
+    if args.command == "score":
+        for folder in args.folders:  # every problem before any frame is scored
+            problem = _unreadable(folder, args.steps)
+            if problem:
+                parser.exit(2, f"detector_replay: error: {problem}\n")
+    per_step: dict[str, dict[str, list[float | None]]] = {}
     for folder in args.folders:
         print(folder.name)
-        for job, s in score(folder, args.config).items():
+        per_step[str(folder)] = {}
+        for job, s in score(folder, args.config, args.steps, per_step[str(folder)]).items():
             print(f"  {job:22s} rmse {s['rmse_cm']:6.1f} cm  p95 {s['p95_cm']:6.1f}  max "
                   f"{s['max_cm']:6.1f}  valid {s['valid_pct']:5.1f}%  gross "
                   f"{s['gross_pct']:5.1f}%  {s['ms']:5.1f} ms")
+    if args.per_step is not None:
+        args.per_step.write_text(json.dumps({"steps": args.steps, "folders": per_step}))
     return 0
+
+
+def _unreadable(folder: Path, steps: str | None) -> str:
+    """Why a folder is no recording, or its `--steps` none of its steps ('' when fine)."""
+    try:
+        count = len(np.load(folder / "truth.npy", mmap_mode="r"))
+        json.loads((folder / "meta.json").read_text())
+    except (OSError, ValueError) as err:
+        return f"{folder}: not a recording ({err})"
+    try:
+        step_range(steps, count)
+    except ValueError as err:
+        return f"{folder}: {err}"
+    return ""
 
 
 if __name__ == "__main__":
