@@ -16,8 +16,10 @@ at (scoring only: the detectors still see the frames alone). The car is steered 
 centre plus a slow sinusoidal wander (WANDER_M, WANDER_PERIOD_S): the recording is data for
 tuning the detectors, and a loop that a fooled detector drove out of its lane would leave
 nothing to tune on; `--closed-loop` records the loop's own drive instead. `score` runs a fresh
-hough and sliding_window on the front frames and sliding_window on the rear (the closed loop's
-reference) in order, so the sliding windows' memory of the last fit plays as in the loop, and
+hough and sliding_window on the front frames and sliding_window on the rear (a classical
+reference the loop can select with `reference_detector`; its default is LaneNet, which this
+tool does not score) in order, so the sliding windows' memory of the last fit plays as in
+the loop, and
 prints per detector: RMSE and the 95th percentile of the offset error, the share of valid
 frames, the share of gross errors (over GROSS_M) and the detector's time per frame. `--config
 FILE` scores a candidate detectors TOML (a partial file: the rest keeps the tuned defaults)
