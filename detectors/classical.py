@@ -21,6 +21,7 @@ from lanekeep.detectors.image_stage import (
     RegionOfInterest,
     RoiMemo,
     binary_bird_eye,
+    drop_blobs,
     grain_noise,
     reject_noise,
     warped_roi,
@@ -135,6 +136,9 @@ class ClassicalDetector:
             estimate = LaneEstimate.invalid(noise, self.x_ref)
             self.remember(estimate)  # a noisy frame drops the fit, not the measured width
             return estimate
+        pre, w = self.config.preprocess, self.view.window
+        bev = drop_blobs(bev, w.m_per_row, w.m_per_col, pre.min_blob_length_m,
+                         pre.min_blob_elongation)
         lines = self.find_boundaries(bev)
         width = self.lane_width_m if self.bird_eye_paint else None
         estimate = assemble(lines.left, lines.right, self.x_ref, self.config.lane, self.camera,

@@ -153,6 +153,41 @@ def drop_speckle(mask: np.ndarray, min_coherence: float) -> tuple[np.ndarray, st
     return opened, ""
 
 
+def drop_blobs(bev: np.ndarray, m_per_row: float, m_per_col: float, min_length_m: float,
+               min_elongation: float) -> np.ndarray:
+    """The binary bird's-eye view without its blobs: each 8-connected piece shorter than
+    `min_length_m` along its own principal axis and less than `min_elongation` times as long
+    as it is wide (sun flecks; detectors/config.py Preprocess). Length and width are those
+    of the rectangle with the piece's second moments (in metres: a stripe L x W has
+    variances L^2 / 12 and W^2 / 12 along its axes), so that a line keeps its length
+    whichever way it runs across the view (a sharp turn's lines cross the columns)."""
+    if min_length_m <= 0.0:
+        return bev
+    count, labels, stats, _ = cv2.connectedComponentsWithStats(bev, connectivity=8)
+    if count <= 1:
+        return bev
+    rows, cols = np.nonzero(bev)
+    label = labels[rows, cols]
+    y = cols * m_per_col  # across the road
+    x = rows * m_per_row  # along it
+    n = np.bincount(label, minlength=count).astype(np.float64)
+    n[0] = 1.0  # the background has no pixels here
+    mx, my = np.bincount(label, x, count) / n, np.bincount(label, y, count) / n
+    # A pixel is a cell, not a point: its own extent adds 1/12 of its size squared.
+    sxx = np.bincount(label, x * x, count) / n - mx * mx + m_per_row**2 / 12.0
+    syy = np.bincount(label, y * y, count) / n - my * my + m_per_col**2 / 12.0
+    sxy = np.bincount(label, x * y, count) / n - mx * my
+    half_trace, det = 0.5 * (sxx + syy), sxx * syy - sxy * sxy
+    spread = np.sqrt(np.maximum(half_trace * half_trace - det, 0.0))
+    major = np.sqrt(12.0 * (half_trace + spread))
+    minor = np.sqrt(12.0 * np.maximum(half_trace - spread, 0.0))
+    keep = (major >= min_length_m) | (major >= min_elongation * minor)
+    keep[0] = False  # the background
+    if keep[1:].all():
+        return bev
+    return np.where(keep[labels], np.uint8(255), np.uint8(0))
+
+
 def _open_2x2(mask: np.ndarray) -> np.ndarray:
     """The mask's 2x2 opening: what survives of it is coherent strokes, not speckle."""
     return cv2.morphologyEx(mask, cv2.MORPH_OPEN, _KERNEL_2X2)

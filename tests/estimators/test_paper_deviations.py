@@ -11,6 +11,7 @@ import pytest
 
 from lanekeep.core.config_io import InvalidValue
 from lanekeep.detectors.base import LaneEstimate
+from lanekeep.detectors.config import load_config
 from lanekeep.driver.paper_mode import (
     ESTIMATOR_CHOICES,
     FINITE_FLOOR,
@@ -67,10 +68,15 @@ def test_roll_windows_and_binarisation_are_deviations_too():
     config = front_detector_config("hough", "paper")
     assert config.hough.binarisation == config.sliding_window.binarisation == "paper"
     pre = config.preprocess
-    assert (pre.vehicle_dark_ratio, pre.streak_min_rows, pre.min_coherence, pre.max_fill) == (
-        0.0, 0, 0.0, 1.0)
+    assert (pre.vehicle_dark_ratio, pre.streak_min_rows, pre.min_coherence, pre.max_fill,
+            pre.min_blob_length_m) == (0.0, 0, 0.0, 1.0, 0.0)
     ours = front_detector_config("hough", "paper", keeps=("binarisation",))
     assert ours.hough.binarisation == "image" and ours.preprocess.min_coherence > 0.0
+    flecks = load_config()
+    flecks = replace(flecks, preprocess=replace(flecks.preprocess, min_blob_length_m=1.0))
+    assert front_detector_config("hough", "paper", flecks).preprocess.min_blob_length_m == 0.0
+    kept = front_detector_config("hough", "paper", flecks, keeps=("binarisation",))
+    assert kept.preprocess.min_blob_length_m == 1.0
     assert ours.profiles.front.x_far_m == 30.0  # the window is a deviation of its own
     both = front_detector_config("hough", "paper", keeps=("binarisation", "windows"))
     assert both.profiles.front.x_far_m == 20.0
