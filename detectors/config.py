@@ -108,14 +108,14 @@ class Preprocess:
     # against the leaf shade as paint against its road, and as wide as paint in the bird's-eye
     # view: no threshold on contrast or width tells them apart. Their shape does: a lane line,
     # even a dash (3 m), runs along the road, a fleck is a blob. A connected piece of the
-    # binary bird's-eye view shorter than `min_blob_length_m` along the road is dropped unless
-    # it is at least `min_blob_elongation` times longer than wide (a fragment of a worn or
-    # occluded line). 0 (the default) keeps every piece. 1.0 m and 3 were chosen on
-    # tune_right_turn_shade_bumps' recorded drive and the tuning eval sets, and on the tuning
+    # binary bird's-eye view shorter than `min_blob_length_m` along its own principal axis is
+    # dropped unless it is at least `min_blob_elongation` times longer than wide (a fragment of
+    # a worn or occluded line). 0 (the default) keeps every piece. 1.0 m and 3 were chosen on
+    # tune_right_turn_shade_bumps' recorded drive and the tuning eval sets; on the tuning
     # scenarios the two-model loop then kept its lane in all three drives of that scenario
-    # (2 of 3 departed before); not yet the default: the rear camera's sliding_window loses a
-    # clear-road frame with it, and the scored benches are to run (docs/experiments.md,
-    # session 20).
+    # (2 of 3 departed before). Not the default: the rear camera's sliding_window loses a
+    # clear-road frame with it, and on the scored bench the two-model loop departed in 4 of
+    # 95 episodes with it (0 without; docs/experiments.md, session 20).
     min_blob_length_m: float = 0.0
     min_blob_elongation: float = 3.0
 

@@ -163,7 +163,7 @@ def drop_blobs(bev: np.ndarray, m_per_row: float, m_per_col: float, min_length_m
     whichever way it runs across the view (a sharp turn's lines cross the columns)."""
     if min_length_m <= 0.0:
         return bev
-    count, labels, stats, _ = cv2.connectedComponentsWithStats(bev, connectivity=8)
+    count, labels = cv2.connectedComponents(bev, connectivity=8)
     if count <= 1:
         return bev
     rows, cols = np.nonzero(bev)
