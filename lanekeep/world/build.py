@@ -332,6 +332,7 @@ def _in_cast_shadow(road: Road, pieces: list[MarkingPiece], conditions: Conditio
 def _add_markings(
     spec: mujoco.MjSpec, road: Road, layout: WorldLayout, conditions: ConditionsInfo,
     seed: int = 0, surface: float = paint_filter.ROAD_ALBEDO,
+    sections: tuple[list[tuple[float, float]], float] | None = None,
 ) -> tuple[dict[str, int], set[str]]:
     """Marking meshes grouped by (boundary, segment, brightness level); returns name ->
     boundary, and the names of the colour render's own paint geoms. Paint strips are geometry
@@ -345,6 +346,10 @@ def _add_markings(
     run the lane through them. The masks mark the whole strip; which of its pixels a camera
     shows as paint is for lanekeep/sensing/paint_visibility.py to say. `surface`: the grey of the
     carriageway (lanekeep/world/pavement.surface_albedo), which faded paint fades towards.
+    `sections`: the s intervals of the road's sections of another surface and that surface's
+    grey; paint strips are cut at their ends, and the pieces on a section get materials
+    composed against its grey (geoms and materials named with an "_o"), as a line painted
+    across a concrete bridge is lighter than the slab, not darker.
 
     Why shaded paint stays opaque geometry: MuJoCo draws translucent geoms twice, and a
     shadow overlay drawn after them darkens them once where it darkens the asphalt twice
@@ -354,9 +359,11 @@ def _add_markings(
     segmentation meshes do not depend on the shadows, so the masks are the same with or
     without them."""
     styles = road.markings
-    groups: dict[tuple[int, int, int], list[Ribbon]] = {}
-    translucent: dict[tuple[int, int, int], list[Ribbon]] = {}
-    shaded: dict[tuple[int, int, int], list[Ribbon]] = {}
+    other, other_surface = sections or ([], surface)
+    greys = (surface, other_surface)  # per colour key's last field: 0 the road's, 1 a section's
+    groups: dict[tuple[int, int, int], list[Ribbon]] = {}  # the masks' geometry, uncut
+    translucent: dict[tuple[int, int, int, int], list[Ribbon]] = {}
+    shaded: dict[tuple[int, int, int, int], list[Ribbon]] = {}
     dots: set[tuple[int, int, int]] = set()
     reflectors: dict[int, list[Ribbon]] = {}  # per boundary: one geom for the whole road
     bounds = road.segment_bounds()
@@ -370,22 +377,26 @@ def _add_markings(
             continue
         segment = int(np.searchsorted(starts, piece.s_start_m, side="right") - 1)
         level = int(np.clip(round(piece.brightness * (levels - 1)), 0, levels - 1))
-        half = piece.width_m / 2.0
-        strip = _dot_mesh(road, piece) if piece.dot else ribbon(
-            road, piece.s_start_m, piece.s_end_m, piece.r_m - half, piece.r_m + half,
-            MARKING_Z_M, tile_m=1.0, max_step_m=1.0)
-        key = (piece.boundary, segment, level)
-        groups.setdefault(key, []).append(strip)
+        key, half = (piece.boundary, segment, level), piece.width_m / 2.0
         if piece.dot:
+            groups.setdefault(key, []).append(_dot_mesh(road, piece))
             dots.add(key)
-        elif shade:
-            shaded.setdefault(key, []).append(strip)
-        elif level == levels - 1:
-            translucent.setdefault(key, []).append(paint_filter.filtered_strip(
-                road, piece.s_start_m, piece.s_end_m, piece.r_m, piece.width_m, MARKING_Z_M,
-                v_shift=PAINT_WEAR_SHIFT * piece.boundary))
-        else:
-            translucent.setdefault(key, []).append(strip)
+            continue
+        groups.setdefault(key, []).append(ribbon(
+            road, piece.s_start_m, piece.s_end_m, piece.r_m - half, piece.r_m + half,
+            MARKING_Z_M, tile_m=1.0, max_step_m=1.0))
+        for on_section, spans in enumerate(_cut(piece.s_start_m, piece.s_end_m, other)):
+            for s0, s1 in spans:
+                if shade or level < levels - 1:
+                    strip = groups[key][-1] if (s0, s1) == (piece.s_start_m, piece.s_end_m) \
+                        else ribbon(road, s0, s1, piece.r_m - half, piece.r_m + half,
+                                    MARKING_Z_M, tile_m=1.0, max_step_m=1.0)
+                else:
+                    strip = paint_filter.filtered_strip(
+                        road, s0, s1, piece.r_m, piece.width_m, MARKING_Z_M,
+                        v_shift=PAINT_WEAR_SHIFT * piece.boundary)
+                (shaded if shade else translucent).setdefault(
+                    (*key, on_section), []).append(strip)
     paint_filter.add_paint_texture(spec, "paint_filtered",
                                    np.random.default_rng([seed, PAINT_SEED, 1]))
     paint_filter.add_worn_texture(spec, "paint_worn_rgba",
@@ -400,35 +411,41 @@ def _add_markings(
             materials.add(name)
         return name
 
+    def paint_material(key: tuple[int, int, int, int], kind: str) -> str:
+        """The colour render's material of one colour key: "" (opaque), "_rgb" (the
+        translucent copy) or "_shaded" (fresh paint's opaque copy in a cast shadow)."""
+        boundary, _, level, on_section = key
+        grey, fresh = greys[on_section], level == levels - 1
+        rgb = paint_filter.paint_rgb(np.asarray(styles[boundary].colour),
+                                     0.35 + 0.65 * level / max(levels - 1, 1), grey)
+        name = f"paint_b{boundary}_l{level}{'_o' if on_section else ''}"
+        if kind == "_rgb":
+            return material(f"{name}_rgb", "paint_filtered" if fresh else "paint_worn_rgba",
+                            rgb, paint_filter.PAINT_ALPHA)
+        if kind == "_shaded" and fresh:
+            return material(f"{name}_shaded", "paint", paint_filter.shaded_rgb(rgb, grey))
+        return material(name, "paint" if fresh else "paint_worn", rgb)
+
     for key, strips in sorted(groups.items()):
         boundary, segment, level = key
-        colour = np.asarray(styles[boundary].colour)
-        brightness = 0.35 + 0.65 * level / max(levels - 1, 1)
-        rgb = paint_filter.paint_rgb(colour, brightness, surface)
-        fresh = level == levels - 1
-        opaque = material(f"paint_b{boundary}_l{level}", "paint" if fresh else "paint_worn", rgb)
         name = f"marking_b{boundary}_s{segment}_l{level}"
         names[name] = boundary
         if key in dots:  # ceramic: brighter than paint, in both renders
             add_mesh_geom(spec, name, Ribbon.concatenate(strips),
                           material(f"paint_b{boundary}_dot", "paint",
-                                   list(DOT_ALBEDO * colour)), GROUP_MARKING)
+                                   list(DOT_ALBEDO * np.asarray(styles[boundary].colour))),
+                          GROUP_MARKING)
             continue
-        add_mesh_geom(spec, name, Ribbon.concatenate(strips), opaque, GROUP_MARKING_LABEL)
-        if key in translucent:
-            see_through = material(f"paint_b{boundary}_l{level}_rgb",
-                                   "paint_filtered" if fresh else "paint_worn_rgba", rgb,
-                                   paint_filter.PAINT_ALPHA)
-            add_mesh_geom(spec, f"{name}_rgb", Ribbon.concatenate(translucent[key]),
-                          see_through, GROUP_RGB_OVERLAY)
-            colour_only.add(f"{name}_rgb")
-        if key in shaded:
-            in_shade = opaque if not fresh else material(
-                f"paint_b{boundary}_l{level}_shaded", "paint",
-                paint_filter.shaded_rgb(rgb, surface))
-            add_mesh_geom(spec, f"{name}_shaded_rgb", Ribbon.concatenate(shaded[key]),
-                          in_shade, GROUP_RGB_OVERLAY)
-            colour_only.add(f"{name}_shaded_rgb")
+        add_mesh_geom(spec, name, Ribbon.concatenate(strips), paint_material((*key, 0), ""),
+                      GROUP_MARKING_LABEL)
+        for on_section, tag in enumerate(("", "_o")):
+            colour_key = (*key, on_section)
+            for copies, kind in ((translucent, "_rgb"), (shaded, "_shaded")):
+                if colour_key in copies:
+                    geom = f"{name}{tag}{kind}_rgb" if kind == "_shaded" else f"{name}{tag}_rgb"
+                    add_mesh_geom(spec, geom, Ribbon.concatenate(copies[colour_key]),
+                                  paint_material(colour_key, kind), GROUP_RGB_OVERLAY)
+                    colour_only.add(geom)
     for boundary, blocks in sorted(reflectors.items()):
         name = f"marking_b{boundary}_reflectors"
         names[name] = boundary  # a boundary's marking, in both renders (as Botts' dots)
@@ -491,8 +508,8 @@ def build_spec(
     _add_road_surface(spec, road, layout, look.asphalt_grid_step_m, other)
     conditions = add_conditions(spec, scenario, road, layout)  # first: its cast shadows
     marking_names, ribbons = _add_markings(
-        spec, road, layout, conditions, scenario.seed,
-        pavement.surface_albedo(scenario.road.pavement))
+        spec, road, layout, conditions, scenario.seed, pavement.surface_albedo(style),
+        (other, pavement.surface_albedo(pavement.section_style(style))))
     paint_filter.draw_overlays_last(spec, GROUP_RGB_OVERLAY, ribbons)
     _draw_ground_last(spec)
     return spec, marking_names, conditions

@@ -153,3 +153,23 @@ def test_reflectors_are_their_boundarys_marking_and_stand_out():
     assert grey[mask].mean() > grey[beside].mean() + 30
     names = [world.model.geom(i).name for i in range(world.model.ngeom)]
     assert names.count("marking_b1_reflectors") == 1  # one geom for the whole road
+
+
+def test_paint_across_a_concrete_section_is_lighter_than_the_slab():
+    """The paint on a section is composed against the section's surface: on light concrete
+    slabs it stands out as a light line (it was composed against the asphalt and, a little
+    darker than the slab, all but vanished: 7-19 DN above the slab beside it)."""
+    scenario = _no_traffic("clear_straight")
+    road = dataclasses.replace(scenario.road, surface="asphalt", section_surface="concrete",
+                               surface_changes=0.9)
+    world, seg, rgb = _render(dataclasses.replace(scenario, road=road))
+    names = [world.model.geom(i).name for i in range(world.model.ngeom)]
+    assert any(n.startswith("marking_b") and n.endswith("_o_rgb") for n in names)
+    grey = rgb.astype(float).mean(axis=2)
+    for boundary in range(road.n_lanes + 1):
+        mask = world.marking_mask(seg, boundary)
+        for shift in (8, -8):
+            beside = np.roll(grey, -shift, axis=1)  # the road `shift` px beside each pixel
+            on_slab = mask & ~np.roll(mask, -shift, axis=1) & (beside > 140)
+            assert on_slab.sum() > 100, (boundary, shift)
+            assert np.median(grey[on_slab] - beside[on_slab]) > 25, (boundary, shift)
