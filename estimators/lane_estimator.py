@@ -17,6 +17,7 @@ detection is measured from the detections themselves.
 from __future__ import annotations
 
 import functools
+import math
 import tomllib
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
@@ -276,8 +277,10 @@ class LaneEstimator:
             meets = self._meets_reference(centre, reference)
             if centre is not None and not meets and (not tracker.valid or every_update):
                 what = "update" if tracker.valid else "start"
+                heading = ("" if self.settings.track_start_gate_heading_rad is None else
+                           f" and {self._heading_gap(centre, reference):.3f} rad")
                 events.append(f"{name}: track {what} refused: its lane "
-                              f"{self._gap_at_car(centre, reference):.2f} m from the "
+                              f"{self._gap_at_car(centre, reference):.2f} m{heading} from the "
                               f"reference's at the car")
                 centre = None  # a miss: the track waits for a lane the reference confirms
             result = tracker.update_coefficients(centre)
@@ -308,11 +311,20 @@ class LaneEstimator:
 
     def _meets_reference(self, centre: np.ndarray | None, reference: np.ndarray | None) -> bool:
         """Whether a front lane may start a track: no reference to ask, or the two meet at
-        the car within `track_start_gate_lane_widths` of the measured lane width."""
+        the car within `track_start_gate_lane_widths` of the measured lane width (and, with
+        `track_start_gate_heading_rad`, run within that heading of each other there)."""
         gate = self.settings.track_start_gate_lane_widths
         if centre is None or reference is None or gate is None:
             return True
+        heading = self.settings.track_start_gate_heading_rad
+        if heading is not None and self._heading_gap(centre, reference) > heading:
+            return False
         return self._gap_at_car(centre, reference) <= gate * self.lane_width_m
+
+    @staticmethod
+    def _heading_gap(centre: np.ndarray, reference: np.ndarray) -> float:
+        """How far apart two centre lines' headings are at the car (x = 0), rad."""
+        return abs(math.atan(float(centre[1])) - math.atan(float(reference[1])))
 
     def _select(self, reference: LaneEstimate, tracked, detections: dict[str, LaneEstimate],
                 ego: EgoMotion, events: list[str]) -> tuple[MMAEOutput, float]:

@@ -126,6 +126,15 @@ class EstimatorSettings:
         "reference's at the car (x = 0) within this share of the measured lane width, while "
         "the reference has a lane (after its width check); unset: any detection starts it "
         "(the paper's; paper mode).", bounds=(0.01, 1.0))
+    # The check above compares offsets at the car only: a detection whose lane crosses the
+    # reference's there with a wrong heading is 1.6 m off 5 m ahead and still passes
+    # (sharp_turn seed 3, two-model loop, session 22: the car left its lane). Both lanes'
+    # headings at the car are the car's heading in its lane; right detections' gap to the
+    # reference's: median 0.010 rad, 99th percentile 0.135 (docs/experiments.md, session 22).
+    # Off until decided on the tuning scenarios.
+    track_start_gate_heading_rad: float | None = setting(
+        None, "With the start check on, a front lane must also run within this heading "
+        "(rad) of the rear reference's at the car; unset: offset only.", bounds=(0.01, 1.0))
     # A coasting track's gate widens with its covariance: after most of a second without a
     # detection it accepts a lane 1.3-1.7 m off (case 3 seed 3, two-model loop, 2026-11-30:
     # sliding_window's track took a pair half a lane over at 3.6 s and the car steered by it,

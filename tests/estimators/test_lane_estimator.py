@@ -366,6 +366,33 @@ def test_with_every_update_checked_a_coasting_track_takes_no_lane_the_reference_
         EstimatorSettings(track_reference_check="every")
 
 
+def test_with_the_heading_check_a_lane_that_crosses_the_reference_at_the_car_is_refused():
+    """A detection whose lane meets the reference's at the car but runs off at 0.3 rad
+    (1.5 m off 5 m ahead: sharp_turn seed 3's wrong line) passes the offset check alone; with
+    `track_start_gate_heading_rad` it is refused like a lane a line over, and the event gives
+    both gaps. A lane at the reference's heading is still taken, and with the check unset
+    (the default) nothing changes."""
+    def after_a_coast(heading_gate, heading: float):
+        settings = _settings(track_start_gate_heading_rad=heading_gate)
+        estimator = LaneEstimator(NAMES, settings, -4.0)
+        for k in range(10):
+            estimator.update({n: _lane(0.0) for n in NAMES}, _pair(0.0, WIDTH), _ego(k))
+        for k in range(10, 19):
+            estimator.update({n: LaneEstimate.invalid("no lane") for n in NAMES},
+                             _pair(0.0, WIDTH), _ego(k))
+        return estimator.update({"hough": LaneEstimate.invalid("no lane"),
+                                 "sliding_window": _lane(0.0, heading)}, _pair(0.0, WIDTH),
+                                _ego(19))
+
+    refused = after_a_coast(0.15, 0.3)
+    assert refused.tracker_status["sliding_window"] == "missed"
+    assert "sliding_window: track update refused: its lane 0.00 m and 0.291 rad from the " \
+           "reference's at the car" in refused.events
+    assert after_a_coast(0.15, 0.05).tracker_status["sliding_window"] == "updated"
+    assert after_a_coast(None, 0.3).tracker_status["sliding_window"] != "missed"
+    assert EstimatorSettings().track_start_gate_heading_rad is None
+
+
 def test_the_track_start_check_is_a_setting_paper_mode_leaves_out():
     from lanekeep.driver.paper_mode import estimator_settings
     from lanekeep.scenario.schema import EstimationConfig, InvalidValue
