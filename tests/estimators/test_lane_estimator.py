@@ -337,6 +337,19 @@ def test_two_models_that_agree_on_the_next_lane_do_not_restart_their_tracks():
     assert set(unchecked.tracker_status.values()) == {"restarted"}
 
 
+def _after_a_coast(settings, detection: LaneEstimate):
+    """Both tracks held on the lane for 1 s, then 0.9 s without a detection (the gate widens),
+    then `detection` for sliding_window alone: the estimator's output of that step."""
+    estimator = LaneEstimator(NAMES, settings, -4.0)
+    for k in range(10):
+        estimator.update({n: _lane(0.0) for n in NAMES}, _pair(0.0, WIDTH), _ego(k))
+    for k in range(10, 19):
+        estimator.update({n: LaneEstimate.invalid("no lane") for n in NAMES},
+                         _pair(0.0, WIDTH), _ego(k))
+    return estimator.update({"hough": LaneEstimate.invalid("no lane"),
+                             "sliding_window": detection}, _pair(0.0, WIDTH), _ego(19))
+
+
 def test_with_every_update_checked_a_coasting_track_takes_no_lane_the_reference_disowns():
     """A coasting track's gate widens with its covariance, so after most of a second it takes
     a lane well off the one it held (case 3 seed 3, two-model loop: a pair half a lane over).
@@ -345,15 +358,8 @@ def test_with_every_update_checked_a_coasting_track_takes_no_lane_the_reference_
     meets it is taken. (A gate of a tenth of a lane, so that the coasted gate can reach past
     it here.)"""
     def after_a_coast(check: str, c0: float):
-        estimator = LaneEstimator(NAMES, _settings(track_reference_check=check,
-                                                   track_start_gate_lane_widths=0.1), -4.0)
-        for k in range(10):
-            estimator.update({n: _lane(0.0) for n in NAMES}, _pair(0.0, WIDTH), _ego(k))
-        for k in range(10, 19):
-            estimator.update({n: LaneEstimate.invalid("no lane") for n in NAMES},
-                             _pair(0.0, WIDTH), _ego(k))
-        return estimator.update({"hough": LaneEstimate.invalid("no lane"),
-                                 "sliding_window": _lane(c0)}, _pair(0.0, WIDTH), _ego(19))
+        return _after_a_coast(_settings(track_reference_check=check,
+                                        track_start_gate_lane_widths=0.1), _lane(c0))
 
     assert after_a_coast("starts", 0.6).tracker_status["sliding_window"] == "updated"
     refused = after_a_coast("updates", 0.6)
@@ -373,16 +379,8 @@ def test_with_the_heading_check_a_lane_that_crosses_the_reference_at_the_car_is_
     both gaps. A lane at the reference's heading is still taken, and with the check unset
     (the default) nothing changes."""
     def after_a_coast(heading_gate, heading: float):
-        settings = _settings(track_start_gate_heading_rad=heading_gate)
-        estimator = LaneEstimator(NAMES, settings, -4.0)
-        for k in range(10):
-            estimator.update({n: _lane(0.0) for n in NAMES}, _pair(0.0, WIDTH), _ego(k))
-        for k in range(10, 19):
-            estimator.update({n: LaneEstimate.invalid("no lane") for n in NAMES},
-                             _pair(0.0, WIDTH), _ego(k))
-        return estimator.update({"hough": LaneEstimate.invalid("no lane"),
-                                 "sliding_window": _lane(0.0, heading)}, _pair(0.0, WIDTH),
-                                _ego(19))
+        return _after_a_coast(_settings(track_start_gate_heading_rad=heading_gate),
+                              _lane(0.0, heading))
 
     refused = after_a_coast(0.15, 0.3)
     assert refused.tracker_status["sliding_window"] == "missed"
