@@ -3,6 +3,8 @@ seed.
 
     python tools/make_dataset.py --out data/lanenet --train 320 --val 24 --test 24 [--workers 2]
     python tools/make_dataset.py --out /work/data/observer58 --seed 58 --cameras rear ...
+    python tools/make_dataset.py --out /work/data/observer62 --seed 58 --cameras rear \
+        --rear-mount-share 0.5 ...     # half the worlds seen near the loop's rear camera
 
 Each world is one compressed shard (`SPLIT/world_NNNNN.npz`); a shard already there is kept,
 so an interrupted run goes on where it stopped. `recipe.json` records the recipe and counts:
@@ -50,12 +52,17 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--cameras", choices=("both", "front", "rear"), default="both",
                         help="the cameras each sequence is rendered by (rear: a rear-only "
                              "model's data, without the front's render cost)")
+    parser.add_argument("--rear-mount-share", type=float, default=0.0, metavar="P",
+                        help="share of worlds whose cameras are mounted near the car's own rear "
+                             "camera (a rear-only model's deployment camera) instead of the "
+                             "world's draw (default 0)")
     args = parser.parse_args(argv)
     from tqdm import tqdm
 
     cameras = CAMERAS if args.cameras == "both" else (args.cameras,)
     recipe = DatasetRecipe(seed=args.seed, sequences_per_world=args.sequences_per_world,
-                           frames=args.frames, cameras=cameras)
+                           frames=args.frames, cameras=cameras,
+                           rear_mount_share=args.rear_mount_share)
     counts = {"train": args.train, "val": args.val, "test": args.test}
     root = Path(args.out)
     write_recipe(root, recipe, counts)

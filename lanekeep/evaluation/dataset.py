@@ -26,6 +26,7 @@ Frames are stored at the network's working size (320x176, RGB uint8, area-averag
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 from collections.abc import Sequence
@@ -37,7 +38,7 @@ import numpy as np
 
 from lanekeep.detectors.lanenet_model import LaneNetConfig
 from lanekeep.detectors.lanenet_targets import BoundaryLabel, FrameLabel, slots_from_lateral
-from lanekeep.evaluation.dataset_world import ROAD_LENGTH_M, random_scenario
+from lanekeep.evaluation.dataset_world import ROAD_LENGTH_M, near_rear_mount, random_scenario
 from lanekeep.geometry.camera_model import CameraModel
 from lanekeep.scenario.schema import Scenario
 from lanekeep.scoring.metrics import ADE_POINTS_M
@@ -78,6 +79,11 @@ class DatasetRecipe:
     # places are the two-camera recipe's of the same seed; its image noise is not (the front's
     # frames no longer take their draws from the world's stream).
     cameras: tuple[str, ...] = CAMERAS
+    # Share of worlds whose camera mount is drawn near the car's own rear camera instead of
+    # the world's draw (`dataset_world.near_rear_mount`): a rear-only model meets one camera
+    # in the loop (150 deg, 1.5 m, 20 deg down), at the wide end of the drawn range, where
+    # #58's observer leant into the lane across dash gaps. 0 keeps every existing recipe.
+    rear_mount_share: float = 0.0
 
     def __post_init__(self):
         if self.frames < 1 or self.sequences_per_world < 1:
@@ -88,6 +94,8 @@ class DatasetRecipe:
             raise ValueError(f"cameras must be a non-empty subset of {CAMERAS} in that order, "
                              f"not {self.cameras!r}")
         object.__setattr__(self, "cameras", cameras)
+        if not 0.0 <= self.rear_mount_share <= 1.0:
+            raise ValueError(f"rear_mount_share must be in [0, 1], not {self.rear_mount_share}")
 
 
 def world_seed(recipe: DatasetRecipe, split: str, index: int) -> int:
@@ -273,6 +281,11 @@ def make_shard(recipe: DatasetRecipe, split: str, index: int) -> dict:
     """World `index` of `split`: its arrays plus its seed and condition tag."""
     seed = world_seed(recipe, split, index)
     scenario = random_scenario(seed)
+    if recipe.rear_mount_share > 0.0:  # its own stream: the world's draws stay as they were
+        mount = np.random.default_rng([seed, 0x2EA2])
+        if mount.random() < recipe.rear_mount_share:
+            scenario = dataclasses.replace(scenario,
+                                           camera=near_rear_mount(scenario.camera, mount))
     arrays = render_world(scenario, recipe, np.random.default_rng([seed, 0x5E0]))
     arrays["world_seed"] = np.array(seed, np.uint64)
     arrays["tag"] = np.array(scenario.name.rsplit("_", 1)[1])

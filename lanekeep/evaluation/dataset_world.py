@@ -139,6 +139,21 @@ def _camera(rng: np.random.Generator, dashcam: bool = False) -> CameraConfig:
     return camera
 
 
+def near_rear_mount(camera: CameraConfig, rng: np.random.Generator) -> CameraConfig:
+    """`camera` with its mount drawn near the car's own (mjcf/car.xml; the rear camera: 150 deg
+    wide, 1.5 m high, 20 deg down): height 1.35-1.65 m, pitch and yaw within 3 deg, roll
+    within 2 deg, field of view scaled 0.8-1.1 (rear: 143-153 deg). Image settings (noise,
+    JPEG, vignetting, hood) stay the world's. The front preset goes back to the car's
+    (a rear-only recipe does not render the front)."""
+    return dataclasses.replace(
+        camera, preset=CameraConfig.preset,
+        mount_height_m=float(rng.uniform(1.35, 1.65)),
+        pitch_offset_deg=float(rng.uniform(-3.0, 3.0)),
+        roll_deg=float(rng.uniform(-2.0, 2.0)),
+        yaw_offset_deg=float(rng.uniform(-3.0, 3.0)),
+        fov_scale=float(rng.uniform(0.8, 1.1)))
+
+
 def _traffic(rng: np.random.Generator, n_lanes: int) -> tuple[VehicleSpec, ...]:
     """Vehicles spread along the whole road (the dataset renders many places on it): none, or
     0.5-4 per 100 m of road per lane, at least 9 m apart in a lane."""

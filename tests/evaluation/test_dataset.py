@@ -18,7 +18,7 @@ from lanekeep.evaluation.dataset import (
     world_seed,
     write_recipe,
 )
-from lanekeep.evaluation.dataset_world import CONDITION_TAGS, random_scenario
+from lanekeep.evaluation.dataset_world import CONDITION_TAGS, near_rear_mount, random_scenario
 from lanekeep.scenario.schema import CameraConfig, load_scenario
 from lanekeep.sensing.cameras import CameraRig, RenderSettings
 from lanekeep.sensing.snapshot import place_on_road
@@ -203,7 +203,8 @@ def test_recipe_cameras_default_to_both_and_old_recipes_still_load(tmp_path):
     write_recipe(tmp_path, DatasetRecipe(seed=58, cameras=("rear",)), {"train": 1})
     assert read_recipe(tmp_path)[0] == DatasetRecipe(seed=58, cameras=("rear",))
     blob = json.loads((tmp_path / "recipe.json").read_text())
-    del blob["recipe"]["cameras"]  # a recipe.json written before the option
+    del blob["recipe"]["cameras"]  # a recipe.json written before the options
+    del blob["recipe"]["rear_mount_share"]
     (tmp_path / "recipe.json").write_text(json.dumps(blob))
     assert read_recipe(tmp_path)[0] == DatasetRecipe(seed=58)
 
@@ -217,3 +218,22 @@ def test_rear_only_recipe_labels_the_two_camera_recipes_rear_frames(shard):
     for key in ("xs", "slots", "ground_y", "camera"):
         np.testing.assert_array_equal(rear[key], shard[key][both], err_msg=key)
     assert rear["frames"].shape == shard["frames"][both].shape
+
+
+def test_worlds_mounted_near_the_cars_rear_camera_see_the_road_as_the_loop_does():
+    """`rear_mount_share` (#58's observer data): such a world keeps its road and weather but
+    its rear camera is the car's own give or take a little (the loop's: 150 deg, 1.5 m), where
+    the drawn mounts spread it over 104-152 deg and 1.2-1.9 m."""
+    nominal = camera_from_model(build(load_scenario("clear_straight")).model, "rear")
+    for seed in (3, 11, 58):
+        drawn = random_scenario(seed)
+        near = near_rear_mount(drawn.camera, np.random.default_rng(seed))
+        assert near.jpeg_quality == drawn.camera.jpeg_quality and near.preset == "paper"
+        rear = camera_from_model(build(dataclasses.replace(drawn, camera=near)).model, "rear")
+        hfov = np.degrees(2 * np.arctan(rear.width / 2 / rear.fx))
+        assert 142.0 < hfov < 154.0
+        assert abs(rear.position_m[2] - nominal.position_m[2]) <= 0.15 + 1e-9
+        assert rear.position_m[0] == pytest.approx(nominal.position_m[0])
+    for bad in (-0.1, 1.5):
+        with pytest.raises(ValueError, match="rear_mount_share"):
+            DatasetRecipe(rear_mount_share=bad)
