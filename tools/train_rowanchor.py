@@ -26,7 +26,9 @@ validation split is scored and the best epoch's weights are kept (float16, < 1 M
 with that sequence's own camera and reports the ego lane's offset error at the rear window's
 look-ahead (4 m behind the car) against the labels' ground truth, in centimetres (and which
 frames are off by more than FAR_CM, and the RMSE of the others);
-`--baseline lanenet` the same for today's reference on the same frames (LaneNet never saw
+and the network's lean into the ego lane on painted rows and across dash gaps
+(`lean_into_lane`, all cameras and the wide ones like the loop's); `--baseline lanenet` the
+same offset errors for today's reference on the same frames (LaneNet never saw
 these worlds either: its data are seed 0's).
 
 A JSON-lines log goes beside the weights (`.log.jsonl`): a first line with the command, seed,
@@ -61,6 +63,7 @@ from lanekeep.detectors.rowanchor import (
 from lanekeep.detectors.rowanchor_model import (
     RowAnchorConfig,
     RowAnchorNet,
+    anchor_rows,
     bin_to_x,
     decode,
     mirror_targets,
@@ -79,6 +82,8 @@ from lanekeep.scoring.metrics import ADE_POINTS_M
 
 TOLERANCE_PX = 20.0  # at 1280x720, as TuSimple counts a point
 FAR_CM = 30.0  # an offset error beyond this is a wrong lane or a failed fit, not noise
+WIDE_HFOV_DEG = 145.0  # "wide" rear cameras: the loop's is 150 deg
+LEAN_OUTLIER_PX = 40.0  # a point this far off is a wrong line, not a lean
 
 
 def rear_frames(root: Path, split: str) -> dict[str, np.ndarray]:
@@ -88,7 +93,7 @@ def rear_frames(root: Path, split: str) -> dict[str, np.ndarray]:
     rear = np.flatnonzero(data["is_rear"])
     t = data["frames"].shape[1]
     out = {k: data[k][rear].reshape(len(rear) * t, *data[k].shape[2:])
-           for k in ("frames", "xs", "slots", "ground_y")}
+           for k in ("frames", "paint", "xs", "slots", "ground_y")}
     out["camera"] = np.repeat(data["camera"][rear], t, axis=0)
     out["tag"] = np.repeat(data["tag"][rear], t, axis=0)
     return out
@@ -139,6 +144,48 @@ def point_scores(logits: torch.Tensor, cls: np.ndarray, pos: np.ndarray,
             "presence_recall": float((called & present).sum() / max(present.sum(), 1)),
             "median_err_px_ego": float(np.median(err[ego & present & called]))
             if (ego & present & called).any() else float("nan")}
+
+
+def dash_gap_lean(logits: torch.Tensor, data: dict, bins: int) -> dict[str, dict]:
+    """The network's signed point error on the ego pair, + = into the ego lane (px at
+    1280x720), split by whether the labelled point lies on its boundary's paint ("dash") or
+    between dashes ("gap"), over all cameras and over wide ones (horizontal field of view
+    >= WIDE_HFOV_DEG, the loop's rear camera is 150 deg). Lower half of the frame only (the
+    ground the detector fits), points the network calls present, within LEAN_OUTLIER_PX.
+
+    Why: #58's observer leant about 6 px into the lane across the dash gaps of the loop's
+    rear frames (docs/observer.md), which biased its offset by 1-3 cm towards the solid line."""
+    got, presence = decode(logits)
+    x_got = bin_to_x(got, LABEL_WIDTH, bins)
+    lanes, anchors = got.shape[1:]
+    rows = anchor_rows(LABEL_HEIGHT, anchors)
+    paint = data["paint"]
+    height, width = paint.shape[1:]
+    rs = np.round((rows + 0.5) * height / LABEL_HEIGHT - 0.5).astype(int)
+    hfov = np.degrees(2.0 * np.arctan(0.5 * LABEL_WIDTH / data["camera"][:, 0]))
+    errors: dict[tuple[str, str], list[float]] = {}
+    for i in range(len(paint)):
+        for b, slot in enumerate(data["slots"][i]):
+            if slot not in (0, 1):
+                continue
+            at = np.interp(rows, LABEL_ROWS, data["xs"][i, b], left=np.nan, right=np.nan)
+            inward = 1.0 if slot == 0 else -1.0  # ego-left: + x is into the lane
+            for a in np.flatnonzero(np.isfinite(at) & (rows >= LABEL_HEIGHT / 2)
+                                    & (presence[i, slot] > 0.5)):
+                e = float(x_got[i, slot, a] - at[a])
+                if abs(e) > LEAN_OUTLIER_PX:
+                    continue
+                c = int((at[a] + 0.5) * width / LABEL_WIDTH - 0.5)
+                near = paint[i, max(rs[a] - 1, 0):rs[a] + 2, max(c - 3, 0):c + 4]
+                kind = "dash" if (near == b + 1).any() else "gap"
+                for cams in ("all", "wide") if hfov[i] >= WIDE_HFOV_DEG else ("all",):
+                    errors.setdefault((cams, kind), []).append(inward * e)
+    out: dict[str, dict] = {}
+    for (cams, kind), v in sorted(errors.items()):
+        a = np.asarray(v)
+        out[f"{cams}_{kind}"] = {"points": len(a), "mean_px": round(float(a.mean()), 2),
+                                 "sem_px": round(float(a.std() / math.sqrt(len(a))), 2)}
+    return out
 
 
 def run_network(model: RowAnchorNet, frames: np.ndarray, batch: int = 64) -> torch.Tensor:
@@ -279,6 +326,8 @@ def main(argv: list[str] | None = None) -> int:
         result = {"split": args.evaluate, "frames": len(data["frames"]), "command": command,
                   "weights_bytes": Path(args.out).stat().st_size,
                   **evaluate(model, data, cls, pos),
+                  "lean_into_lane": dash_gap_lean(run_network(model, data["frames"]), data,
+                                                  model.config.bins),
                   **offset_errors(args.out, data, config_file=args.detectors_config)}
         if args.baseline:
             base = offset_errors(None, data, args.baseline, args.detectors_config)
