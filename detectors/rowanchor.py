@@ -54,6 +54,7 @@ from lanekeep.detectors.rowanchor_model import (
     RowAnchorNet,
     anchor_rows,
     bin_to_x,
+    column_spread,
     decode,
 )
 from lanekeep.geometry.camera_model import CameraModel
@@ -111,6 +112,17 @@ class RowAnchorSettings:
     # a left-right lean the network learnt cancels (LaneNet's mirror pass, for the same
     # reason; docs/observer.md measures what it changes).
     mirror: bool = True
+    # A point whose column distribution spreads wider than this (frame pixels at 1280 wide,
+    # one standard deviation) counts as inferred rather than seen, as LaneNet's points off
+    # paint do: its weight in the lane fit is seen_spread_px / spread, at least the decoder's
+    # unseen_weight. 0 = every point seen (the weights' first behaviour). Why: the network
+    # reads across a dash gap from the lines around it and leant into the lane there by about
+    # 6 px on case 4's rear frames, biasing the offset by 1-3 cm (docs/observer.md).
+    seen_spread_px: float = 0.0
+
+    def __post_init__(self) -> None:
+        if not self.seen_spread_px >= 0.0:
+            raise ValueError(f"seen_spread_px must be >= 0 (0 = off), not {self.seen_spread_px}")
 
     def decode(self) -> DecodeSettings:
         return DecodeSettings(score_threshold=self.presence_threshold, inlier_px=self.inlier_px,
@@ -119,6 +131,19 @@ class RowAnchorSettings:
                               curvature_prior_shape=self.curvature_prior_shape,
                               width_std_m=self.width_std_m, score_power=0.0,
                               max_range_m=self.max_range_m)
+
+
+def _pooled_spread(position: np.ndarray, presence: np.ndarray, spread: np.ndarray, bins: int
+                   ) -> np.ndarray:
+    """The spread (each (2, lanes, anchors)) that goes with `_pooled`'s read: the
+    presence-weighted mean where the two passes agree, the more present one's elsewhere."""
+    back = list(MIRRORED_LANES[:position.shape[1]])
+    pos = np.stack([position[0], bins - position[1][back]])
+    pres = np.stack([presence[0], presence[1][back]])
+    sd = np.stack([spread[0], spread[1][back]])
+    mean = (pres * sd).sum(0) / np.maximum(pres.sum(0), 1e-12)
+    pick = np.take_along_axis(sd, pres.argmax(0)[None], 0)[0]
+    return np.where(np.abs(pos[0] - pos[1]) <= MIRROR_AGREE_BINS, mean, pick)
 
 
 def _pooled(position: np.ndarray, presence: np.ndarray, bins: int
@@ -176,6 +201,11 @@ class RowAnchorDetector:
     def points(self, frame: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The network's read of one frame: x (lanes, anchors) in this frame's pixels and the
         presence probability (lanes, anchors)."""
+        x, presence, _ = self.read(frame)
+        return x, presence
+
+    def read(self, frame: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """`points` and each point's column spread (lanes, anchors), in pixels at 1280 wide."""
         cfg = self.model.config
         h, w = frame.shape[:2]
         small = frame if (h, w) == (cfg.height, cfg.width) else cv2.resize(
@@ -186,17 +216,19 @@ class RowAnchorDetector:
                 item = torch.cat([item, item.flip(-1)])
             logits = self.model(item)
         position, presence = decode(logits)
+        spread = column_spread(logits) * (1280.0 / cfg.bins)
         if self.settings.mirror:
+            spread = _pooled_spread(position, presence, spread, cfg.bins)
             position, presence = _pooled(position, presence, cfg.bins)
         else:
-            position, presence = position[0], presence[0]
-        return bin_to_x(position, w, cfg.bins), presence
+            position, presence, spread = position[0], presence[0], spread[0]
+        return bin_to_x(position, w, cfg.bins), presence, spread
 
     def proposals(self, frame: np.ndarray) -> Proposals:
         """The anchor points above the presence threshold, as the shared fit takes them."""
         cfg = self.model.config
         h, w = frame.shape[:2]
-        x, presence = self.points(frame)
+        x, presence, spread = self.read(frame)
         rows = anchor_rows(h, cfg.anchors)
         lane, anchor = np.nonzero(presence > self._decode.score_threshold)
         pts = np.stack([x[lane, anchor], rows[anchor]], -1).reshape(-1, 2)
@@ -204,8 +236,11 @@ class RowAnchorDetector:
         boxes = np.stack([pts[:, 0] - half_w, pts[:, 1] - half_h, pts[:, 0] + half_w,
                           pts[:, 1] + half_h], -1).reshape(-1, 4)
         scores = presence[lane, anchor].astype(np.float64)
-        props = Proposals(pts, boxes, scores, lane.astype(np.int64), np.ones(len(lane)),
-                          np.ones(len(lane)))
+        seen = np.ones(len(lane))
+        if self.settings.seen_spread_px > 0.0:
+            seen = np.minimum(1.0, self.settings.seen_spread_px
+                              / np.maximum(spread[lane, anchor], 1e-6))
+        props = Proposals(pts, boxes, scores, lane.astype(np.int64), np.ones(len(lane)), seen)
         if self.distortion is not None and len(pts):
             camera = self._camera_for(w, h)
             und = cv2.undistortPoints(pts.reshape(-1, 1, 2).astype(np.float64), camera.K,

@@ -186,6 +186,18 @@ def decode(logits: torch.Tensor | np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return expected_position(z[..., :-1]).numpy(), presence.numpy()
 
 
+def column_spread(logits: torch.Tensor | np.ndarray) -> np.ndarray:
+    """Standard deviation in bins (..., anchors) of each point's column distribution (the
+    softmax over the bins alone, "absent" left out), from logits (..., anchors, bins + 1).
+    A point on paint reads narrow; one the network infers across a dash gap or an occluder
+    reads wide (on case 4's rear frames a median 0.23 bins on paint, 0.86 in gaps)."""
+    z = torch.as_tensor(logits, dtype=torch.float32)[..., :-1]
+    p = torch.softmax(z, -1)
+    centre = torch.arange(p.shape[-1], dtype=torch.float32) + 0.5
+    mean = (p * centre).sum(-1, keepdim=True)
+    return torch.sqrt((p * (centre - mean) ** 2).sum(-1)).numpy()
+
+
 def targets(xs_px: np.ndarray, label_rows: np.ndarray, slots: np.ndarray, frame_width: int,
             frame_height: int, config: RowAnchorConfig) -> tuple[np.ndarray, np.ndarray]:
     """Training targets of one frame from its row-sampled labels: class (lanes, anchors) int64

@@ -31,6 +31,7 @@ from lanekeep.detectors.rowanchor_model import (
     RowAnchorNet,
     anchor_rows,
     bin_to_x,
+    column_spread,
     decode,
     mirror_targets,
     rowanchor_loss,
@@ -286,3 +287,34 @@ def test_mirror_pass_makes_the_read_mirror_symmetric(rear_frame):
     assert abs(direct.offset_m + mirrored.offset_m) < 1e-3, (direct.offset_m, mirrored.offset_m)
     single = RowAnchorDetector(camera, settings=RowAnchorSettings(mirror=False)).detect(frame)
     assert single.valid and single.offset_m != direct.offset_m
+
+
+def test_column_spread_is_narrow_on_a_sure_column_and_wide_on_a_guess():
+    """A point read on paint has one sharp column; one inferred across a dash gap spreads
+    over several (`column_spread`, in bins; "absent" plays no part)."""
+    bins = 80
+    sure = torch.full((bins + 1,), -20.0)
+    sure[40] = 10.0
+    guess = -0.5 * ((torch.arange(bins + 1, dtype=torch.float32) - 40.0) / 3.0) ** 2
+    guess[-1] = 5.0  # a likely "absent" does not widen the columns
+    spread = column_spread(torch.stack([sure, guess]))
+    assert spread[0] < 0.01
+    assert spread[1] == pytest.approx(3.0, rel=0.02)
+
+
+def test_seen_spread_weights_wide_points_as_inferred(rear_frame):
+    """`seen_spread_px`: each proposal's `paint` (how surely it is seen, the lane fit's weight)
+    is min(1, seen_spread_px / spread); 0 (the default) leaves every point seen, so the
+    detector reads exactly as before."""
+    frame, camera, _ = rear_frame
+    plain = RowAnchorDetector(camera)
+    weighted = RowAnchorDetector(camera, settings=RowAnchorSettings(seen_spread_px=4.0))
+    a, b = plain.proposals(frame), weighted.proposals(frame)
+    np.testing.assert_array_equal(a.points_px, b.points_px)
+    assert np.all(a.paint == 1.0)
+    _, _, spread = weighted.read(frame)
+    lane, anchor = np.nonzero(weighted.points(frame)[1] > 0.5)
+    np.testing.assert_allclose(b.paint, np.minimum(1.0, 4.0 / spread[lane, anchor]))
+    assert 0.0 < b.paint.min() < 1.0
+    with pytest.raises(ValueError, match="seen_spread_px"):
+        RowAnchorSettings(seen_spread_px=-1.0)
