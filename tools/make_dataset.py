@@ -3,7 +3,7 @@ seed.
 
     python tools/make_dataset.py --out data/lanenet --train 320 --val 24 --test 24 [--workers 2]
     python tools/make_dataset.py --out /work/data/observer58 --seed 58 --cameras rear ...
-    python tools/make_dataset.py --out /work/data/observer62 --seed 58 --cameras rear \
+    python tools/make_dataset.py --out /work/data/observer62m --seed 58 --cameras rear \
         --rear-mount-share 0.5 ...     # half the worlds seen near the loop's rear camera
 
 Each world is one compressed shard (`SPLIT/world_NNNNN.npz`); a shard already there is kept,

@@ -157,8 +157,7 @@ def dash_gap_lean(logits: torch.Tensor, data: dict, bins: int) -> dict[str, dict
     rear frames (docs/observer.md), which biased its offset by 1-3 cm towards the solid line."""
     got, presence = decode(logits)
     x_got = bin_to_x(got, LABEL_WIDTH, bins)
-    lanes, anchors = got.shape[1:]
-    rows = anchor_rows(LABEL_HEIGHT, anchors)
+    rows = anchor_rows(LABEL_HEIGHT, got.shape[2])
     paint = data["paint"]
     height, width = paint.shape[1:]
     rs = np.round((rows + 0.5) * height / LABEL_HEIGHT - 0.5).astype(int)
