@@ -133,33 +133,23 @@ class RowAnchorSettings:
                               max_range_m=self.max_range_m)
 
 
-def _pooled_spread(position: np.ndarray, presence: np.ndarray, spread: np.ndarray, bins: int
-                   ) -> np.ndarray:
-    """The spread (each (2, lanes, anchors)) that goes with `_pooled`'s read: the
-    presence-weighted mean where the two passes agree, the more present one's elsewhere."""
+def _pooled(position: np.ndarray, presence: np.ndarray, spread: np.ndarray, bins: int
+            ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """One read from a frame's (item 0) and its mirror's (item 1), each (2, lanes, anchors):
+    the mirror's lanes swapped and columns mapped back; where both passes place a point
+    within MIRROR_AGREE_BINS, the presence-weighted mean of position and spread, elsewhere
+    the more present one's; the presence is the two passes' mean."""
     back = list(MIRRORED_LANES[:position.shape[1]])
     pos = np.stack([position[0], bins - position[1][back]])
     pres = np.stack([presence[0], presence[1][back]])
-    sd = np.stack([spread[0], spread[1][back]])
-    mean = (pres * sd).sum(0) / np.maximum(pres.sum(0), 1e-12)
-    pick = np.take_along_axis(sd, pres.argmax(0)[None], 0)[0]
-    return np.where(np.abs(pos[0] - pos[1]) <= MIRROR_AGREE_BINS, mean, pick)
-
-
-def _pooled(position: np.ndarray, presence: np.ndarray, bins: int
-            ) -> tuple[np.ndarray, np.ndarray]:
-    """One read from a frame's (item 0) and its mirror's (item 1), each (2, lanes, anchors):
-    the mirror's lanes swapped and columns mapped back; where both passes place a point
-    within MIRROR_AGREE_BINS, the presence-weighted mean, elsewhere the more present one's;
-    the presence is the two passes' mean."""
-    lanes = position.shape[1]
-    back = list(MIRRORED_LANES[:lanes])
-    pos = np.stack([position[0], bins - position[1][back]])
-    pres = np.stack([presence[0], presence[1][back]])
-    mean = (pres * pos).sum(0) / np.maximum(pres.sum(0), 1e-12)
-    pick = np.take_along_axis(pos, pres.argmax(0)[None], 0)[0]
     agree = np.abs(pos[0] - pos[1]) <= MIRROR_AGREE_BINS
-    return np.where(agree, mean, pick), pres.mean(0)
+    weight, more_present = np.maximum(pres.sum(0), 1e-12), pres.argmax(0)[None]
+
+    def pool(v: np.ndarray) -> np.ndarray:
+        mean = (pres * v).sum(0) / weight
+        return np.where(agree, mean, np.take_along_axis(v, more_present, 0)[0])
+
+    return pool(pos), pres.mean(0), pool(np.stack([spread[0], spread[1][back]]))
 
 
 class RowAnchorDetector:
@@ -218,8 +208,7 @@ class RowAnchorDetector:
         position, presence = decode(logits)
         spread = column_spread(logits) * (1280.0 / cfg.bins)
         if self.settings.mirror:
-            spread = _pooled_spread(position, presence, spread, cfg.bins)
-            position, presence = _pooled(position, presence, cfg.bins)
+            position, presence, spread = _pooled(position, presence, spread, cfg.bins)
         else:
             position, presence, spread = position[0], presence[0], spread[0]
         return bin_to_x(position, w, cfg.bins), presence, spread

@@ -86,14 +86,14 @@ WIDE_HFOV_DEG = 145.0  # "wide" rear cameras: the loop's is 150 deg
 LEAN_OUTLIER_PX = 40.0  # a point this far off is a wrong line, not a lean
 
 
-def rear_frames(root: Path, split: str) -> dict[str, np.ndarray]:
+def rear_frames(root: Path, split: str, paint: bool = False) -> dict[str, np.ndarray]:
     """The rear frames of a split, one per stored frame: frames (N, H, W, 3), xs, slots,
-    ground_y, camera (N, ...)."""
+    ground_y, camera (N, ...); with `paint` also the paint ids (N, H, W)."""
     data = load_split(root, split)
     rear = np.flatnonzero(data["is_rear"])
     t = data["frames"].shape[1]
     out = {k: data[k][rear].reshape(len(rear) * t, *data[k].shape[2:])
-           for k in ("frames", "paint", "xs", "slots", "ground_y")}
+           for k in ("frames", "xs", "slots", "ground_y") + (("paint",) if paint else ())}
     out["camera"] = np.repeat(data["camera"][rear], t, axis=0)
     out["tag"] = np.repeat(data["tag"][rear], t, axis=0)
     return out
@@ -196,9 +196,9 @@ def run_network(model: RowAnchorNet, frames: np.ndarray, batch: int = 64) -> tor
     return torch.cat(outs)
 
 
-def evaluate(model: RowAnchorNet, data: dict, cls: np.ndarray, pos: np.ndarray
-             ) -> dict[str, float]:
-    logits = run_network(model, data["frames"])
+def evaluate(model: RowAnchorNet, data: dict, cls: np.ndarray, pos: np.ndarray,
+             logits: torch.Tensor | None = None) -> dict[str, float]:
+    logits = run_network(model, data["frames"]) if logits is None else logits
     loss, _ = rowanchor_loss(logits, torch.from_numpy(cls), torch.from_numpy(pos))
     return {"loss": float(loss), **point_scores(logits, cls, pos, model.config.bins)}
 
@@ -320,13 +320,13 @@ def main(argv: list[str] | None = None) -> int:
             model = load_weights(args.out)
         except WeightsError as exc:
             raise SystemExit(f"train_rowanchor: error: {exc}") from None
-        data = rear_frames(root, args.evaluate)
+        data = rear_frames(root, args.evaluate, paint=True)
         cls, pos = targets_of(data, model.config)
+        logits = run_network(model, data["frames"])
         result = {"split": args.evaluate, "frames": len(data["frames"]), "command": command,
                   "weights_bytes": Path(args.out).stat().st_size,
-                  **evaluate(model, data, cls, pos),
-                  "lean_into_lane": dash_gap_lean(run_network(model, data["frames"]), data,
-                                                  model.config.bins),
+                  **evaluate(model, data, cls, pos, logits),
+                  "lean_into_lane": dash_gap_lean(logits, data, model.config.bins),
                   **offset_errors(args.out, data, config_file=args.detectors_config)}
         if args.baseline:
             base = offset_errors(None, data, args.baseline, args.detectors_config)
