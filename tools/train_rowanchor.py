@@ -13,6 +13,11 @@ Independence: its data are rendered with recipe seed 58 (LaneNet's with seed 0),
 place or image is shared; its initial weights, shuffling and augmentation draw from `--seed`
 (58 by default). Only rear frames are used (`is_rear`), whatever the dataset holds.
 
+`--seen-only` labels a point "absent" where no paint of its own boundary lies beside it (the
+dataset's paint ids: dash gaps, vehicles over a line), so the network reports only what it
+sees and the lane fit bridges gaps from painted rows; without it the network is taught to
+place a line across its gaps, which it does from the texture around (#58, docs/observer.md).
+
 Seeded: the same data and arguments give the same weights on the same machine. Each epoch goes
 once over the training frames, each mirrored left-right with probability 0.5 (lanes swap
 sides) and given a random exposure, contrast, tint, blur and noise. After every epoch the
@@ -84,6 +89,7 @@ TOLERANCE_PX = 20.0  # at 1280x720, as TuSimple counts a point
 FAR_CM = 30.0  # an offset error beyond this is a wrong lane or a failed fit, not noise
 WIDE_HFOV_DEG = 145.0  # "wide" rear cameras: the loop's is 150 deg
 LEAN_OUTLIER_PX = 40.0  # a point this far off is a wrong line, not a lean
+PAINT_NEAR_PX = 3  # stored pixels (320 wide) either side of a label that count as "on paint"
 
 
 def rear_frames(root: Path, split: str, paint: bool = False) -> dict[str, np.ndarray]:
@@ -99,11 +105,41 @@ def rear_frames(root: Path, split: str, paint: bool = False) -> dict[str, np.nda
     return out
 
 
-def targets_of(data: dict, config: RowAnchorConfig) -> tuple[np.ndarray, np.ndarray]:
-    """Class (N, lanes, anchors) and position (N, lanes, anchors) of every frame."""
+def targets_of(data: dict, config: RowAnchorConfig, seen_only: bool = False
+               ) -> tuple[np.ndarray, np.ndarray]:
+    """Class (N, lanes, anchors) and position (N, lanes, anchors) of every frame; with
+    `seen_only` a point with no paint of its boundary beside it (a dash gap, an occluder) is
+    "absent", so that the network reports what it sees and the lane fit bridges the gaps
+    from painted rows (#58: across a gap it leant into the lane from the texture around)."""
     pairs = [targets(xs, LABEL_ROWS, slots, LABEL_WIDTH, LABEL_HEIGHT, config)
              for xs, slots in zip(data["xs"], data["slots"], strict=True)]
-    return np.stack([p[0] for p in pairs]), np.stack([p[1] for p in pairs])
+    cls, pos = np.stack([p[0] for p in pairs]), np.stack([p[1] for p in pairs])
+    if seen_only:
+        unseen = np.isfinite(pos) & ~on_paint(data, config.lanes, config.anchors)
+        cls[unseen], pos[unseen] = config.bins, np.nan
+    return cls, pos
+
+
+def on_paint(data: dict, lanes: int, anchors: int) -> np.ndarray:
+    """(N, lanes, anchors) bool: the boundary's own paint lies within a row and
+    PAINT_NEAR_PX stored pixels of its label at that anchor (the dataset's paint ids: 1 +
+    the boundary's index)."""
+    paint = data["paint"]
+    height, width = paint.shape[1:]
+    rows = anchor_rows(LABEL_HEIGHT, anchors)
+    rs = np.round((rows + 0.5) * height / LABEL_HEIGHT - 0.5).astype(int)
+    out = np.zeros((len(paint), lanes, anchors), bool)
+    for i in range(len(paint)):
+        for b, slot in enumerate(data["slots"][i]):
+            if not 0 <= slot < lanes:
+                continue
+            at = np.interp(rows, LABEL_ROWS, data["xs"][i, b], left=np.nan, right=np.nan)
+            for a in np.flatnonzero(np.isfinite(at)):
+                c = int((at[a] + 0.5) * width / LABEL_WIDTH - 0.5)
+                near = paint[i, max(rs[a] - 1, 0):rs[a] + 2,
+                             max(c - PAINT_NEAR_PX, 0):c + PAINT_NEAR_PX + 1]
+                out[i, slot, a] = bool((near == b + 1).any())
+    return out
 
 
 def augment(frames: torch.Tensor, gen: torch.Generator) -> torch.Tensor:
@@ -158,12 +194,10 @@ def dash_gap_lean(logits: torch.Tensor, data: dict, bins: int) -> dict[str, dict
     got, presence = decode(logits)
     x_got = bin_to_x(got, LABEL_WIDTH, bins)
     rows = anchor_rows(LABEL_HEIGHT, got.shape[2])
-    paint = data["paint"]
-    height, width = paint.shape[1:]
-    rs = np.round((rows + 0.5) * height / LABEL_HEIGHT - 0.5).astype(int)
+    painted = on_paint(data, got.shape[1], got.shape[2])
     hfov = np.degrees(2.0 * np.arctan(0.5 * LABEL_WIDTH / data["camera"][:, 0]))
     errors: dict[tuple[str, str], list[float]] = {}
-    for i in range(len(paint)):
+    for i in range(len(painted)):
         for b, slot in enumerate(data["slots"][i]):
             if slot not in (0, 1):
                 continue
@@ -174,9 +208,7 @@ def dash_gap_lean(logits: torch.Tensor, data: dict, bins: int) -> dict[str, dict
                 e = float(x_got[i, slot, a] - at[a])
                 if abs(e) > LEAN_OUTLIER_PX:
                     continue
-                c = int((at[a] + 0.5) * width / LABEL_WIDTH - 0.5)
-                near = paint[i, max(rs[a] - 1, 0):rs[a] + 2, max(c - 3, 0):c + 4]
-                kind = "dash" if (near == b + 1).any() else "gap"
+                kind = "dash" if painted[i, slot, a] else "gap"
                 for cams in ("all", "wide") if hfov[i] >= WIDE_HFOV_DEG else ("all",):
                     errors.setdefault((cams, kind), []).append(inward * e)
     out: dict[str, dict] = {}
@@ -302,6 +334,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--threads", type=int, default=1)
     parser.add_argument("--limit", type=int, default=0, help="use only N training frames")
     parser.add_argument("--resume", action="store_true", help="go on from --checkpoint")
+    parser.add_argument("--seen-only", action="store_true",
+                        help="label a point absent where its boundary has no paint beside it "
+                             "(dash gaps, occluders): the network reports only what it sees")
     parser.add_argument("--evaluate", default="", metavar="SPLIT",
                         help="score --out on SPLIT (val or test) and print JSON; no training")
     parser.add_argument("--baseline", default="", metavar="NAME",
@@ -321,7 +356,7 @@ def main(argv: list[str] | None = None) -> int:
         except WeightsError as exc:
             raise SystemExit(f"train_rowanchor: error: {exc}") from None
         data = rear_frames(root, args.evaluate, paint=True)
-        cls, pos = targets_of(data, model.config)
+        cls, pos = targets_of(data, model.config, args.seen_only)
         logits = run_network(model, data["frames"])
         result = {"split": args.evaluate, "frames": len(data["frames"]), "command": command,
                   "weights_bytes": Path(args.out).stat().st_size,
@@ -346,14 +381,16 @@ def train(args: argparse.Namespace, root: Path, command: str) -> int:
     start = time.perf_counter()
     recipe, worlds = read_recipe(root)
     config = RowAnchorConfig()
-    data, val = rear_frames(root, "train"), rear_frames(root, "val")
+    data = rear_frames(root, "train", paint=args.seen_only)
+    val = rear_frames(root, "val", paint=args.seen_only)
     if args.limit:
         data = {k: v[:args.limit] for k, v in data.items()}
-    cls, pos = targets_of(data, config)
+    cls, pos = targets_of(data, config, args.seen_only)
     mcls, mpos = zip(*[mirror_targets(c, p, config.bins) for c, p in zip(cls, pos, strict=True)],
                      strict=True)
     mcls, mpos = np.stack(mcls), np.stack(mpos)
-    vcls, vpos = targets_of(val, config)
+    vcls, vpos = targets_of(val, config, args.seen_only)
+    data.pop("paint", None)  # only the targets needed it
     n = len(data["frames"])
     print(f"data: {n} rear training frames, {len(val['frames'])} validation; targets in "
           f"{time.perf_counter() - start:.0f} s", file=sys.stderr)
@@ -370,7 +407,8 @@ def train(args: argparse.Namespace, root: Path, command: str) -> int:
     log_path = out.with_suffix(".log.jsonl")
     ckpt = Path(args.checkpoint) if args.checkpoint else out.with_name(
         out.stem + ".ckpt" + out.suffix)
-    fixed = {k: getattr(args, k) for k in ("data", "epochs", "batch", "lr", "seed", "limit")}
+    fixed = {k: getattr(args, k) for k in ("data", "epochs", "batch", "lr", "seed", "limit",
+                                           "seen_only")}
     best: dict | None = None
     first_epoch = 0
     if args.resume and ckpt.is_file():
@@ -394,6 +432,7 @@ def train(args: argparse.Namespace, root: Path, command: str) -> int:
                 "recipe": asdict(recipe), "worlds": worlds, "train_frames": n,
                 "val_frames": len(val["frames"]), "config": config.to_dict(),
                 "parameters": sum(p.numel() for p in model.parameters()),
+                "seen_only": args.seen_only,
                 "threads": args.threads, "torch": torch.__version__}
         log_path.write_text(json.dumps(head) + "\n")
     for epoch in range(first_epoch, args.epochs):
@@ -435,7 +474,8 @@ def train(args: argparse.Namespace, root: Path, command: str) -> int:
         if best is None or score > best["score"]:
             best = {"score": score, **row}
             meta = {"recipe": {"data": str(root), "worlds": worlds, **asdict(recipe)},
-                    "command": command, "seed": args.seed, "chosen": row}
+                    "command": command, "seed": args.seed, "seen_only": args.seen_only,
+                    "chosen": row}
             save_weights(model, out, meta)
         tmp = ckpt.with_suffix(".tmp")
         torch.save({"model": model.state_dict(), "opt": opt.state_dict(),

@@ -1,6 +1,7 @@
 """tools/train_rowanchor.py's `lean_into_lane`: a point read off its line by a known amount is
 counted on the right side (into or out of the lane) and in the right kind of row (on paint or
-in a dash gap), from a synthetic frame's labels, paint ids and logits."""
+in a dash gap), from a synthetic frame's labels, paint ids and logits; `--seen-only` targets
+drop exactly the gap rows."""
 
 from __future__ import annotations
 
@@ -59,3 +60,21 @@ def test_a_lean_is_signed_into_the_lane_and_split_by_paint_and_gap():
     assert lean["wide_gap"] == gap  # a 150 deg camera is a wide one
     narrow, logits = _frame(slice(120, 176), hfov_deg=100.0)
     assert "wide_gap" not in tool.dash_gap_lean(logits, narrow, BINS)
+
+
+def test_seen_only_targets_call_a_line_absent_in_its_gaps_and_nowhere_else():
+    """`--seen-only`: the ego-right line's gap rows become "absent" targets, its painted rows
+    and the solid ego-left line keep their columns; without the option every row keeps them."""
+    data, _ = _frame(slice(120, 176), hfov_deg=150.0)
+    config = tool.RowAnchorConfig()
+    cls, pos = tool.targets_of(data, config)
+    seen_cls, seen_pos = tool.targets_of(data, config, seen_only=True)
+    painted = tool.on_paint(data, config.lanes, config.anchors)[0]
+    assert painted[0].all() and 0 < painted[1].sum() < config.anchors
+    assert np.isfinite(pos[0, :2]).all()  # the labels cover every anchor of both lines
+    gap = ~painted[1]
+    assert (seen_cls[0, 1, gap] == config.bins).all() and np.isnan(seen_pos[0, 1, gap]).all()
+    assert (seen_cls[0, 1, ~gap] == cls[0, 1, ~gap]).all()
+    assert (seen_cls[0, 0] == cls[0, 0]).all() and np.array_equal(seen_pos[0, 0], pos[0, 0])
+    rows = tool.anchor_rows(176, config.anchors)  # the anchors' rows in the stored paint map
+    assert np.array_equal(gap, rows > 120)  # the gap drawn: stored rows 120 down
