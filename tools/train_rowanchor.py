@@ -413,8 +413,9 @@ def train(args: argparse.Namespace, root: Path, command: str) -> int:
     first_epoch = 0
     if args.resume and ckpt.is_file():
         state = torch.load(str(ckpt), map_location="cpu", weights_only=True)
-        if state.get("args") != fixed:
-            changed = sorted(k for k in fixed if state.get("args", {}).get(k) != fixed[k])
+        saved = {"seen_only": False, **state.get("args", {})}  # checkpoints before the option
+        if saved != fixed:
+            changed = sorted(k for k in fixed if saved.get(k) != fixed[k])
             raise SystemExit(f"train_rowanchor: error: --resume with other arguments than the "
                              f"checkpoint's ({', '.join(changed)}): {ckpt}")
         model.load_state_dict(state["model"])
