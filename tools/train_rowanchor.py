@@ -51,6 +51,7 @@ import sys
 import time
 from dataclasses import asdict
 from pathlib import Path
+from typing import NoReturn
 
 import lanekeep  # noqa: F401  (first: it pins numpy's, torch's and OpenCV's kernels)
 
@@ -90,6 +91,12 @@ FAR_CM = 30.0  # an offset error beyond this is a wrong lane or a failed fit, no
 WIDE_HFOV_DEG = 145.0  # "wide" rear cameras: the loop's is 150 deg
 LEAN_OUTLIER_PX = 40.0  # a point this far off is a wrong line, not a lean
 PAINT_NEAR_PX = 3  # stored pixels (320 wide) either side of a label that count as "on paint"
+
+
+def fail(why: str) -> NoReturn:
+    """One line on stderr and exit 2, as every lanekeep command answers bad input."""
+    print(f"train_rowanchor: error: {why}", file=sys.stderr)
+    raise SystemExit(2)
 
 
 def rear_frames(root: Path, split: str, paint: bool = False) -> dict[str, np.ndarray]:
@@ -354,7 +361,7 @@ def main(argv: list[str] | None = None) -> int:
         try:
             model = load_weights(args.out)
         except WeightsError as exc:
-            raise SystemExit(f"train_rowanchor: error: {exc}") from None
+            fail(str(exc))
         data = rear_frames(root, args.evaluate, paint=True)
         cls, pos = targets_of(data, model.config, args.seen_only)
         logits = run_network(model, data["frames"])
@@ -407,17 +414,18 @@ def train(args: argparse.Namespace, root: Path, command: str) -> int:
     log_path = out.with_suffix(".log.jsonl")
     ckpt = Path(args.checkpoint) if args.checkpoint else out.with_name(
         out.stem + ".ckpt" + out.suffix)
-    fixed = {k: getattr(args, k) for k in ("data", "epochs", "batch", "lr", "seed", "limit",
-                                           "seen_only")}
+    fixed = {k: getattr(args, k) for k in ("data", "out", "epochs", "batch", "lr", "seed",
+                                           "limit", "seen_only")}
     best: dict | None = None
     first_epoch = 0
     if args.resume and ckpt.is_file():
         state = torch.load(str(ckpt), map_location="cpu", weights_only=True)
-        saved = {"seen_only": False, **state.get("args", {})}  # checkpoints before the option
+        # checkpoints written before these arguments were kept
+        saved = {"seen_only": False, "out": args.out, **state.get("args", {})}
         if saved != fixed:
             changed = sorted(k for k in fixed if saved.get(k) != fixed[k])
-            raise SystemExit(f"train_rowanchor: error: --resume with other arguments than the "
-                             f"checkpoint's ({', '.join(changed)}): {ckpt}")
+            fail(f"--resume with other arguments than the checkpoint's ({', '.join(changed)}): "
+                 f"{ckpt}")
         model.load_state_dict(state["model"])
         opt.load_state_dict(state["opt"])
         sched.load_state_dict(state["sched"])
@@ -485,6 +493,9 @@ def train(args: argparse.Namespace, root: Path, command: str) -> int:
                     "args": fixed}, str(tmp))
         tmp.replace(ckpt)
     total = time.perf_counter() - start
+    if not out.is_file():  # a finished run resumed with nothing left to train and no weights
+        fail(f"no weights at {out}: the checkpoint's run had finished and wrote its best epoch "
+             "to another --out")
     summary = {"event": "end", "weights": str(out), "wall_s": round(total),
                "best_epoch": best["epoch"], "val_point_acc_ego": best["val_point_acc_ego"],
                "val_point_acc_all": best["val_point_acc_all"],

@@ -10,6 +10,7 @@ import math
 from pathlib import Path
 
 import numpy as np
+import pytest
 import torch
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -78,3 +79,12 @@ def test_seen_only_targets_call_a_line_absent_in_its_gaps_and_nowhere_else():
     assert (seen_cls[0, 0] == cls[0, 0]).all() and np.array_equal(seen_pos[0, 0], pos[0, 0])
     rows = tool.anchor_rows(176, config.anchors)  # the anchors' rows in the stored paint map
     assert np.array_equal(gap, rows > 120)  # the gap drawn: stored rows 120 down
+
+
+def test_a_missing_weights_file_is_one_line_and_exit_2(tmp_path, capsys):
+    missing = tmp_path / "none.pt"
+    with pytest.raises(SystemExit) as stop:
+        tool.main(["--data", str(tmp_path), "--evaluate", "val", "--out", str(missing)])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert stop.value.code == 2 and len(err) == 1
+    assert err[0].startswith("train_rowanchor: error: ") and str(missing) in err[0]
