@@ -15,8 +15,9 @@ place or image is shared; its initial weights, shuffling and augmentation draw f
 
 `--seen-only` labels a point "absent" where no paint of its own boundary lies beside it (the
 dataset's paint ids: dash gaps, vehicles over a line), so the network reports only what it
-sees and the lane fit bridges gaps from painted rows; without it the network is taught to
-place a line across its gaps, which it does from the texture around (#58, docs/observer.md).
+sees; without it the network is taught to place a line across its gaps, which it does from
+the texture around (#58). In the loop's rear frames a dashed line then often has too few
+painted anchor rows for the lane fit (docs/observer.md, "The bias is the gap reads").
 
 Seeded: the same data and arguments give the same weights on the same machine. Each epoch goes
 once over the training frames, each mirrored left-right with probability 0.5 (lanes swap
@@ -116,8 +117,8 @@ def targets_of(data: dict, config: RowAnchorConfig, seen_only: bool = False
                ) -> tuple[np.ndarray, np.ndarray]:
     """Class (N, lanes, anchors) and position (N, lanes, anchors) of every frame; with
     `seen_only` a point with no paint of its boundary beside it (a dash gap, an occluder) is
-    "absent", so that the network reports what it sees and the lane fit bridges the gaps
-    from painted rows (#58: across a gap it leant into the lane from the texture around)."""
+    "absent", so that the network reports only what it sees (#58: across a gap it leant into
+    the lane from the texture around)."""
     pairs = [targets(xs, LABEL_ROWS, slots, LABEL_WIDTH, LABEL_HEIGHT, config)
              for xs, slots in zip(data["xs"], data["slots"], strict=True)]
     cls, pos = np.stack([p[0] for p in pairs]), np.stack([p[1] for p in pairs])
