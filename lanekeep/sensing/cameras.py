@@ -19,6 +19,7 @@ import numpy as np
 from lanekeep.core.busy import all_cores_busy
 from lanekeep.geometry.lens import Lens, is_distorted
 from lanekeep.scenario.camera import CameraConfig
+from lanekeep.sensing.frustum import FrustumCuller
 from lanekeep.sensing.gl_backend import RendererUnavailable
 from lanekeep.sensing.weather import needs_depth
 from lanekeep.world.camera_mount import camera_from_model
@@ -27,6 +28,7 @@ from lanekeep.world.groups import (
     GROUP_HOOD,
     GROUP_MARKING_LABEL,
     GROUP_RGB_OVERLAY,
+    GROUP_UNSEEN,
 )
 
 
@@ -50,6 +52,10 @@ class RenderSettings:
     # OpenCV lens distortion (k1, k2, p1, p2, k3) per camera name, applied to every render
     # (lanekeep/geometry/lens.py); a camera not named, or all zero: a pinhole.
     distortion: tuple[tuple[str, tuple[float, ...]], ...] = ()
+    # Leave out the static geoms wholly outside the camera's view (lanekeep/sensing/frustum.py):
+    # the same pixels, fewer vertices for the software renderer. Off only to measure it, and
+    # with MuJoCo's shadow maps (a geom out of view may cast a shadow into it).
+    cull: bool = True
 
     @classmethod
     def of(cls, scenario, width: int | None = None, height: int | None = None
@@ -105,6 +111,8 @@ class CameraRig:
             rgb.geomgroup[GROUP_RGB_OVERLAY], rgb.geomgroup[GROUP_MARKING_LABEL] = 1, 0
             seg.geomgroup[GROUP_RGB_OVERLAY], seg.geomgroup[GROUP_MARKING_LABEL] = 0, 1
             self._rgb_option[name], self._seg_option[name] = rgb, seg
+        self._culler = (FrustumCuller(model, w, h)
+                        if self.settings.cull and not self.settings.shadows else None)
         self._depth_raw = np.empty((h, w), np.float32)
         extent = model.stat.extent
         self._znear = np.float32(model.vis.map.znear * extent)
@@ -116,11 +124,26 @@ class CameraRig:
         lens = self.lenses.get(camera)
         return None if lens is None else lens.coefficients.copy()
 
+    def _update_scene(self, renderer: mujoco.Renderer, data: mujoco.MjData, camera: str,
+                      option: mujoco.MjvOption) -> None:
+        """The renderer's scene for `camera`, without the geoms it cannot see: they are moved
+        to the group no render draws while MuJoCo collects the scene, then put back."""
+        if self._culler is None:
+            renderer.update_scene(data, camera=camera, scene_option=option)
+            return
+        hidden = self._culler.outside(data, camera)
+        groups = self.model.geom_group[hidden].copy()
+        self.model.geom_group[hidden] = GROUP_UNSEEN
+        try:
+            renderer.update_scene(data, camera=camera, scene_option=option)
+        finally:
+            self.model.geom_group[hidden] = groups
+
     def render_rgb(self, data: mujoco.MjData, camera: str) -> np.ndarray:
         """RGB uint8 image (H, W, 3) of one camera."""
         renderer = self._renderers[camera]
         renderer.disable_segmentation_rendering()
-        renderer.update_scene(data, camera=camera, scene_option=self._rgb_option[camera])
+        self._update_scene(renderer, data, camera, self._rgb_option[camera])
         renderer.scene.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = self.settings.shadows
         renderer.scene.flags[mujoco.mjtRndFlag.mjRND_FOG] = self.settings.fog
         with all_cores_busy():  # background work waits (lanekeep/core/busy.py)
@@ -151,7 +174,7 @@ class CameraRig:
         renderer = self._renderers[camera]
         renderer.enable_segmentation_rendering()
         try:
-            renderer.update_scene(data, camera=camera, scene_option=self._seg_option[camera])
+            self._update_scene(renderer, data, camera, self._seg_option[camera])
             renderer.scene.flags[mujoco.mjtRndFlag.mjRND_FOG] = False  # ids must stay exact
             with all_cores_busy():  # background work waits (lanekeep/core/busy.py)
                 seg = renderer.render()

@@ -42,6 +42,7 @@ SHRUB_OFFSET_M = (2.0, 25.0)  # from the gravel's outer edge (m)
 TREE_DETAIL_SEED = 0x920B  # the stream of the scenery crowns' lobes (`rng` draws as before)
 TREE_SHADE_SEED = 0x920C  # the stream of the gaps in their soft shadows
 TREE_KINDS = {"broadleaf": 0.55, "poplar": 0.15, "conifer": 0.3}  # shares of scenery trees
+PROP_CELL_M = 40.0  # the props' geoms: one per material and cell this wide (_add_prop_geoms)
 
 
 def add_props(spec: mujoco.MjSpec, scenario: Scenario, road: Road, to_sun: np.ndarray,
@@ -74,9 +75,7 @@ def add_props(spec: mujoco.MjSpec, scenario: Scenario, road: Road, to_sun: np.nd
     _scenery(props, rng, road, scenario, layout, to_sun)
     _skyline(props, rng, road, cfg.skyline, layout,
              np.random.default_rng([scenario.seed, TREE_DETAIL_SEED, 1]))
-    for material, meshes in sorted(props.meshes.items()):
-        add_mesh_geom(spec, material.replace("prop_", "props_", 1), Ribbon.concatenate(meshes),
-                      material, GROUP_WORLD)
+    _add_prop_geoms(spec, props)
     if scenario.conditions.time_of_day != "night":
         transmission = shade_transmission(cfg.shadow_darkness, scenario.conditions)
         if props.casters:
@@ -87,6 +86,29 @@ def add_props(spec: mujoco.MjSpec, scenario: Scenario, road: Road, to_sun: np.nd
                              transmission, np.random.default_rng([scenario.seed, TREE_SHADE_SEED]))
             info.shadow_polygons.extend(cast_shadow(points, to_sun)
                                         for group in props.tree_shadows for points in group)
+
+
+def prop_kind(geom_name: str) -> str:
+    """The material-wide name of a prop geom ("props_conifer" for "props_conifer@3")."""
+    return geom_name.split("@", 1)[0]
+
+
+def _add_prop_geoms(spec: mujoco.MjSpec, props: assets.Props) -> None:
+    """One mesh geom per material and square cell of PROP_CELL_M (named kind@k, k in the
+    cells' sorted order), each prop in the cell of its bounding box's centre. Why cells: few
+    geoms render fast, but the software renderer transforms all of a geom's vertices even
+    when most of them lie behind the camera; per cell, the cameras leave out the cells they
+    cannot see (lanekeep/sensing/frustum.py)."""
+    for material, meshes in sorted(props.meshes.items()):
+        cells: dict[tuple[int, int], list[Ribbon]] = {}
+        for mesh in meshes:
+            centre = 0.5 * (mesh.vertices[:, :2].min(axis=0) + mesh.vertices[:, :2].max(axis=0))
+            cell = np.floor(centre / PROP_CELL_M).astype(int)
+            cells.setdefault((int(cell[0]), int(cell[1])), []).append(mesh)
+        kind = material.replace("prop_", "props_", 1)
+        for k, cell in enumerate(sorted(cells)):
+            add_mesh_geom(spec, f"{kind}@{k}", Ribbon.concatenate(cells[cell]), material,
+                          GROUP_WORLD)
 
 
 def _add_shadows(spec: mujoco.MjSpec, props: assets.Props, to_sun: np.ndarray,

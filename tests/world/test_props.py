@@ -20,14 +20,19 @@ from lanekeep.world import prop_assets as assets
 from lanekeep.world.build import build, build_spec, check_buildable
 from lanekeep.world.lighting import sun_direction
 from lanekeep.world.parts import WorldLayout
-from lanekeep.world.props import _add_shadows
+from lanekeep.world.props import PROP_CELL_M, _add_shadows, prop_kind
 
 CLEARANCE_M = 4.5  # anything lower than this is no overhead part and must stay off the road
 
 
 def _prop_vertices(spec: mujoco.MjSpec, prefix: str = "props_") -> dict[str, np.ndarray]:
-    return {m.name: np.asarray(m.uservert, float).reshape(-1, 3) for m in spec.meshes
-            if m.name.startswith(prefix) and not m.name.startswith("props_shadow")}
+    """Each prop kind's vertices, over all its cells."""
+    verts: dict[str, list[np.ndarray]] = {}
+    for m in spec.meshes:
+        if m.name.startswith(prefix) and not m.name.startswith("props_shadow"):
+            verts.setdefault(prop_kind(m.name), []).append(
+                np.asarray(m.uservert, float).reshape(-1, 3))
+    return {kind: np.concatenate(parts) for kind, parts in verts.items()}
 
 
 @pytest.fixture(scope="module")
@@ -38,14 +43,23 @@ def highway():
     return scenario, road, spec, info
 
 
-def test_highway_props_compile_into_few_geoms(highway):
+def test_highway_props_compile_into_one_geom_per_material_and_cell(highway):
     scenario, road, spec, _ = highway
     model = spec.compile()
     names = {model.geom(i).name for i in range(model.ngeom)}
+    kinds = {prop_kind(n) for n in names if n.startswith("props_")}
     for kind in ("props_steel", "props_concrete", "props_pole", "props_hills", "props_shadow_p0",
                  "props_sign_0", "props_sign_1", "props_trunk"):
-        assert kind in names
-    assert sum(n.startswith("props_") for n in names) <= 14  # merged per material
+        assert kind in kinds
+    assert len(kinds) <= 14  # merged per material
+    # ... and per cell: each prop lies in the cell of its bounding box's centre, so a cell's
+    # trees reach at most a crown's width beyond it (the rails, woods and hills run on).
+    for mesh in spec.meshes:
+        if prop_kind(mesh.name).startswith(("props_foliage", "props_conifer", "props_trunk")):
+            xy = np.asarray(mesh.uservert, float).reshape(-1, 3)[:, :2]
+            assert np.ptp(xy, axis=0).max() < PROP_CELL_M + 20.0, mesh.name
+    crowns = sum(prop_kind(n).startswith("props_foliage") for n in names)
+    assert crowns >= road.length_m / PROP_CELL_M  # the trees line the road: many cells
 
 
 def test_props_stand_beyond_the_gravel_and_on_the_ground(highway):

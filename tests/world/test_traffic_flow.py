@@ -12,6 +12,7 @@ from lanekeep.scenario.keys import with_settings
 from lanekeep.scenario.schema import load_scenario, parse_scenario, shipped_scenarios
 from lanekeep.scenario.traffic import Traffic
 from lanekeep.world.build import build_spec, check_buildable
+from lanekeep.world.props import prop_kind
 from lanekeep.world.traffic_flow import traffic_vehicles
 
 FOUR_LANES = """
@@ -127,8 +128,9 @@ def test_vehicles_glow_at_night_and_trucks_carry_a_textured_box():
 def test_scenery_trees_come_in_several_kinds():
     sc = with_settings(load_scenario("clear_straight"), (("roadside.trees_per_100m", 20.0),))
     spec, _, _ = build_spec(sc, sc.build_road())
-    names = {g.name for g in spec.geoms}
-    assert "props_conifer" in names
-    assert sum(n.startswith("props_foliage_") for n in names) >= 2
-    verts = np.array(spec.mesh("props_conifer").uservert).reshape(-1, 3)
+    kinds = {prop_kind(g.name) for g in spec.geoms}
+    assert "props_conifer" in kinds
+    assert sum(n.startswith("props_foliage_") for n in kinds) >= 2
+    verts = np.concatenate([np.array(m.uservert).reshape(-1, 3) for m in spec.meshes
+                            if prop_kind(m.name) == "props_conifer"])
     assert np.ptp(verts[:, 2]) > 5.0  # conifers stand 7-16 m
