@@ -52,6 +52,7 @@ from lanekeep.scenario.streams import stream_entropy
 from lanekeep.sensing.cameras import CameraRig, RenderSettings
 from lanekeep.sensing.snapshot import camera_frame, make_effects, place_on_road
 from lanekeep.world.build import World, build
+from lanekeep.world.props import prop_kind
 
 Frames = dict[str, np.ndarray]
 
@@ -230,8 +231,8 @@ def snow_props(out: Path | None) -> None:
             white = (sat < 0.1) & (y >= float(np.median(y[verge])))
             crowns = geom_mask(world, ids, lambda n: n.startswith(("props_foliage",
                                                                     "props_conifer")))
-            rails = geom_mask(world, ids, lambda n: n.startswith(("props_steel@", "props_pole@",
-                                                                   "props_snow@")))
+            rails = geom_mask(world, ids, lambda n: prop_kind(n) in ("props_steel", "props_pole",
+                                                                     "props_snow"))
             print(f"snow_props snow front {pose:5s} crowns ({crowns.sum()} px): saturation "
                   f"{sat[crowns].mean():.3f}, snow-white {white[crowns].mean():6.1%}; rail and "
                   f"posts ({rails.sum()} px): snow-white {white[rails].mean():6.1%}")
