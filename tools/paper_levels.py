@@ -10,7 +10,10 @@ paint pixels (the segmentation's markings, eroded by one pixel) and of the aspha
 road's outer edges 4-30 m ahead (paint and 3 px about it left out); the level that best
 separates them (Youden's J: the share of paint at or above it minus the asphalt's).
 Part 2, the paper cases: the paint's lightness percentiles in case 1 and case 2 and the share
-at or above the authors' 200; with --real, the same for a TuSimple folder's labelled lanes
+at or above the authors' 200; the lightness of the rest of model #1's ground window (shoulders,
+verges and rails too), the share of it at or above the level of part 1, and the level that
+would separate that case's own paint from it (a diagnostic, never paper mode's level: the
+cases are scored); with --real, the same for a TuSimple folder's labelled lanes
 (brightest of 7 px about each labelled point below row 300; validation frames, read only).
 Ground truth (segmentation, road geometry) is read here, on the measuring side only.
 """
@@ -41,10 +44,13 @@ CASE_POSES_M = {"case1_building_shadows": (10.0, 40.0, 92.0, 130.0),
 AUTHORS_LEVEL = 200
 
 
-def _lightness(scenario: Scenario, poses_m: tuple[float, ...]) -> tuple[np.ndarray, np.ndarray]:
-    """(paint, asphalt) HLS lightness of the front frames at `poses_m`, 4-30 m ahead."""
+def _lightness(scenario: Scenario, poses_m: tuple[float, ...]
+               ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(paint, asphalt, ground) HLS lightness of the front frames at `poses_m`, 4-30 m ahead;
+    ground: every pixel of that window (|y| < 6 m, model #1's) that is not paint or next to
+    it, the shoulders, verges and rails as well as the asphalt."""
     world = build(scenario)
-    paint_l, asphalt_l = [], []
+    paint_l, asphalt_l, ground_l = [], [], []
     with CameraRig(world.model, RenderSettings.of(scenario, 1280, 720)) as rig:
         camera = rig.cameras["front"]
         v, u = np.mgrid[0:camera.height, 0:camera.width]
@@ -71,7 +77,8 @@ def _lightness(scenario: Scenario, poses_m: tuple[float, ...]) -> tuple[np.ndarr
                           & (r < world.road.boundary_r(world.road.n_lanes)))
             paint_l.append(light[core])
             asphalt_l.append(light[road & ~ring])
-    return np.concatenate(paint_l), np.concatenate(asphalt_l)
+            ground_l.append(light[near & ~ring])
+    return np.concatenate(paint_l), np.concatenate(asphalt_l), np.concatenate(ground_l)
 
 
 def best_level(paint: np.ndarray, asphalt: np.ndarray) -> int:
@@ -107,14 +114,22 @@ def main(argv: list[str] | None = None) -> int:
     if args.real is not None and not (args.real / "labels").is_dir():
         print(f"error: {args.real} has no labels/ folder", file=sys.stderr)
         return 2
-    paint, asphalt = _lightness(load_scenario(tuning_dir() / f"{TUNING}.toml"), TUNING_POSES_M)
+    paint, asphalt, _ = _lightness(load_scenario(tuning_dir() / f"{TUNING}.toml"),
+                                   TUNING_POSES_M)
     level = best_level(paint, asphalt)
     print(_describe(TUNING, paint) + f"; asphalt p50/p99 {np.percentile(asphalt, 50):.0f} / "
           f"{np.percentile(asphalt, 99):.0f}")
     print(f"white level {level}: paint at or above {np.mean(paint >= level):.3f}, asphalt "
           f"{np.mean(asphalt >= level):.4f}")
     for name, poses in CASE_POSES_M.items():
-        print(_describe(name, _lightness(load_scenario(name), poses)[0]))
+        case_paint, _, ground = _lightness(load_scenario(name), poses)
+        print(_describe(name, case_paint))
+        own = best_level(case_paint, ground)  # a diagnostic: paper mode's level is `level`
+        print(f"  the rest of model #1's window: L p90/p99 {np.percentile(ground, 90):.0f} / "
+              f"{np.percentile(ground, 99):.0f}, at or above {level}: "
+              f"{np.mean(ground >= level):.4f}; the level that would separate this case's "
+              f"paint from it: {own} (paint {np.mean(case_paint >= own):.3f}, the rest "
+              f"{np.mean(ground >= own):.4f})")
     if args.real is not None:
         print(_describe(f"{args.real} labelled lanes", real_lightness(args.real)))
     return 0

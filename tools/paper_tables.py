@@ -4,6 +4,8 @@
     MUJOCO_GL=egl .venv/bin/python tools/paper_tables.py --read out/paper_tables.json
     MUJOCO_GL=egl .venv/bin/python tools/paper_tables.py case2_sharp_turn --seeds 3 \\
         --keep binarisation          # one of our deviations kept (docs/paper_mode.md)
+    MUJOCO_GL=egl .venv/bin/python tools/paper_tables.py case2_sharp_turn --seeds 10 \\
+        --open-loop                  # the paper's models on the frames of a drive in lane
 
 Each paper case runs in paper mode (`[estimation] mode = "paper"`) at seeds file + 1 .. + N (as
 `lanekeep bench --seeds N`). Scored as the paper scores (lanekeep/scoring/paper_tables.py):
@@ -48,20 +50,32 @@ EVENTS = {"case1_building_shadows": "shade", "case2_sharp_turn": "turn",
 TURN_CURVATURE = 0.01  # 1/m: the 40 m arc of case 2 and the steep ends of its clothoids
 
 
-def run_one(name: str, seed: int, keeps: tuple[str, ...]) -> dict:
-    """One paper-mode episode of a paper case, scored as the paper scores."""
+def run_one(name: str, seed: int, keeps: tuple[str, ...], open_loop: bool = False,
+            detectors_config: str | None = None) -> dict:
+    """One episode of a paper case, scored as the paper scores: in paper mode, or with
+    `open_loop` driven by the default loop while the paper's two models (paper mode's
+    detectors, less `keeps`) read the same front frames beside it (`open_loop_models`).
+    `detectors_config`: a detectors file that becomes the case's `[detectors]` table (e.g. a
+    `[paper] white_level`), as `lanekeep bench --detectors-config` does."""
+    from lanekeep.detectors.config import load_config
     from lanekeep.loop.episode import Episode
     from lanekeep.loop.paper_mode import with_mode
     from lanekeep.scenario.schema import load_scenario
 
-    scenario = with_mode(load_scenario(name), "paper")
-    scenario = replace(scenario, seed=seed,
-                       estimation=replace(scenario.estimation, paper_keeps=keeps))
+    if open_loop:  # the default loop drives; `keeps` reach the two models only
+        scenario = replace(load_scenario(name), seed=seed)
+    else:
+        scenario = with_mode(load_scenario(name), "paper")
+        scenario = replace(scenario, seed=seed,
+                           estimation=replace(scenario.estimation, paper_keeps=keeps))
+    if detectors_config is not None:
+        scenario = replace(scenario, detectors=load_config(detectors_config))
     trace = PaperTrace()
     with Episode(scenario) as episode:
         road, conditions = episode.world.road, episode.world.conditions
         estimator = episode.driver.estimator
-        labels = list(episode.driver.front)
+        models = open_loop_models(episode, keeps) if open_loop else None
+        labels = list(models or episode.driver.front)
         held: list[float | None] = [None] * len(labels)
 
         def on_step(step, total):
@@ -72,22 +86,48 @@ def run_one(name: str, seed: int, keeps: tuple[str, ...]) -> dict:
                 in_event = bool(conditions.shaded(ahead))
             else:
                 in_event = abs(float(road.curvature_at(float(s) + 4.0))) > TURN_CURVATURE
+            estimates = ({label: model.detect(step.frames["front"])
+                          for label, model in models.items()} if models else step.estimates)
             offsets: dict[str, float | None] = {}
             for i, label in enumerate(labels[:2]):
-                centre = estimator.centre_of(step.estimates[label])
+                centre = estimator.centre_of(estimates[label])
                 value = None if centre is None else float(LanePoly.of(centre).offset_m(0.0))
                 offsets[f"model{i + 1}"] = value
                 if value is not None:
                     held[i] = value
-            offsets["final"] = held[step.selected] if step.selected < 2 else None
+            if models:  # no paper MMAE ran: no final offset, no selection
+                offsets["final"], selected = None, -1
+            else:
+                offsets["final"] = held[step.selected] if step.selected < 2 else None
+                selected = step.selected
             offsets["observer"] = step.reference_m
-            trace.add(step.truth.offset_at(0.0), offsets, step.selected, in_event)
+            trace.add(step.truth.offset_at(0.0), offsets, selected, in_event)
 
         report = episode.run(on_step=on_step)
     row = paper_row(trace).to_dict()
     row.update(case=name, seed=seed, departures=report.lane_departures,
-               completed=report.completed)
+               completed=report.completed, open_loop=open_loop)
     return row
+
+
+def open_loop_models(episode, keeps: tuple[str, ...]) -> dict:
+    """The paper's model #1 (hough) and model #2 (sliding_window) as paper mode builds them
+    (its windows and fixed thresholds, less `keeps`), on the episode's front camera; they
+    keep their own state across the drive and steer nothing. Why: in paper mode the paper's
+    PID loses the lane in case 2 and every model then errs; driven by the default loop, which
+    keeps the lane, the two models are compared on the frames of a drive that stays in it."""
+    from lanekeep.detectors.registry import make_detector
+    from lanekeep.driver.paper_mode import front_detector_config
+
+    config = episode.driver.config
+    camera, lens = config.cameras["front"], config.distortions.get("front")
+    models = {name: make_detector(name, camera,
+                                  front_detector_config(name, "paper", config.detectors, keeps),
+                                  lens)
+              for name in ("hough", "sliding_window")}
+    for model in models.values():
+        model.reset()
+    return models
 
 
 def _interval(spread: stats.Spread, fmt: str) -> str:
@@ -135,9 +175,11 @@ def summarise(rows: list[dict]) -> str:
         lines.append(f"model #2 - model #1 in the event:  {_verdict(e2, e1)}")
         ratio = stats.spread([b / a for a, b in zip(m1, m2, strict=True) if a > 0],
                              log_scale=True)
-        lines.append(f"model #2 / model #1 (geometric mean): {_interval(ratio, '.2f')}; MMAE on "
-                     f"model #1 in the event {_interval(on1, '.2f')}, on model #2 "
-                     f"{_interval(on2, '.2f')}")
+        selection = ("no paper MMAE (open loop)" if any(r.get("open_loop") for r in case)
+                     else f"MMAE on model #1 in the event {_interval(on1, '.2f')}, on model "
+                     f"#2 {_interval(on2, '.2f')}")
+        lines.append(f"model #2 / model #1 (geometric mean): {_interval(ratio, '.2f')}; "
+                     f"{selection}")
     return "\n".join(lines)
 
 
@@ -147,6 +189,12 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--seeds", type=int, default=10)
     parser.add_argument("--keep", action="append", default=[],
                         help="a deviation of ours to keep in paper mode (repeatable)")
+    parser.add_argument("--open-loop", action="store_true",
+                        help="drive with the default loop and run the paper's two models beside "
+                        "it on the same front frames (no paper MMAE: final and shares are nan)")
+    parser.add_argument("--detectors-config", metavar="FILE",
+                        help="a detectors TOML file that becomes each case's [detectors] table "
+                        "(e.g. [paper] white_level = 125), recorded in --json")
     parser.add_argument("--workers", type=int, default=1)
     parser.add_argument("--json", type=Path, help="write the rows here")
     parser.add_argument("--read", type=Path, help="print the rows of an earlier --json")
@@ -168,10 +216,18 @@ def main(argv: list[str] | None = None) -> int:
         print(f"error: not a paper case: {unknown[0]} (one of {', '.join(PAPER_CASES)})",
               file=sys.stderr)
         return 2
+    if args.detectors_config is not None:
+        from lanekeep.detectors.config import load_config
+
+        try:
+            load_config(args.detectors_config)
+        except (OSError, ValueError) as err:  # TOML and config errors are ValueErrors
+            print(f"error: --detectors-config {args.detectors_config}: {err}", file=sys.stderr)
+            return 2
     from lanekeep.scenario.schema import load_scenario
 
-    jobs = [(name, load_scenario(name).seed + k, tuple(args.keep))
-            for name in args.cases for k in range(1, args.seeds + 1)]
+    jobs = [(name, load_scenario(name).seed + k, tuple(args.keep), args.open_loop,
+             args.detectors_config) for name in args.cases for k in range(1, args.seeds + 1)]
     if args.workers > 1:
         context = multiprocessing.get_context("spawn")
         with ProcessPoolExecutor(args.workers, mp_context=context) as pool:
@@ -183,9 +239,13 @@ def main(argv: list[str] | None = None) -> int:
             print(f"{job[0]} seed {job[1]}: " + ", ".join(
                 f"{c} {rows[-1]['rmse_cm'][c]:.1f}" for c in COLUMNS), flush=True)
             if args.json:  # kept as it grows: an interrupted run loses only its last episode
-                args.json.write_text(json.dumps({"keeps": args.keep, "rows": rows}, indent=1))
+                args.json.write_text(json.dumps({"keeps": args.keep, "open_loop": args.open_loop,
+                                             "detectors_config": args.detectors_config,
+                                             "rows": rows}, indent=1))
     if args.json:
-        args.json.write_text(json.dumps({"keeps": args.keep, "rows": rows}, indent=1))
+        args.json.write_text(json.dumps({"keeps": args.keep, "open_loop": args.open_loop,
+                                         "detectors_config": args.detectors_config,
+                                         "rows": rows}, indent=1))
     print(summarise(rows))
     return 0
 

@@ -20,11 +20,25 @@ def test_the_stored_rows_print_the_papers_table_beside_ours_and_the_verdicts(cap
     assert "model #2 - model #1 in the event:  -72.77 cm" in case1 and "better" in case1
 
 
+def test_open_loop_rows_print_the_models_without_a_paper_mmae(capsys):
+    """--open-loop rows (the default loop drives, the paper's two models read its frames):
+    the ratio and the turn's verdict print, and no MMAE share is made up for them."""
+    rows = ROOT / "docs/data/paper_tables_case2_open_loop_keep_binarisation.json"
+    assert tool.main(["--read", str(rows)]) == 0
+    out = capsys.readouterr().out
+    assert "model #2 / model #1 (geometric mean): 2.05 [1.88, 2.23]; no paper MMAE" in out
+    assert "model #2 - model #1 in the event:  +39.34 cm" in out and "worse" in out
+
+
 def test_bad_input_is_one_line_and_exit_2(tmp_path, capsys):
     garbage = tmp_path / "rows.json"
     garbage.write_text("not json")
+    bad_config = tmp_path / "detectors.toml"
+    bad_config.write_text("[paper]\nwhite_level = 300\n")
     assert tool.main(["--read", str(garbage)]) == 2
     assert tool.main(["no_such_case"]) == 2
     assert tool.main(["--seeds", "0"]) == 2
+    assert tool.main(["--detectors-config", str(tmp_path / "missing.toml")]) == 2
+    assert tool.main(["--detectors-config", str(bad_config)]) == 2
     lines = capsys.readouterr().err.strip().splitlines()
-    assert len(lines) == 3 and all(line.startswith("error: ") for line in lines)
+    assert len(lines) == 5 and all(line.startswith("error: ") for line in lines)
