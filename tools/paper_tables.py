@@ -51,15 +51,18 @@ TURN_CURVATURE = 0.01  # 1/m: the 40 m arc of case 2 and the steep ends of its c
 
 
 def run_one(name: str, seed: int, keeps: tuple[str, ...], open_loop: bool = False,
-            detectors_config: str | None = None) -> dict:
+            detectors_config: str | None = None,
+            settings: tuple[tuple[str, object], ...] = ()) -> dict:
     """One episode of a paper case, scored as the paper scores: in paper mode, or with
     `open_loop` driven by the default loop while the paper's two models (paper mode's
     detectors, less `keeps`) read the same front frames beside it (`open_loop_models`).
     `detectors_config`: a detectors file that becomes the case's `[detectors]` table (e.g. a
-    `[paper] white_level`), as `lanekeep bench --detectors-config` does."""
+    `[paper] white_level`), as `lanekeep bench --detectors-config` does; `settings`: scenario
+    keys set as `lanekeep bench --set` sets them, after the mode and the seed."""
     from lanekeep.detectors.config import load_config
     from lanekeep.loop.episode import Episode
     from lanekeep.loop.paper_mode import with_mode
+    from lanekeep.scenario.keys import with_settings
     from lanekeep.scenario.schema import load_scenario
 
     if open_loop:  # the default loop drives; `keeps` reach the two models only
@@ -70,6 +73,7 @@ def run_one(name: str, seed: int, keeps: tuple[str, ...], open_loop: bool = Fals
                            estimation=replace(scenario.estimation, paper_keeps=keeps))
     if detectors_config is not None:
         scenario = replace(scenario, detectors=load_config(detectors_config))
+    scenario = with_settings(scenario, settings)
     trace = PaperTrace()
     with Episode(scenario) as episode:
         road, conditions = episode.world.road, episode.world.conditions
@@ -180,6 +184,12 @@ def summarise(rows: list[dict]) -> str:
                      f"#2 {_interval(on2, '.2f')}")
         lines.append(f"model #2 / model #1 (geometric mean): {_interval(ratio, '.2f')}; "
                      f"{selection}")
+        if all("valid_share_in_event" in r for r in case):  # rows from before 2026-12-01: none
+            valid = [stats.spread([r[key][i] for r in case]) for key in
+                     ("valid_share_in_event", "valid_share_outside") for i in (0, 1)]
+            lines.append(f"a value of its own: model #1 in the event {_interval(valid[0], '.2f')}, "
+                         f"outside {_interval(valid[2], '.2f')}; model #2 in the event "
+                         f"{_interval(valid[1], '.2f')}, outside {_interval(valid[3], '.2f')}")
     return "\n".join(lines)
 
 
@@ -195,6 +205,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--detectors-config", metavar="FILE",
                         help="a detectors TOML file that becomes each case's [detectors] table "
                         "(e.g. [paper] white_level = 125), recorded in --json")
+    parser.add_argument("--set", dest="settings", action="append", default=[],
+                        metavar="KEY=VALUE", help="a scenario key for every case, as `lanekeep "
+                        "bench --set` (e.g. 'conditions.shadows[0].coverage=1.0'), recorded")
     parser.add_argument("--workers", type=int, default=1)
     parser.add_argument("--json", type=Path, help="write the rows here")
     parser.add_argument("--read", type=Path, help="print the rows of an earlier --json")
@@ -224,10 +237,19 @@ def main(argv: list[str] | None = None) -> int:
         except (OSError, ValueError) as err:  # TOML and config errors are ValueErrors
             print(f"error: --detectors-config {args.detectors_config}: {err}", file=sys.stderr)
             return 2
-    from lanekeep.scenario.schema import load_scenario
+    from lanekeep.scenario.keys import parse_setting, with_settings
+    from lanekeep.scenario.schema import ScenarioError, load_scenario
 
+    try:
+        settings = tuple(parse_setting(text) for text in args.settings)
+        for name in args.cases:  # a key a case cannot take: one line, before any episode
+            with_settings(load_scenario(name), settings)
+    except (ValueError, ScenarioError) as err:
+        print(f"error: --set: {err}", file=sys.stderr)
+        return 2
     jobs = [(name, load_scenario(name).seed + k, tuple(args.keep), args.open_loop,
-             args.detectors_config) for name in args.cases for k in range(1, args.seeds + 1)]
+             args.detectors_config, settings)
+            for name in args.cases for k in range(1, args.seeds + 1)]
     if args.workers > 1:
         context = multiprocessing.get_context("spawn")
         with ProcessPoolExecutor(args.workers, mp_context=context) as pool:
@@ -241,11 +263,12 @@ def main(argv: list[str] | None = None) -> int:
             if args.json:  # kept as it grows: an interrupted run loses only its last episode
                 args.json.write_text(json.dumps({"keeps": args.keep, "open_loop": args.open_loop,
                                              "detectors_config": args.detectors_config,
-                                             "rows": rows}, indent=1))
+                                             "settings": args.settings, "rows": rows},
+                                            indent=1))
     if args.json:
         args.json.write_text(json.dumps({"keeps": args.keep, "open_loop": args.open_loop,
                                          "detectors_config": args.detectors_config,
-                                         "rows": rows}, indent=1))
+                                         "settings": args.settings, "rows": rows}, indent=1))
     print(summarise(rows))
     return 0
 

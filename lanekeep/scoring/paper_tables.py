@@ -75,12 +75,18 @@ class PaperRow:
     event_steps: int
     uncarried_steps: dict[str, int]  # steps before a column's first value (not scored)
     selected_share_in_event: tuple[float, float]  # share of event steps on model #1, #2
+    # Share of the event's steps, and of the other steps, in which model #1 / #2 had a value
+    # of its own this step (not one carried): where a model "loses the lane" (case 1).
+    valid_share_in_event: tuple[float, float] = (math.nan, math.nan)
+    valid_share_outside: tuple[float, float] = (math.nan, math.nan)
 
     def to_dict(self) -> dict:
         return {"rmse_cm": self.rmse_cm, "event_rmse_cm": self.event_rmse_cm,
                 "steps": self.steps, "event_steps": self.event_steps,
                 "uncarried_steps": self.uncarried_steps,
-                "selected_share_in_event": list(self.selected_share_in_event)}
+                "selected_share_in_event": list(self.selected_share_in_event),
+                "valid_share_in_event": list(self.valid_share_in_event),
+                "valid_share_outside": list(self.valid_share_outside)}
 
 
 def paper_row(trace: PaperTrace) -> PaperRow:
@@ -97,4 +103,13 @@ def paper_row(trace: PaperTrace) -> PaperRow:
     n_event = int(event.sum())
     shares = ((float(np.mean(selected[event] == 0)), float(np.mean(selected[event] == 1)))
               if n_event else (math.nan, math.nan))
-    return PaperRow(rmse, event_rmse, len(truth), n_event, uncarried, shares)
+    own = {c: np.array([v is not None and math.isfinite(v) for v in trace.offsets_m[c]], bool)
+           for c in ("model1", "model2")}
+
+    def valid_share(steps: np.ndarray) -> tuple[float, float]:
+        if not steps.any():
+            return (math.nan, math.nan)
+        return (float(own["model1"][steps].mean()), float(own["model2"][steps].mean()))
+
+    return PaperRow(rmse, event_rmse, len(truth), n_event, uncarried, shares,
+                    valid_share(event), valid_share(~event))

@@ -35,3 +35,7 @@ def test_a_model_that_fails_is_scored_on_the_value_it_left_behind():
     assert row.event_steps == 3
     assert row.event_rmse_cm["model1"] == pytest.approx(100.0 * np.sqrt((0.0 + 0.01 + 0.04) / 3))
     assert row.selected_share_in_event == (0.0, 1.0)
+    # Where a model had a value of its own (case 1's "loses the lane"): model #1 none of the
+    # three event steps, both of the two others; a carried value is not its own.
+    assert row.valid_share_in_event == (0.0, 1.0)
+    assert row.valid_share_outside == (1.0, 1.0)

@@ -40,5 +40,7 @@ def test_bad_input_is_one_line_and_exit_2(tmp_path, capsys):
     assert tool.main(["--seeds", "0"]) == 2
     assert tool.main(["--detectors-config", str(tmp_path / "missing.toml")]) == 2
     assert tool.main(["--detectors-config", str(bad_config)]) == 2
+    assert tool.main(["case1_building_shadows", "--set", "conditions.no_such_key=1"]) == 2
+    assert tool.main(["case1_building_shadows", "--set", "no equals sign"]) == 2
     lines = capsys.readouterr().err.strip().splitlines()
-    assert len(lines) == 5 and all(line.startswith("error: ") for line in lines)
+    assert len(lines) == 7 and all(line.startswith("error: ") for line in lines)
