@@ -6,13 +6,17 @@
         --keep binarisation          # one of our deviations kept (docs/paper_mode.md)
     MUJOCO_GL=egl .venv/bin/python tools/paper_tables.py case2_sharp_turn --seeds 10 \\
         --open-loop                  # the paper's models on the frames of a drive in lane
+    MUJOCO_GL=egl .venv/bin/python tools/paper_tables.py case1_building_shadows --seeds 10 \\
+        --set 'conditions.shadows[0].coverage=1.0' \\
+        --detectors-config F.toml    # a scenario key and a detectors file for every case
 
 Each paper case runs in paper mode (`[estimation] mode = "paper"`) at seeds file + 1 .. + N (as
 `lanekeep bench --seeds N`). Scored as the paper scores (lanekeep/scoring/paper_tables.py):
 every offset at the car, RMSE over every step with the value the loop carries. Printed per
 case: model #1, model #2, the final offset and the observer, mean over seeds with its 95%
-interval, beside the paper's Table 3 (case 2) and Table 4 (case 4); and the patterns as paired
-verdicts over the seeds (lanekeep/scoring/statistics.py):
+interval, beside the paper's Table 3 (case 2) and Table 4 (case 4); the patterns as paired
+verdicts over the seeds (lanekeep/scoring/statistics.py); and each model's share of steps with
+a value of its own, in the event and outside it:
 
 * case 1 (building shadows): in the shaded steps model #1 worse than model #2, and the share of
   those steps the MMAE is on model #2;
