@@ -114,13 +114,16 @@ def main(argv: list[str] | None = None) -> int:
     if args.real is not None and not (args.real / "labels").is_dir():
         print(f"error: {args.real} has no labels/ folder", file=sys.stderr)
         return 2
-    paint, asphalt, _ = _lightness(load_scenario(tuning_dir() / f"{TUNING}.toml"),
-                                   TUNING_POSES_M)
+    paint, asphalt, ground = _lightness(load_scenario(tuning_dir() / f"{TUNING}.toml"),
+                                        TUNING_POSES_M)
     level = best_level(paint, asphalt)
     print(_describe(TUNING, paint) + f"; asphalt p50/p99 {np.percentile(asphalt, 50):.0f} / "
           f"{np.percentile(asphalt, 99):.0f}")
     print(f"white level {level}: paint at or above {np.mean(paint >= level):.3f}, asphalt "
-          f"{np.mean(asphalt >= level):.4f}")
+          f"{np.mean(asphalt >= level):.4f}; the rest of model #1's window: L p90/p99 "
+          f"{np.percentile(ground, 90):.0f} / {np.percentile(ground, 99):.0f}, at or above "
+          f"{level}: {np.mean(ground >= level):.4f}; the level that would separate the paint "
+          f"from it: {best_level(paint, ground)}")
     for name, poses in CASE_POSES_M.items():
         case_paint, _, ground = _lightness(load_scenario(name), poses)
         print(_describe(name, case_paint))
