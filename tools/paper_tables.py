@@ -55,18 +55,15 @@ TURN_CURVATURE = 0.01  # 1/m: the 40 m arc of case 2 and the steep ends of its c
 
 
 def run_one(name: str, seed: int, keeps: tuple[str, ...], open_loop: bool = False,
-            detectors_config: str | None = None,
-            settings: tuple[tuple[str, object], ...] = ()) -> dict:
+            overrides=None) -> dict:
     """One episode of a paper case, scored as the paper scores: in paper mode, or with
     `open_loop` driven by the default loop while the paper's two models (paper mode's
     detectors, less `keeps`) read the same front frames beside it (`open_loop_models`).
-    `detectors_config`: a detectors file that becomes the case's `[detectors]` table (e.g. a
-    `[paper] white_level`), as `lanekeep bench --detectors-config` does; `settings`: scenario
-    keys set as `lanekeep bench --set` sets them, after the mode and the seed."""
-    from lanekeep.detectors.config import load_config
+    `overrides`: the command line's `--detectors-config` and `--set` (a PluginOverrides,
+    lanekeep/loop/overrides.py), applied as `lanekeep bench` applies them, after the mode and
+    the seed."""
     from lanekeep.loop.episode import Episode
     from lanekeep.loop.paper_mode import with_mode
-    from lanekeep.scenario.keys import with_settings
     from lanekeep.scenario.schema import load_scenario
 
     if open_loop:  # the default loop drives; `keeps` reach the two models only
@@ -75,9 +72,8 @@ def run_one(name: str, seed: int, keeps: tuple[str, ...], open_loop: bool = Fals
         scenario = with_mode(load_scenario(name), "paper")
         scenario = replace(scenario, seed=seed,
                            estimation=replace(scenario.estimation, paper_keeps=keeps))
-    if detectors_config is not None:
-        scenario = replace(scenario, detectors=load_config(detectors_config))
-    scenario = with_settings(scenario, settings)
+    if overrides is not None:
+        scenario = overrides.apply(scenario)
     trace = PaperTrace()
     with Episode(scenario) as episode:
         road, conditions = episode.world.road, episode.world.conditions
@@ -233,26 +229,25 @@ def main(argv: list[str] | None = None) -> int:
         print(f"error: not a paper case: {unknown[0]} (one of {', '.join(PAPER_CASES)})",
               file=sys.stderr)
         return 2
-    if args.detectors_config is not None:
-        from lanekeep.detectors.config import load_config
-
-        try:
-            load_config(args.detectors_config)
-        except (OSError, ValueError) as err:  # TOML and config errors are ValueErrors
-            print(f"error: --detectors-config {args.detectors_config}: {err}", file=sys.stderr)
-            return 2
-    from lanekeep.scenario.keys import parse_setting, with_settings
+    from lanekeep.core.config_io import ConfigError
+    from lanekeep.loop.overrides import PluginOverrides
+    from lanekeep.scenario.keys import parse_setting
     from lanekeep.scenario.schema import ScenarioError, load_scenario
 
     try:
         settings = tuple(parse_setting(text) for text in args.settings)
-        for name in args.cases:  # a key a case cannot take: one line, before any episode
-            with_settings(load_scenario(name), settings)
-    except (ValueError, ScenarioError) as err:
+    except ValueError as err:
         print(f"error: --set: {err}", file=sys.stderr)
         return 2
-    jobs = [(name, load_scenario(name).seed + k, tuple(args.keep), args.open_loop,
-             args.detectors_config, settings)
+    overrides = PluginOverrides(settings=settings, detectors_config=args.detectors_config)
+    try:  # a bad file or a key a case cannot take: one line, before any episode
+        overrides.check()
+        for name in args.cases:
+            overrides.apply(load_scenario(name))
+    except (ConfigError, ScenarioError) as err:
+        print(f"error: {err}", file=sys.stderr)
+        return 2
+    jobs = [(name, load_scenario(name).seed + k, tuple(args.keep), args.open_loop, overrides)
             for name in args.cases for k in range(1, args.seeds + 1)]
     if args.workers > 1:
         context = multiprocessing.get_context("spawn")
