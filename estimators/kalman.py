@@ -338,15 +338,20 @@ class LaneTracker:
         self._kf.predict(u=u, B=np.eye(DIM_X), F=f, Q=q)
 
     # ---- update ------------------------------------------------------------------------------
-    def update_coefficients(self, coefficients: ArrayLike | None) -> UpdateResult:
-        """Fuse a measured polynomial [c0, c1, c2] (H = [I 0]); None or non-finite = missed."""
+    def update_coefficients(self, coefficients: ArrayLike | None, r_scale: float = 1.0
+                            ) -> UpdateResult:
+        """Fuse a measured polynomial [c0, c1, c2] (H = [I 0]); None or non-finite = missed.
+        `r_scale` multiplies R for this measurement alone (a detection whose own confidence
+        says it is noisier or surer than its detector's average: estimators/confidence.py)."""
+        if not (np.isfinite(r_scale) and r_scale > 0.0):
+            raise ValueError(f"r_scale must be a positive number, got {r_scale}")
         if coefficients is None:
             return self._miss()
         z = np.asarray(coefficients, dtype=float).reshape(-1)
         if z.shape != (N_COEF,):
             raise ValueError(f"expected {N_COEF} coefficients, got shape {z.shape}")
         h = np.hstack([np.eye(N_COEF), np.zeros((N_COEF, N_COEF))])
-        return self._update(z, h, self.config.coefficient_r)
+        return self._update(z, h, r_scale * self.config.coefficient_r)
 
     def update_offset(self, offset_m: float | None, x_m: float = 0.0) -> UpdateResult:
         """Fuse a measured offset at look-ahead x_m (1-D mode); None or non-finite = missed.
@@ -382,7 +387,7 @@ class LaneTracker:
         self._missed_steps = 0
         return UpdateResult(UpdateStatus.UPDATED, nis)
 
-    def restart(self, coefficients: ArrayLike) -> UpdateResult:
+    def restart(self, coefficients: ArrayLike, r_scale: float = 1.0) -> UpdateResult:
         """Drop the track and start a new one from this measurement, ungated.
 
         For a measurement the gate rejected but an independent source corroborates (two
@@ -391,7 +396,7 @@ class LaneTracker:
         track has coasted `max_coast_steps`.
         """
         self.reset()
-        result = self.update_coefficients(coefficients)
+        result = self.update_coefficients(coefficients, r_scale)
         if result.status is not UpdateStatus.INITIALIZED:
             return result
         return UpdateResult(UpdateStatus.RESTARTED, float("nan"))

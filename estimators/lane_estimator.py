@@ -28,6 +28,7 @@ import numpy as np
 from lanekeep.core.config_io import ConfigError, from_dict
 from lanekeep.detectors.base import LaneEstimate
 from lanekeep.estimators.alignment import OdometryAlignedHistory
+from lanekeep.estimators.confidence import ConfidenceBands
 from lanekeep.estimators.consensus import corroborated
 from lanekeep.estimators.kalman import LaneTracker, TrackerConfig, UpdateStatus
 from lanekeep.estimators.mmae import MMAE, MMAEConfig, MMAEOutput
@@ -46,6 +47,7 @@ TRACKER_TOML = "closed_loop_tracker.toml"
 PAPER_R_M2 = 1e-6
 PAPER_OFFSET_VARIANCE_M2 = {"hough": 6.25e-13, "sliding_window": 8.14e-13}
 BY_DETECTOR = "measured_coefficient_covariance_by_detector"
+CONFIDENCE_BY_DETECTOR = "confidence_noise_by_detector"
 
 
 @dataclass(frozen=True)
@@ -53,13 +55,19 @@ class TrackerTuning:
     """The closed loop's trackers: each detector measured on its own gets its own R (the
     learned detector's fits scatter far less than the classical ones', and a track with its
     detector's R neither lags a good detector nor follows a noisy one's scatter); any other
-    detector (a plug-in) gets the pooled one, `default`."""
+    detector (a plug-in) gets the pooled one, `default`. `confidence_bands`: per detector,
+    the factor of R for each band of its detections' confidence (estimators/confidence.py;
+    used with `EstimatorSettings.confidence_noise`); a detector without bands gets 1."""
 
     default: TrackerConfig
     by_detector: Mapping[str, TrackerConfig] = field(default_factory=dict)
+    confidence_bands: Mapping[str, ConfidenceBands] = field(default_factory=dict)
 
     def for_detector(self, name: str) -> TrackerConfig:
         return self.by_detector.get(name, self.default)
+
+    def bands_for(self, name: str) -> ConfidenceBands | None:
+        return self.confidence_bands.get(name)
 
 
 def _covariance(value: object, key: str, source: str) -> np.ndarray:
@@ -86,6 +94,7 @@ def closed_loop_tracker(text: str | None = None) -> TrackerTuning:
         pooled = _covariance(data.pop("measured_coefficient_covariance"),
                              "measured_coefficient_covariance", source)
         per_detector = data.pop(BY_DETECTOR, {})
+        confidence = data.pop(CONFIDENCE_BY_DETECTOR, {})
         scale = float(data.pop("r_scale"))
         table = data.pop("tracker")
     except KeyError as err:
@@ -111,7 +120,26 @@ def closed_loop_tracker(text: str | None = None) -> TrackerTuning:
     by_detector = {name: config(_covariance(value, f"{BY_DETECTOR}.{name}", source),
                                 f"{BY_DETECTOR}.{name}")
                    for name, value in per_detector.items()}
-    return TrackerTuning(config(pooled, "tracker"), by_detector)
+    return TrackerTuning(config(pooled, "tracker"), by_detector,
+                         _confidence_bands(confidence, source))
+
+
+def _confidence_bands(table: object, source: str) -> dict[str, ConfidenceBands]:
+    """`[confidence_noise_by_detector]`: per detector `{ edges = [...], scales = [...] }`."""
+    if not isinstance(table, dict):
+        raise ConfigError(source, CONFIDENCE_BY_DETECTOR,
+                          "must be a table of detector = { edges = [...], scales = [...] }")
+    bands = {}
+    for name, value in table.items():
+        key = f"{CONFIDENCE_BY_DETECTOR}.{name}"
+        if not isinstance(value, dict) or set(value) != {"edges", "scales"}:
+            raise ConfigError(source, key, "must be { edges = [...], scales = [...] }")
+        try:
+            bands[name] = ConfidenceBands(tuple(float(v) for v in value["edges"]),
+                                          tuple(float(v) for v in value["scales"]))
+        except (TypeError, ValueError) as err:
+            raise ConfigError(source, key, str(err)) from None
+    return bands
 
 
 @functools.cache
@@ -159,6 +187,8 @@ class LaneEstimator:
         tuning = tracker if isinstance(tracker, TrackerTuning) else TrackerTuning(tracker)
         self.tracker_configs = {name: tuning.for_detector(families.get(name, name))
                                 for name in self.names}
+        self.confidence_bands = ({name: tuning.bands_for(families.get(name, name))
+                                  for name in self.names} if settings.confidence_noise else {})
         self.trackers = {name: LaneTracker(self.tracker_configs[name]) for name in self.names}
         # Distance-aligned residuals: each model's past lane estimate is carried by odometry to
         # the point the reference measures now (estimators/alignment.py), so the MMAE compares
@@ -208,7 +238,8 @@ class LaneEstimator:
         self._measure_lane_width(detections.values())
         centres = {name: self.centre_of(detections[name]) for name in self.names}
         reference_centre = self._usable_reference(reference)
-        tracked, status = self._track(centres, ego, reference_centre, events)
+        scales = {name: self._r_scale(name, detections[name]) for name in self.names}
+        tracked, status = self._track(centres, scales, ego, reference_centre, events)
         lap("track")
         selection, reference_x = self._select(reference, tracked, detections, ego, events)
         selected, centre = self._output(centres, tracked, status, selection)
@@ -258,8 +289,16 @@ class LaneEstimator:
         return None
 
     # -- the stages ----------------------------------------------------------------------------
-    def _track(self, centres: dict[str, np.ndarray | None], ego: EgoMotion,
-               reference: np.ndarray | None, events: list[str]
+    def _r_scale(self, name: str, detection: LaneEstimate) -> float:
+        """The factor of the model's R for this detection: its confidence band's with
+        `confidence_noise` (estimators/confidence.py), else 1."""
+        bands = self.confidence_bands.get(name)
+        if bands is None or not detection.valid:
+            return 1.0
+        return bands.scale(detection.confidence)
+
+    def _track(self, centres: dict[str, np.ndarray | None], scales: dict[str, float],
+               ego: EgoMotion, reference: np.ndarray | None, events: list[str]
                ) -> tuple[dict[str, np.ndarray | None], dict[str, str]]:
         """Predict and update each model's tracker with its detection's centre line. A
         detection the gate rejects but another model's detection corroborates restarts that
@@ -267,7 +306,7 @@ class LaneEstimator:
         outruns the constant-rate model). A track starts or restarts only from a lane that
         meets the rear reference's at the car (`_meets_reference`); with
         `track_reference_check = "updates"` every detection a track takes must."""
-        noise = [self.tracker_configs[name].coefficient_r for name in centres]
+        noise = [scales[name] * self.tracker_configs[name].coefficient_r for name in centres]
         agreed = dict(zip(centres, corroborated(list(centres.values()), noise), strict=True))
         tracked, status = {}, {}
         every_update = self.settings.track_reference_check == "updates"
@@ -283,9 +322,9 @@ class LaneEstimator:
                               f"{self._gap_at_car(centre, reference):.2f} m{heading} from the "
                               f"reference's at the car")
                 centre = None  # a miss: the track waits for a lane the reference confirms
-            result = tracker.update_coefficients(centre)
+            result = tracker.update_coefficients(centre, scales[name])
             if result.status is UpdateStatus.GATED and agreed[name] and meets:
-                result = tracker.restart(centre)
+                result = tracker.restart(centre, scales[name])
             status[name] = result.status.value
             tracked[name] = tracker.coefficients
         return tracked, status

@@ -158,6 +158,15 @@ class EstimatorSettings:
         True, "While no front model has a lane, the output is the rear reference's lane "
         "(after its width check) instead of none (the wheel held straight); the paper's "
         "loop has no such output (paper mode).", allowed="true, false")
+    # A classical detection's confidence (the share of its window its boundaries cover) says
+    # how far off it tends to be: on the tuning scenarios the robust core of hough's and
+    # sliding_window's errors is several times wider in their lowest-confidence band than in
+    # their highest (estimators/closed_loop_tracker.toml [confidence_noise_by_detector]).
+    # Off until decided on the tuning scenarios.
+    confidence_noise: bool = setting(
+        False, "Each detection's R is its detector's times the factor measured for its "
+        "confidence band (estimators/closed_loop_tracker.toml), instead of one R for all of "
+        "a detector's detections (the paper's; paper mode).", allowed="true, false")
     # Re-decided 2026-11-27 with `output` above: alone, "uniform" was indistinguishable (fused
     # RMSE +0.03 cm [-0.01, +0.06]); together with the paper's other two choices, worse.
     mmae_prior: str = setting("precision", "The MMAE's probabilities before the reference has "

@@ -69,6 +69,7 @@ ESTIMATOR_CHOICES: dict[str, dict[str, object]] = {
     "reference_width_check": {"reference_width_tolerance_m": None},
     "track_start_check": {"track_start_gate_lane_widths": None},
     "reference_fallback": {"reference_fallback": False},
+    "confidence_noise": {"confidence_noise": False},
     "output": {"output": "select", "prefer_accepted": False},
     "pid_input": {"model_lane": "detection", "output_at": "nearest_row"},
 }

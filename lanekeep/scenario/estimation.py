@@ -36,6 +36,8 @@ PAPER_DEVIATIONS: dict[str, str] = {
                          "detection starts it and its gate alone decides",
     "reference_fallback": "ours: with no front lane the output is the rear reference's; "
                           "paper: none, the wheel held straight",
+    "confidence_noise": "ours: a detection's R follows its confidence band; paper: one "
+                        "noise for all of a model's detections",
     "output": "ours: the tracks fused by precision and probability; paper: the likeliest model",
     "pid_input": "ours: the output lane at the control look-ahead with its heading; paper: the "
                  "selected model's detection at its nearest row",

@@ -22,6 +22,12 @@ truth is the least-squares quadratic of the exact road centre over the front det
 window (detectors/config.py profiles.front), so that the errors are the detectors' and
 not the difference between two windows' quadratic fits of a curving road.
 
+Each detector's detections are also cut at the quintiles of their own confidence into bands,
+and each band's core covariance is given as a factor of the detector's (the cube root of the
+ratio of determinants), with the share of its detections over 30 cm off 4 m ahead: the
+`[confidence_noise_by_detector]` table of estimators/closed_loop_tracker.toml, which
+`[estimation] confidence_noise` uses (estimators/confidence.py).
+
 tools/measure_detector_noise.py runs the same command line from a clone.
 """
 
@@ -30,7 +36,7 @@ from __future__ import annotations
 import argparse
 import sys
 from collections.abc import Iterator, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -54,29 +60,45 @@ def front_window() -> tuple[float, float]:
     return tuple(sorted((float(front.x_near_m), float(front.x_far_m))))
 
 
+@dataclass
+class Detections:
+    """One front detector's valid detections of an episode: each one's coefficients minus the
+    truth's, and its own confidence."""
+
+    errors: list[np.ndarray] = field(default_factory=list)
+    confidences: list[float] = field(default_factory=list)
+
+    def extend(self, other: Detections) -> None:
+        self.errors.extend(other.errors)
+        self.confidences.extend(other.confidences)
+
+
 def coefficient_errors(name: str | Path, fit_range_m: tuple[float, float]
-                       ) -> dict[str, list[np.ndarray]]:
-    """Per front detector, detection minus truth, one row per valid detection of one
-    episode."""
+                       ) -> dict[str, Detections]:
+    """Per front detector, detection minus truth and the detection's confidence, one row per
+    valid detection of one episode."""
     from lanekeep.loop.episode import Episode
     from lanekeep.scoring.truth import lane_truth
 
     scenario = load_scenario(name)
-    errors: dict[str, list[np.ndarray]] = {}
+    found: dict[str, Detections] = {}
     with Episode(scenario) as episode:
         for _ in range(episode.total_steps):
             step = episode.step()
             truth = lane_truth(episode.world.road, *step.sensed_pose, scenario.road.ego_lane,
                                fit_range_m=fit_range_m).center
             for detector in episode.driver.front:
-                centre = episode.driver.estimator.centre_of(step.estimates[detector])
+                estimate = step.estimates[detector]
+                centre = episode.driver.estimator.centre_of(estimate)
                 if centre is not None:
-                    errors.setdefault(detector, []).append(np.asarray(centre) - truth)
-    return errors
+                    rows = found.setdefault(detector, Detections())
+                    rows.errors.append(np.asarray(centre) - truth)
+                    rows.confidences.append(float(estimate.confidence))
+    return found
 
 
 def errors_per_scenario(scenarios: Sequence[str], fit_range_m: tuple[float, float],
-                        workers: int) -> Iterator[dict[str, list[np.ndarray]]]:
+                        workers: int) -> Iterator[dict[str, Detections]]:
     """`coefficient_errors` of each scenario, in order, `workers` episodes at a time (Ctrl-C
     reaches the workers: a measurement keeps nothing half done)."""
     with worker_pool(workers, initializer=set_thread_counts) as pool:
@@ -123,6 +145,59 @@ class Fit:
         return lines
 
 
+@dataclass(frozen=True)
+class BandFit:
+    """One band of a detector's confidence: its detections' count, the factor of the
+    detector's R its core covariance is (the cube root of the determinants' ratio: the
+    geometric mean over the principal axes), and the share of its detections over 30 cm off
+    at the output's look-ahead (a wrong line, which no Gaussian R describes)."""
+
+    low: float
+    high: float
+    count: int
+    scale: float
+    std_4m_m: float
+    gross_share: float
+
+
+LOOKAHEAD_ROW = np.array([1.0, 4.0, 16.0])  # the lane's lateral position 4 m ahead
+GROSS_M = 0.30
+
+
+def confidence_bands(found: Detections, overall: Fit, count: int = 5) -> list[BandFit]:
+    """The detections cut at the quantiles of their confidence into `count` bands (edges
+    rounded to 0.01; tied edges merged), each band's core against the detector's."""
+    errors, confidences = np.array(found.errors), np.array(found.confidences)
+    quantiles = np.quantile(confidences, np.arange(1, count) / count)
+    edges = np.unique(np.round(quantiles, 2))
+    band = np.searchsorted(edges, confidences, side="right")
+    bounds = [-np.inf, *edges, np.inf]
+    fits = []
+    for k in range(len(edges) + 1):
+        rows = errors[band == k]
+        if len(rows) < 10 * rows.shape[1]:
+            raise ValueError(f"confidence band {k} holds only {len(rows)} detections")
+        _, cov, _ = core_covariance(rows)
+        scale = float(np.cbrt(np.linalg.det(cov) / np.linalg.det(overall.cov)))
+        lateral = np.abs(rows @ LOOKAHEAD_ROW)
+        fits.append(BandFit(float(bounds[k]), float(bounds[k + 1]), len(rows), scale,
+                            float(np.sqrt(LOOKAHEAD_ROW @ cov @ LOOKAHEAD_ROW)),
+                            float(np.mean(lateral > GROSS_M))))
+    return fits
+
+
+def bands_report(detector: str, bands: list[BandFit]) -> list[str]:
+    """Per band: the confidence range, the count, the factor of R, the core's lateral std 4 m
+    ahead and the share of gross errors."""
+    lines = [f"{detector}, by confidence band (factor of R; core std 4 m ahead; share over "
+             f"{100 * GROSS_M:.0f} cm off there):"]
+    for band in bands:
+        lines.append(f"  [{band.low:.2f}, {band.high:.2f}): {band.count} detections, factor "
+                     f"{band.scale:.2f}, std {100 * band.std_4m_m:.1f} cm, "
+                     f"{band.gross_share:.1%} gross")
+    return lines
+
+
 def number(value: float) -> str:
     """3 significant digits, TOML's float syntax with a short exponent: 3.18e-3."""
     mantissa, exponent = f"{value:.2e}".split("e")
@@ -157,6 +232,19 @@ def toml_block(pooled: Fit, per_detector: dict[str, Fit], names: list[str]) -> s
     return "\n".join(lines)
 
 
+def toml_bands(per_detector: dict[str, list[BandFit]]) -> str:
+    """The confidence bands as the lines to paste into estimators/closed_loop_tracker.toml."""
+    lines = ["[confidence_noise_by_detector]"]
+    for detector, bands in per_detector.items():
+        edges = ", ".join(f"{band.low:g}" for band in bands[1:])
+        scales = ", ".join(f"{band.scale:.2f}" for band in bands)
+        gross = ", ".join(f"{band.gross_share:.1%}" for band in bands)
+        lines.append(f"# {detector}: {sum(b.count for b in bands):,} detections; gross "
+                     f"errors by band {gross}")
+        lines.append(f"{detector} = {{ edges = [{edges}], scales = [{scales}] }}")
+    return "\n".join(lines)
+
+
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     """The command line; exits 2 on a shipped (bench-scored) scenario without --allow-scored."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -185,23 +273,32 @@ def main(argv: list[str] | None = None) -> int:
     print("  scored by the bench: " + (", ".join(scored) if scored else "none"))
     print(f"  truth: least-squares quadratic of the road centre over x = {window[0]:g} .. "
           f"{window[1]:g} m (detectors/config.py profiles.front)")
-    per_detector: dict[str, list[np.ndarray]] = {}
+    per_detector: dict[str, Detections] = {}
     jobs = errors_per_scenario(args.scenarios, window, args.workers)
-    for name, errors in zip(names, jobs, strict=True):
-        counts = ", ".join(f"{d} {len(e)}" for d, e in errors.items())
+    for name, found in zip(names, jobs, strict=True):
+        counts = ", ".join(f"{d} {len(rows.errors)}" for d, rows in found.items())
         print(f"  {name}: {counts} detections", flush=True)
-        for detector, rows in errors.items():
-            per_detector.setdefault(detector, []).extend(rows)
+        for detector, rows in found.items():
+            per_detector.setdefault(detector, Detections()).extend(rows)
     np.set_printoptions(precision=3, suppress=False)
-    arrays = {d: np.array(rows) for d, rows in per_detector.items()}
+    arrays = {d: np.array(rows.errors) for d, rows in per_detector.items()}
     fits = {d: Fit.of(e) for d, e in arrays.items()}
+    bands = {}
     for detector, fit in fits.items():
         print("\n".join(fit.report(detector, arrays[detector])))
+        try:
+            bands[detector] = confidence_bands(per_detector[detector], fit)
+        except ValueError as err:  # too few detections to cut into bands
+            print(f"{detector}: no confidence bands ({err})")
+            continue
+        print("\n".join(bands_report(detector, bands[detector])))
     everything = np.concatenate(list(arrays.values()))
     pooled = Fit.of(everything)
     print("\n".join(pooled.report("all detectors", everything)))
     print("\nTOML (estimators/closed_loop_tracker.toml):")
     print(toml_block(pooled, fits, names))
+    print()
+    print(toml_bands(bands))
     sys.stdout.flush()
     return 0
 
