@@ -326,8 +326,8 @@ def safety_table(docs: list[dict]) -> str:
         collided = d.get("collided_episodes")
         collided_text = "-" if collided is None else f"{collided}/{d['n']}"
         lines.append(f"{d['label']:<{scen_w}}{d['n']:>3}  {collided_text:<10}"
-                     f"{number(d.get('min_ttc_s')):>11}{mean(d, 'min_ttc_s'):>19}"
-                     f"{number(d.get('min_gap_m')):>11}{mean(d, 'min_gap_m'):>19}"
+                     f"{number(d.get('min_ttc_s')):>11} {mean(d, 'min_ttc_s'):>18}"
+                     f"{number(d.get('min_gap_m')):>11} {mean(d, 'min_gap_m'):>18}"
                      f"{number(d.get('hard_braking_events')):>11}")
     lines.extend(textwrap.wrap(
         "(collided = episodes that hit another vehicle (each ends there and fails); min TTC, "

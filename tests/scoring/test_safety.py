@@ -260,6 +260,10 @@ def test_the_bench_summarises_collisions_and_minima_over_seeds():
     table = safety_table([doc])
     assert "min TTC s" in table and "1/3" in table
     assert max(len(line) for line in table.splitlines()) <= 100
+    # a wide interval does not run into the column before it (it read "7.1148.5 [...")
+    wide = {**doc, "min_ttc_s": 7.1, "min_ttc_s_mean": 148.5,
+            "min_ttc_s_mean_ci95": [-209.3, 506.2]}
+    assert "7.1 148.5 [-209.3, 506.2]" in " ".join(safety_table([wide]).split())
     quiet = bench_docs({"y": [report(0), report(1)]})["y"]
     assert quiet["min_ttc_s"] is None and quiet["min_gap_m"] is None
     assert safety_table([quiet]) == ""  # nothing to say without vehicles or braking
