@@ -281,8 +281,8 @@ def _compact_interval_table(docs: list[dict]) -> str:
         verdicts = stats.counts_text(counts) + " "
         lines.append(
             f"{d['label']:<{scen_w}}{d['n']:>3}  "
-            f"{_center_text(fused, 'rmse_cm'):<20}{verdicts:<11}"
-            f"{_center_text(d, 'car_rms_cm', 1):<18}"
+            f"{_center_text(fused, 'rmse_cm'):<19} {verdicts:<11}"
+            f"{_center_text(d, 'car_rms_cm', 1):<17} "
             f"{str(d['departed_episodes']) + '/' + str(d['n']):<10}"
             f"{d['passed_episodes']}/{d['n']}")
     lines.extend(textwrap.wrap(_fused_vs_total(docs), WIDTH))

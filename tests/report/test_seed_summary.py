@@ -176,3 +176,14 @@ def test_an_inconclusive_verdict_says_what_this_n_could_detect():
     assert entry["verdict"] == "inconclusive" and entry["detectable"] > entry["margin"]
     row = next(line for line in paired_table([doc]).splitlines() if "hough:track" in line)
     assert f"inconclusive (detectable: {entry['detectable']:.2f})" in row
+
+
+def test_a_wide_interval_does_not_run_into_the_next_column():
+    """The compact table read "27.12 [4.35, 168.89]0b 0w 2i" for a drive that departed."""
+    doc = summarise("clear_straight", REPORTS, SCENARIO)
+    fused = {**doc["sources"]["fused"], "rmse_cm_gmean": 27.12, "rmse_cm_ci95": [4.35, 168.89]}
+    wide = {**doc, "sources": {**doc["sources"], "fused": fused},
+            "car_rms_cm_gmean": 128.6, "car_rms_cm_ci95": [15.1, 1059.4]}
+    row = next(line for line in interval_table([wide]).splitlines()
+               if line.startswith("clear_straight"))
+    assert "27.12 [4.35, 168.89] " in row and "128.6 [15.1, 1059.4] " in row
