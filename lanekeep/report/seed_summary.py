@@ -43,7 +43,8 @@ bench --json: one document per label (a scenario, or "SCENARIO@MODEL" for a mode
                                   to collision and gap to the vehicle ahead in the car's path
                                   (null: never closing on / never having one)
   min_ttc_s_mean, _ci95, _n       the mean over the episodes that closed on a vehicle of
-  min_gap_m_mean, _ci95, _n       their smallest TTC (gap), its 95% t interval and how many
+  min_gap_m_mean, _ci95, _n       their smallest TTC (gap), its 95% t interval (cut at 0)
+                                  and how many
   hard_braking_events             mean per episode, with _sd and _ci95 (decelerations of
                                   0.4 g or more, one per braking)
   completed, passed               every episode completed / met its criteria
@@ -130,10 +131,15 @@ def safety_keys(reports: Sequence[EpisodeReport]) -> dict[str, Any]:
 
 
 def _mean_keys(key: str, values: Sequence[float]) -> dict[str, Any]:
-    """A per-episode minimum's mean over the episodes that had one, with its t interval."""
+    """A per-episode minimum's mean over the episodes that had one, with its t interval cut
+    at zero: a time or a gap is never negative, and the part of an interval outside what the
+    mean can be holds none of its coverage (one drive that never closes far from the others,
+    148.5 s beside 7-15 s, gave [-209.3, 506.2] s)."""
     s = stats.spread([float(v) for v in values])
+    lo, hi = s.ci95
+    ci = [max(lo, 0.0) if math.isfinite(lo) else lo, hi]
     return {f"{key}_mean": s.mean if values else None,
-            f"{key}_mean_ci95": list(s.ci95) if values else None, f"{key}_n": len(values)}
+            f"{key}_mean_ci95": ci if values else None, f"{key}_n": len(values)}
 
 
 def paired_block(reports: Sequence[EpisodeReport],

@@ -333,8 +333,8 @@ def safety_table(docs: list[dict]) -> str:
         "(collided = episodes that hit another vehicle (each ends there and fails); min TTC, "
         "min gap: the lowest over the seeds, to the vehicle ahead in the car's path, then the "
         "mean of each episode's smallest over the episodes that had one, with its 95% t "
-        "interval; - = never closing on one / never one ahead; hard brake = decelerations of "
-        "0.4 g or more, one per braking, mean per episode)", WIDTH))
+        "interval cut at 0; - = never closing on one / never one ahead; hard brake = "
+        "decelerations of 0.4 g or more, one per braking, mean per episode)", WIDTH))
     return "\n".join(lines)
 
 

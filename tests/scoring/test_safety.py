@@ -256,7 +256,13 @@ def test_the_bench_summarises_collisions_and_minima_over_seeds():
     # the mean of the episodes' minima, (3 + 1.5 + 0) / 3, with its t interval over three
     assert doc["min_ttc_s_mean"] == pytest.approx(1.5) and doc["min_ttc_s_n"] == 3
     half = 4.302653 * np.std([3.0, 1.5, 0.0], ddof=1) / np.sqrt(3)  # t(0.975, 2)
-    assert doc["min_ttc_s_mean_ci95"] == pytest.approx([1.5 - half, 1.5 + half], rel=1e-4)
+    assert doc["min_ttc_s_mean_ci95"] == pytest.approx([0.0, 1.5 + half], rel=1e-4)
+    assert 1.5 - half < 0.0  # the t interval's lower end, cut at zero: a TTC is never negative
+    near = bench_docs({"n": [report(0, min_ttc_s=3.0), report(1, min_ttc_s=3.5)]})["n"]
+    near_half = 12.706205 * np.std([3.0, 3.5], ddof=1) / np.sqrt(2)  # t(0.975, 1)
+    assert 3.25 - near_half > 0.0  # an interval above zero is left as it is
+    assert near["min_ttc_s_mean_ci95"] == pytest.approx([3.25 - near_half, 3.25 + near_half],
+                                                        rel=1e-4)
     table = safety_table([doc])
     assert "min TTC s" in table and "1/3" in table
     assert max(len(line) for line in table.splitlines()) <= 100
