@@ -54,6 +54,11 @@ class ClassicalDetector:
         # Where the region of interest is shared with the other models (None: not shared).
         self.rois: RoiMemo | None = SHARED_ROIS
         self._width: float | None = None  # the lane's width as measured on earlier frames
+        # The same model with its fallback binarisation, asked on the frames where this
+        # one finds no lane (None: no fallback set).
+        mode = self.fallback_binarisation
+        self._fallback: ClassicalDetector | None = None if not mode else type(self)(
+            camera, self.with_binarisation(mode), distortion, name=self.name)
 
     @property
     def window(self) -> GroundWindow:
@@ -64,6 +69,18 @@ class ClassicalDetector:
         """Forget state carried between frames: the lane width measured so far (and what a
         model keeps of its own)."""
         self._width = None
+        if self._fallback is not None:
+            self._fallback.reset()
+
+    @property
+    def fallback_binarisation(self) -> str:
+        """The binarisation tried on a frame where this model's own finds no valid lane
+        ("": none; each model reads its `fallback` setting)."""
+        return ""
+
+    def with_binarisation(self, mode: str) -> DetectorsConfig:
+        """This model's settings with binarisation `mode` and no fallback of its own."""
+        raise NotImplementedError
 
     @property
     def bird_eye_paint(self) -> bool:
@@ -131,6 +148,23 @@ class ClassicalDetector:
         return self.config.preprocess.max_fill
 
     def detect(self, frame: np.ndarray) -> LaneEstimate:
+        """The frame's lane by this model's binarisation; where that finds no valid lane and a
+        fallback binarisation is set, the fallback's lane if it finds a valid one. Both keep
+        the lane a frame settled on (a model that searches near its last fit searches near
+        it on the next frame, whichever binarisation found it)."""
+        estimate = self._detect_own(frame)
+        if self._fallback is None:
+            return estimate
+        if estimate.valid:
+            self._fallback.remember(estimate)
+            return estimate
+        backup = self._fallback.detect(frame)
+        if not backup.valid:
+            return estimate
+        self.remember(backup)
+        return backup
+
+    def _detect_own(self, frame: np.ndarray) -> LaneEstimate:
         bev, noise = self.bird_eye(frame)
         if bev is None:
             estimate = LaneEstimate.invalid(noise, self.x_ref)

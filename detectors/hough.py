@@ -16,12 +16,14 @@ weakness the paper reports.
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import cv2
 import numpy as np
 
 from lanekeep.detectors.boundaries import Boundary, fit_boundary
 from lanekeep.detectors.classical import ClassicalDetector
+from lanekeep.detectors.config import DetectorsConfig
 from lanekeep.detectors.image_stage import RegionOfInterest
 from lanekeep.detectors.lane_lines import LaneLines, aligned, choose_lanes
 from lanekeep.detectors.paper_thresholds import model1_paint
@@ -41,6 +43,14 @@ class HoughDetector(ClassicalDetector):
     @property
     def bird_eye_max_fill(self) -> float:
         return self.config.ridge.max_fill
+
+    @property
+    def fallback_binarisation(self) -> str:
+        return self.config.hough.fallback
+
+    def with_binarisation(self, mode: str) -> DetectorsConfig:
+        return replace(self.config, hough=replace(self.config.hough, binarisation=mode,
+                                                  fallback=""))
 
     # -- stages -------------------------------------------------------------------------------
     def bird_eye_mask(self, roi: RegionOfInterest, seen: np.ndarray) -> np.ndarray:

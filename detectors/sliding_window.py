@@ -17,7 +17,7 @@ model's weakness in sharp turns.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import cv2
 import numpy as np
@@ -25,6 +25,7 @@ import numpy as np
 from lanekeep.detectors.base import LaneEstimate
 from lanekeep.detectors.boundaries import Boundary, fit_boundary
 from lanekeep.detectors.classical import ClassicalDetector
+from lanekeep.detectors.config import DetectorsConfig
 from lanekeep.detectors.edge_pairs import edge_pair_paint
 from lanekeep.detectors.image_stage import RegionOfInterest
 from lanekeep.detectors.lane_lines import LaneLines, aligned, choose_lanes
@@ -73,6 +74,14 @@ class SlidingWindowDetector(ClassicalDetector):
     @property
     def bird_eye_paint(self) -> bool:
         return self.config.sliding_window.binarisation == "edges"
+
+    @property
+    def fallback_binarisation(self) -> str:
+        return self.config.sliding_window.fallback
+
+    def with_binarisation(self, mode: str) -> DetectorsConfig:
+        return replace(self.config, sliding_window=replace(
+            self.config.sliding_window, binarisation=mode, fallback=""))
 
     # -- stages -------------------------------------------------------------------------------
     def bird_eye_mask(self, roi: RegionOfInterest, seen: np.ndarray) -> np.ndarray:

@@ -112,6 +112,7 @@ def front_detector_config(name: str, mode: str, base: DetectorsConfig | None = N
                       streak_min_rows=0, min_coherence=0.0, max_fill=1.0,
                       max_paint_width_m=0.0, min_blob_length_m=0.0)
         config = replace(config, preprocess=pre,
-                         hough=replace(config.hough, binarisation="paper"),
-                         sliding_window=replace(config.sliding_window, binarisation="paper"))
+                         hough=replace(config.hough, binarisation="paper", fallback=""),
+                         sliding_window=replace(config.sliding_window, binarisation="paper",
+                                                fallback=""))
     return config
