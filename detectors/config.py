@@ -216,8 +216,8 @@ class HoughConfig:
     # the default loop's fused-vs-LaneNet verdict on case 3 turned inconclusive, the bench
     # gate missed a 2 cm shift of LaneNet, and snow's two-model loop departs further.
     binarisation: str = "image"
-    # "ridge": tried on a frame where `binarisation` finds no valid lane (faint paint on a
-    # light road that the per-pixel test misses); "": none.
+    # The binarisation tried on a frame where `binarisation` finds no valid lane: "ridge"
+    # (faint paint on a light road that the per-pixel test misses) or "image"; "": none.
     fallback: str = ""
     adaptive_ratio: float = 0.2  # #44 ridge re-tune (closed loop on the tuning scenarios)
     # ... and by at least this many grey levels: only the noise floor (sensor noise, dark
@@ -241,9 +241,9 @@ class HoughConfig:
         if self.binarisation not in ("ridge", "image", "paper"):
             raise InvalidValue("binarisation", f"must be 'ridge', 'image' or 'paper', got "
                                                f"{self.binarisation!r}")
-        if self.fallback not in ("", "ridge") or self.fallback == self.binarisation:
-            raise InvalidValue("fallback", f"must be '' or 'ridge' (and not the binarisation "
-                                           f"itself), got {self.fallback!r}")
+        if self.fallback not in ("", "ridge", "image") or self.fallback == self.binarisation:
+            raise InvalidValue("fallback", f"must be '', 'ridge' or 'image' (and not the "
+                                           f"binarisation itself), got {self.fallback!r}")
         if self.adaptive_ratio < 0 or self.adaptive_c < 0:
             raise InvalidValue("adaptive_ratio", "adaptive_ratio and adaptive_c must be >= 0")
 
@@ -258,7 +258,8 @@ class SlidingWindowConfig:
     # "image" stays the default for the reasons given at HoughConfig.binarisation (and the
     # dashcam test's 11.3 cm at one offset, against its 10 cm).
     binarisation: str = "image"
-    # "edges": tried on a frame where `binarisation` finds no valid lane; "": none.
+    # The binarisation tried on a frame where `binarisation` finds no valid lane: "edges" or
+    # "image"; "": none.
     fallback: str = ""
     edge_half_width_m: float = 0.1  # the rising and falling edges lie this far either side
     edge_length_m: float = 1.5  # the along-line average
@@ -303,9 +304,9 @@ class SlidingWindowConfig:
         if self.binarisation not in ("edges", "image", "paper"):
             raise InvalidValue("binarisation", f"must be 'edges', 'image' or 'paper', got "
                                                f"{self.binarisation!r}")
-        if self.fallback not in ("", "edges") or self.fallback == self.binarisation:
-            raise InvalidValue("fallback", f"must be '' or 'edges' (and not the binarisation "
-                                           f"itself), got {self.fallback!r}")
+        if self.fallback not in ("", "edges", "image") or self.fallback == self.binarisation:
+            raise InvalidValue("fallback", f"must be '', 'edges' or 'image' (and not the "
+                                           f"binarisation itself), got {self.fallback!r}")
         if self.edge_leans < 1 or min(self.edge_half_width_m, self.edge_length_m,
                                       self.edge_dark_floor) <= 0:
             raise InvalidValue("edge_leans", "edge_leans must be >= 1 and the edge widths, "

@@ -106,9 +106,19 @@ def test_the_fallback_is_off_as_shipped_and_in_paper_mode():
     ('[hough]\nfallback = "edges"\n', "fallback"),
     ('[sliding_window]\nfallback = "ridge"\n', "fallback"),
     ('[hough]\nbinarisation = "ridge"\nfallback = "ridge"\n', "fallback"),
+    ('[sliding_window]\nfallback = "image"\n', "fallback"),
+    ('[hough]\nfallback = "paper"\n', "fallback"),
 ])
 def test_a_fallback_a_model_does_not_have_is_refused(tmp_path, text, message):
     path = tmp_path / "detectors.toml"
     path.write_text(text)
     with pytest.raises(ConfigError, match=message):
         load_config(path)
+
+
+def test_a_bird_eye_binarisation_can_fall_back_on_the_image_one(tmp_path):
+    path = tmp_path / "detectors.toml"
+    path.write_text('[sliding_window]\nbinarisation = "edges"\nfallback = "image"\n')
+    detector = make_detector("sliding_window", _camera(), load_config(path))
+    assert detector.bird_eye_paint and not detector._fallback.bird_eye_paint
+    assert detector._fallback._fallback is None  # one level: the fallback has none of its own
