@@ -10,6 +10,9 @@ read the same frame share its region of interest (`image_stage.SHARED_ROIS`).
 
 from __future__ import annotations
 
+from dataclasses import replace
+from typing import Any, ClassVar
+
 import numpy as np
 
 from lanekeep.detectors.base import LaneEstimate
@@ -38,6 +41,10 @@ class ClassicalDetector:
     """Base of models #1 and #2: `detect(frame)` = image stage -> boundaries -> estimate."""
 
     default_name = "classical"
+    # The `DetectorsConfig` table holding this model's `binarisation` and `fallback`.
+    settings_table: ClassVar[str] = ""
+    # The binarisation that finds paint in the bird's-eye view rather than in the image.
+    bird_eye_binarisation: ClassVar[str] = ""
 
     def __init__(
         self,
@@ -73,20 +80,29 @@ class ClassicalDetector:
             self._fallback.reset()
 
     @property
+    def settings(self) -> Any:
+        """This model's own table of the detectors' settings (`settings_table`)."""
+        return getattr(self.config, self.settings_table)
+
+    @property
     def fallback_binarisation(self) -> str:
         """The binarisation tried on a frame where this model's own finds no valid lane
-        ("": none; each model reads its `fallback` setting)."""
-        return ""
+        ("": none)."""
+        return self.settings.fallback if self.settings_table else ""
 
     def with_binarisation(self, mode: str) -> DetectorsConfig:
         """This model's settings with binarisation `mode` and no fallback of its own."""
-        raise NotImplementedError
+        own = replace(self.settings, binarisation=mode, fallback="")
+        return replace(self.config, **{self.settings_table: own})
 
     @property
     def bird_eye_paint(self) -> bool:
-        """Whether this model finds paint in the bird's-eye view (its binarisation setting);
-        such a model also fits unweighted and remembers the lane's measured width."""
-        return False
+        """Whether this model finds paint in the bird's-eye view (its binarisation setting
+        is `bird_eye_binarisation`); such a model also fits unweighted and remembers the
+        lane's measured width."""
+        if not self.settings_table:
+            return False
+        return self.settings.binarisation == self.bird_eye_binarisation
 
     @property
     def lane_width_m(self) -> float:

@@ -16,14 +16,12 @@ weakness the paper reports.
 from __future__ import annotations
 
 import math
-from dataclasses import replace
 
 import cv2
 import numpy as np
 
 from lanekeep.detectors.boundaries import Boundary, fit_boundary
 from lanekeep.detectors.classical import ClassicalDetector
-from lanekeep.detectors.config import DetectorsConfig
 from lanekeep.detectors.image_stage import RegionOfInterest
 from lanekeep.detectors.lane_lines import LaneLines, aligned, choose_lanes
 from lanekeep.detectors.paper_thresholds import model1_paint
@@ -35,22 +33,12 @@ class HoughDetector(ClassicalDetector):
     """Model #1 on one camera; stateless between frames."""
 
     default_name = "hough"
-
-    @property
-    def bird_eye_paint(self) -> bool:
-        return self.config.hough.binarisation == "ridge"
+    settings_table = "hough"
+    bird_eye_binarisation = "ridge"
 
     @property
     def bird_eye_max_fill(self) -> float:
         return self.config.ridge.max_fill
-
-    @property
-    def fallback_binarisation(self) -> str:
-        return self.config.hough.fallback
-
-    def with_binarisation(self, mode: str) -> DetectorsConfig:
-        return replace(self.config, hough=replace(self.config.hough, binarisation=mode,
-                                                  fallback=""))
 
     # -- stages -------------------------------------------------------------------------------
     def bird_eye_mask(self, roi: RegionOfInterest, seen: np.ndarray) -> np.ndarray:

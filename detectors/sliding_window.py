@@ -17,7 +17,7 @@ model's weakness in sharp turns.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import cv2
 import numpy as np
@@ -25,7 +25,6 @@ import numpy as np
 from lanekeep.detectors.base import LaneEstimate
 from lanekeep.detectors.boundaries import Boundary, fit_boundary
 from lanekeep.detectors.classical import ClassicalDetector
-from lanekeep.detectors.config import DetectorsConfig
 from lanekeep.detectors.edge_pairs import edge_pair_paint
 from lanekeep.detectors.image_stage import RegionOfInterest
 from lanekeep.detectors.lane_lines import LaneLines, aligned, choose_lanes
@@ -52,6 +51,8 @@ class SlidingWindowDetector(ClassicalDetector):
     """Model #2 on one camera; remembers the last good fit to search around it."""
 
     default_name = "sliding_window"
+    settings_table = "sliding_window"
+    bird_eye_binarisation = "edges"
 
     def __init__(self, *args, **kwargs) -> None:
         super().__init__(*args, **kwargs)
@@ -70,18 +71,6 @@ class SlidingWindowDetector(ClassicalDetector):
         """Forget the previous frame's fit and the measured width."""
         super().reset()
         self._previous = [None, None]
-
-    @property
-    def bird_eye_paint(self) -> bool:
-        return self.config.sliding_window.binarisation == "edges"
-
-    @property
-    def fallback_binarisation(self) -> str:
-        return self.config.sliding_window.fallback
-
-    def with_binarisation(self, mode: str) -> DetectorsConfig:
-        return replace(self.config, sliding_window=replace(
-            self.config.sliding_window, binarisation=mode, fallback=""))
 
     # -- stages -------------------------------------------------------------------------------
     def bird_eye_mask(self, roi: RegionOfInterest, seen: np.ndarray) -> np.ndarray:
