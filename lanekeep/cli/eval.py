@@ -64,7 +64,8 @@ def register(subparsers) -> None:
                    help=f"comma-separated detector names (default {DEFAULT_DETECTORS})")
     p.add_argument("--conditions", default="all",
                    help="comma-separated conditions (default: all): clear, curve, buildings, "
-                        "half_shade, night, rain, fog, snow, worn, occlusion_40, occlusion_60")
+                        "half_shade, night, rain, fog, snow, worn, occlusion_40, occlusion_60, "
+                        "dots")
     p.add_argument("--weights", metavar="FILE", default=None,
                    help="LaneNet weights (default: the shipped detectors/weights/lanenet.pt)")
     p.add_argument("--detectors-config", metavar="FILE", default=None,

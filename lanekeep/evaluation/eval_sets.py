@@ -4,7 +4,7 @@ Each condition's worlds come from the dataset's random worlds (`random_scenario(
 with the condition forced on them, so that what is scored is the condition and not a lucky
 draw. The paint is forced too: every boundary a readable line (solid, dashed or double; worn
 paint, Botts' dots and missing lines as drawn by the dataset become lines, `readable`) except
-where the condition is the paint ("worn"). Without it "clear" held worlds whose ego lane was
+where the condition is the paint ("worn", "dots"). Without it "clear" held worlds whose ego lane was
 worn on both sides or unpainted, and `--quick`'s one clear world was such a one.
 Seeds come from their own SeedSequence namespace, SeedSequence([EVAL_NAMESPACE,
 condition index, world index]), never one the dataset's splits use ([recipe seed, split, i]).
@@ -21,6 +21,9 @@ test sets would be scored on the worlds it was chosen on.
     night       the dataset's night (headlights only)
     rain, fog, snow   the dataset's conditions of those names
     worn        clear, every inner boundary worn paint
+    dots        clear, every inner boundary Botts' dots (rows of raised ceramic markers, no
+                paint), as many real highways mark their lanes (TuSimple's); labelled as
+                the line they mark
     occlusion_40, occlusion_60   clear, with image-space occluders (below) over 40% / 60% of
                 the visible marking pixels of each frame; the labels stay, as TuSimple keeps
                 a lane labelled behind a car
@@ -61,7 +64,7 @@ TUNING_NAMESPACE = 0x7C1E  # the tuning split's sets: the same conditions, other
 SPLITS = {"test": EVAL_NAMESPACE, "tuning": TUNING_NAMESPACE}
 FORMAT = "lanekeep-eval-set/1"
 CONDITIONS = ("clear", "curve", "buildings", "half_shade", "night", "rain", "fog", "snow",
-              "worn", "occlusion_40", "occlusion_60")
+              "worn", "occlusion_40", "occlusion_60", "dots")
 BASE_TAG = {"night": "night", "rain": "rain", "fog": "fog", "snow": "snow"}  # else "clear"
 OVERSHOOT = 0.03  # an occluder may take the covered share this far past the target
 VEHICLE_W_M, VEHICLE_H_M = (1.7, 2.6), (1.3, 3.2)  # occluder sizes (m): car to truck
@@ -140,6 +143,9 @@ def _force(condition: str, s: Scenario, rng: np.random.Generator) -> Scenario:
     elif condition == "worn":
         m = road.markings
         road = replace(road, markings=(m[0], *(replace(x, kind="worn") for x in m[1:-1]), m[-1]))
+    elif condition == "dots":
+        m = road.markings
+        road = replace(road, markings=(m[0], *(replace(x, kind="dots") for x in m[1:-1]), m[-1]))
     elif condition in ("buildings", "half_shade"):
         half = condition == "half_shade"
         c = replace(c, time_of_day="day", shadows=(ShadowZone(

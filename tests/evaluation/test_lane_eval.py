@@ -248,6 +248,9 @@ def test_conditions_are_forced_on_the_worlds():
     assert arcs and 150.0 <= 1.0 / abs(arcs[0].curvature_1pm) <= 300.0
     worn = condition_scenario("worn", 0).road.markings
     assert all(m.kind == "worn" for m in worn[1:-1])
+    dots = condition_scenario("dots", 0).road.markings
+    assert len(dots) > 2 and all(m.kind == "dots" for m in dots[1:-1])
+    assert {dots[0].kind, dots[-1].kind} <= {"solid", "dashed", "double"}
     shade = condition_scenario("half_shade", 0).conditions.shadows
     assert len(shade) == 1 and 0.45 <= shade[0].reach <= 0.55 and shade[0].coverage == 1.0
     assert condition_scenario("clear", 0).conditions.shadows == ()
