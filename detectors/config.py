@@ -118,6 +118,13 @@ class Preprocess:
     # 95 episodes with it (0 without; docs/experiments.md, session 20).
     min_blob_length_m: float = 0.0
     min_blob_elongation: float = 3.0
+    # Botts' dots (rows of raised markers 0.8-1.3 m apart, no paint between them) reach the
+    # binary bird's-eye view as specks in a column, too short for a Hough segment or a
+    # window's histogram. Pieces up to `join_along_m` apart along the road (and within a
+    # pixel across it) are joined before the boundaries are searched (a closing along the
+    # road): a row of dots becomes a dash, a dashed or solid line stays as it was. 0 (the
+    # default) joins nothing.
+    join_along_m: float = 0.0
 
     def __post_init__(self) -> None:
         if not 0.1 <= self.scale <= 1.0:
@@ -139,6 +146,8 @@ class Preprocess:
         if not (math.isfinite(self.min_blob_elongation) and self.min_blob_elongation > 0):
             raise InvalidValue("min_blob_elongation",
                                f"must be > 0 and finite, got {self.min_blob_elongation}")
+        if not (math.isfinite(self.join_along_m) and self.join_along_m >= 0):
+            raise InvalidValue("join_along_m", f"must be >= 0 and finite, got {self.join_along_m}")
 
 
 @dataclass(frozen=True)

@@ -188,6 +188,20 @@ def drop_blobs(bev: np.ndarray, m_per_row: float, m_per_col: float, min_length_m
     return np.where(keep[labels], np.uint8(255), np.uint8(0))
 
 
+def join_along_road(bev: np.ndarray, m_per_row: float, length_m: float) -> np.ndarray:
+    """The binary bird's-eye view with pieces up to `length_m` apart along the road joined:
+    a closing by a kernel `length_m` long and 3 pixels wide, so that specks in one column, or
+    drifting a pixel across it from one to the next (a line that leans or bends in the
+    view), become one stroke. Anything already continuous is unchanged."""
+    rows = int(round(length_m / m_per_row))
+    if rows < 2:
+        return bev
+    kernel = np.ones((rows + 1, 3), np.uint8)
+    # OpenCV's default border: nothing outside the view is added, and nothing at its edge is
+    # eroded away (a constant 0 would cut every line short by half the kernel at the edges).
+    return cv2.morphologyEx(bev, cv2.MORPH_CLOSE, kernel)
+
+
 def _open_2x2(mask: np.ndarray) -> np.ndarray:
     """The mask's 2x2 opening: what survives of it is coherent strokes, not speckle."""
     return cv2.morphologyEx(mask, cv2.MORPH_OPEN, _KERNEL_2X2)

@@ -1,0 +1,80 @@
+"""Botts' dots joined along the road (detectors/image_stage.py `join_along_road`): a row of
+dots becomes one stroke, a line and a dash stay as they were, pieces further apart than the
+setting stay apart; both classical models join only when asked; the setting is checked."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import cv2
+import numpy as np
+import pytest
+
+from lanekeep.core.config_io import InvalidValue
+from lanekeep.detectors.config import Preprocess, load_config
+from lanekeep.detectors.image_stage import join_along_road
+from lanekeep.detectors.registry import make_detector
+from lanekeep.sensing.cameras import CameraRig
+
+M_PER_ROW = 0.1  # the shipped bird's-eye view's row
+
+
+def _pieces(bev: np.ndarray) -> int:
+    return cv2.connectedComponents(bev, connectivity=8)[0] - 1
+
+
+def _dots(bev: np.ndarray, col: int, first_row: int, spacing_m: float, n: int,
+          drift_px: int = 0) -> None:
+    """`n` dots 10 cm across, `spacing_m` apart down the view, each `drift_px` columns
+    beside the one before (a leaning line)."""
+    for k in range(n):
+        r, c = first_row + int(round(k * spacing_m / M_PER_ROW)), col + k * drift_px
+        bev[r:r + 2, c:c + 2] = 255
+
+
+def test_a_row_of_dots_becomes_one_stroke_and_lines_stay() -> None:
+    bev = np.zeros((160, 240), np.uint8)
+    _dots(bev, 40, 10, 1.0, 4)  # a row of dots 1 m apart, straight
+    _dots(bev, 120, 10, 1.2, 4, drift_px=1)  # 1.2 m apart, leaning a pixel per dot
+    bev[:, 200:203] = 255  # a solid line
+    bev[60:90, 170:173] = 255  # a 3 m dash
+    joined = join_along_road(bev, M_PER_ROW, 1.4)
+    assert _pieces(bev) == 10 and _pieces(joined) == 4
+    assert joined[10:42, 40:42].any(axis=1).all()  # no row of the dots' span left empty
+    assert np.array_equal(joined[:, 160:], bev[:, 160:])  # the line and the dash unchanged
+    assert (joined >= bev).all() and set(np.unique(joined)) <= {0, 255}
+
+
+def test_pieces_further_apart_than_the_setting_stay_apart() -> None:
+    bev = np.zeros((160, 120), np.uint8)
+    _dots(bev, 40, 10, 2.0, 4)  # 2 m apart: a dashed line's gap, or noise, not a row of dots
+    assert _pieces(join_along_road(bev, M_PER_ROW, 1.4)) == 4
+    assert join_along_road(bev, M_PER_ROW, 0.0) is bev
+    assert join_along_road(bev, M_PER_ROW, 0.1) is bev  # under two rows: nothing to join
+
+
+@pytest.mark.parametrize("bad", [-0.5, float("nan"), float("inf")])
+def test_a_bad_join_length_is_refused_by_name(bad: float) -> None:
+    with pytest.raises(InvalidValue, match="join_along_m"):
+        Preprocess(join_along_m=bad)
+
+
+@pytest.mark.parametrize("name", ["hough", "sliding_window"])
+def test_the_models_join_dots_only_when_asked(straight_world, monkeypatch, name):
+    with CameraRig(straight_world.model) as rig:
+        camera = dict(rig.cameras)["front"]
+    shipped = load_config()
+    assert shipped.preprocess.join_along_m == 0.0
+    on = replace(shipped, preprocess=replace(shipped.preprocess, join_along_m=1.4))
+    for config, joins in ((shipped, False), (on, True)):
+        detector = make_detector(name, camera, config)
+        assert detector.view.window.m_per_row == M_PER_ROW
+        bev = np.zeros((detector.view.rows, detector.view.cols), np.uint8)
+        _dots(bev, 100, 20, 1.0, 5)
+        seen: list[np.ndarray] = []
+        monkeypatch.setattr(detector, "bird_eye", lambda frame, b=bev: (b, ""))
+        monkeypatch.setattr(detector, "find_boundaries",
+                            lambda view, original=detector.find_boundaries, out=seen:
+                            out.append(view.copy()) or original(view))
+        detector.detect(np.zeros((camera.height, camera.width, 3), np.uint8))
+        assert _pieces(seen[0]) == (1 if joins else 5)
