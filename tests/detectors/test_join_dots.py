@@ -78,3 +78,13 @@ def test_the_models_join_dots_only_when_asked(straight_world, monkeypatch, name)
                             out.append(view.copy()) or original(view))
         detector.detect(np.zeros((camera.height, camera.width, 3), np.uint8))
         assert _pieces(seen[0]) == (1 if joins else 5)
+
+
+def test_the_measured_setting_in_docs_loads() -> None:
+    """docs/data/join_dots.toml, the setting docs/experiments.md measured, is a valid file."""
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[2] / "docs" / "data" / "join_dots.toml"
+    config = load_config(str(path))
+    assert config.preprocess.join_along_m == 1.5
+    assert replace(config.preprocess, join_along_m=0.0) == load_config().preprocess
