@@ -107,10 +107,11 @@ def front_detector_config(name: str, mode: str, base: DetectorsConfig | None = N
         config = replace(config, profiles=replace(config.profiles, front=front))
     if "binarisation" not in keeps:
         # The paper's fixed thresholds, and none of our image stage's additions: no vehicle
-        # mask, no rain-streak opening or removal, no speckle, fill or blob test.
+        # mask, no rain-streak opening or removal, no speckle, fill or blob test, no dots
+        # joined along the road.
         pre = replace(config.preprocess, vehicle_dark_ratio=0.0, destreak_width_px=0.0,
                       streak_min_rows=0, min_coherence=0.0, max_fill=1.0,
-                      max_paint_width_m=0.0, min_blob_length_m=0.0)
+                      max_paint_width_m=0.0, min_blob_length_m=0.0, join_along_m=0.0)
         config = replace(config, preprocess=pre,
                          hough=replace(config.hough, binarisation="paper", fallback=""),
                          sliding_window=replace(config.sliding_window, binarisation="paper",

@@ -73,10 +73,12 @@ def test_roll_windows_and_binarisation_are_deviations_too():
     ours = front_detector_config("hough", "paper", keeps=("binarisation",))
     assert ours.hough.binarisation == "image" and ours.preprocess.min_coherence > 0.0
     flecks = load_config()
-    flecks = replace(flecks, preprocess=replace(flecks.preprocess, min_blob_length_m=1.0))
-    assert front_detector_config("hough", "paper", flecks).preprocess.min_blob_length_m == 0.0
+    flecks = replace(flecks, preprocess=replace(flecks.preprocess, min_blob_length_m=1.0,
+                                                join_along_m=1.5))
+    paper_pre = front_detector_config("hough", "paper", flecks).preprocess
+    assert paper_pre.min_blob_length_m == paper_pre.join_along_m == 0.0
     kept = front_detector_config("hough", "paper", flecks, keeps=("binarisation",))
-    assert kept.preprocess.min_blob_length_m == 1.0
+    assert kept.preprocess.min_blob_length_m == 1.0 and kept.preprocess.join_along_m == 1.5
     assert ours.profiles.front.x_far_m == 30.0  # the window is a deviation of its own
     both = front_detector_config("hough", "paper", keeps=("binarisation", "windows"))
     assert both.profiles.front.x_far_m == 20.0
