@@ -69,7 +69,7 @@ def test_bad_blob_settings_are_refused_by_name(field: str, bad: float) -> None:
 
 @pytest.mark.parametrize("name", ["hough", "sliding_window"])
 def test_the_models_look_for_lines_in_the_view_without_its_blobs_only_when_asked(
-        straight_world, monkeypatch, name):
+        straight_world, searched_view, name):
     with CameraRig(straight_world.model) as rig:
         camera = dict(rig.cameras)["front"]
     shipped = load_config()
@@ -81,11 +81,6 @@ def test_the_models_look_for_lines_in_the_view_without_its_blobs_only_when_asked
         bev[:, 40:43] = 255  # a line along the whole view
         bev[50:52, 100:102] = 255  # a fleck: 20 x 10 cm
         assert window.m_per_row * 2 < 1.0
-        seen: list[np.ndarray] = []
-        monkeypatch.setattr(detector, "bird_eye", lambda frame, b=bev: (b, ""))
-        monkeypatch.setattr(detector, "find_boundaries",
-                            lambda view, original=detector.find_boundaries, out=seen:
-                            out.append(view.copy()) or original(view))
-        detector.detect(np.zeros((camera.height, camera.width, 3), np.uint8))
-        assert seen[0][:, 40:43].all()
-        assert seen[0][50, 100] == (0 if drops else 255)
+        seen = searched_view(detector, bev)
+        assert seen[:, 40:43].all()
+        assert seen[50, 100] == (0 if drops else 255)

@@ -60,7 +60,7 @@ def test_a_bad_join_length_is_refused_by_name(bad: float) -> None:
 
 
 @pytest.mark.parametrize("name", ["hough", "sliding_window"])
-def test_the_models_join_dots_only_when_asked(straight_world, monkeypatch, name):
+def test_the_models_join_dots_only_when_asked(straight_world, searched_view, name):
     with CameraRig(straight_world.model) as rig:
         camera = dict(rig.cameras)["front"]
     shipped = load_config()
@@ -71,13 +71,7 @@ def test_the_models_join_dots_only_when_asked(straight_world, monkeypatch, name)
         assert detector.view.window.m_per_row == M_PER_ROW
         bev = np.zeros((detector.view.rows, detector.view.cols), np.uint8)
         _dots(bev, 100, 20, 1.0, 5)
-        seen: list[np.ndarray] = []
-        monkeypatch.setattr(detector, "bird_eye", lambda frame, b=bev: (b, ""))
-        monkeypatch.setattr(detector, "find_boundaries",
-                            lambda view, original=detector.find_boundaries, out=seen:
-                            out.append(view.copy()) or original(view))
-        detector.detect(np.zeros((camera.height, camera.width, 3), np.uint8))
-        assert _pieces(seen[0]) == (1 if joins else 5)
+        assert _pieces(searched_view(detector, bev)) == (1 if joins else 5)
 
 
 def test_the_measured_setting_in_docs_loads() -> None:
