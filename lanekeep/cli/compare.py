@@ -54,7 +54,7 @@ def register(sub) -> None:
     p.add_argument("--metrics", nargs="+", default=None, metavar="KEY",
                    help="the metrics to compare instead of the default (fused.rmse_cm, "
                         "fused.max_cm, fused.ade_cm, fused.fde_cm, fused.valid_share, "
-                        "car_rms_cm, car_max_cm, lane_departures): SOURCE.FIELD or an "
+                        "car_rms_cm, car_max_cm, lane_departures, failed): SOURCE.FIELD or an "
                         "episode's key (car_rms_cm, mmae_switches, ...)")
     p.add_argument("--margin", action="append", default=[], metavar="[LABEL:]METRIC=ABS[,REL%]",
                    help="override a metric's margin, for every label or for one, e.g. "

@@ -36,9 +36,12 @@ from lanekeep.core.reproducibility import kernel_differences
 from lanekeep.report.json_io import SCHEMA_VERSION, lanekeep_version
 from lanekeep.report.seed_summary import EPISODE_KEYS, HIGHER_IS_BETTER, SOURCE_KEYS
 from lanekeep.scoring import statistics as stats
-from lanekeep.scoring.metrics import SAFETY_METRICS
+from lanekeep.scoring.metrics import SAFETY_METRICS, drive_failed
 
 WIDTH = 120  # the table keeps within this many columns
+# An episode's "failed" (scoring.metrics.drive_failed): derived from its lane_departures and
+# status, so that documents written before it was named compare on it too.
+FAILED = "failed"
 NOT_BENCH = f"not a bench --json document (schema_version {SCHEMA_VERSION})"
 
 
@@ -72,22 +75,23 @@ def source_metrics(source: str) -> tuple[Metric, ...]:
 
 
 DEFAULT_METRICS = (*source_metrics("fused"), Metric(None, "car_rms_cm"),
-                   Metric(None, "car_max_cm"), Metric(None, "lane_departures"))
+                   Metric(None, "car_max_cm"), Metric(None, "lane_departures"),
+                   Metric(None, FAILED))
 # The table's columns (the --json output holds every metric); other sources add their RMSE.
-TABLE_KEYS = ("fused.rmse_cm", "car_rms_cm", "car_max_cm", "lane_departures")
+TABLE_KEYS = ("fused.rmse_cm", "car_rms_cm", "car_max_cm", "lane_departures", FAILED)
 
 
 def parse_metric(key: str) -> Metric:
     """A Metric from its key ("fused.rmse_cm", "hough:track.drift_cm", "car_rms_cm");
     ValueError naming the keys allowed otherwise."""
-    if key in EPISODE_KEYS or key in SAFETY_METRICS:
+    if key in EPISODE_KEYS or key in SAFETY_METRICS or key == FAILED:
         return Metric(None, key)
     source, _, field = key.rpartition(".")
     if source and field in SOURCE_KEYS:
         return Metric(source, field)
     raise ValueError(f"unknown metric {key!r}: use SOURCE.FIELD with FIELD one of "
                      f"{', '.join(SOURCE_KEYS)} (e.g. fused.rmse_cm), or one of "
-                     f"{', '.join((*EPISODE_KEYS, *SAFETY_METRICS))}")
+                     f"{', '.join((*EPISODE_KEYS, FAILED, *SAFETY_METRICS))}")
 
 
 def metric_set(keys: Sequence[str] | None = None, sources: Sequence[str] = ()
@@ -173,6 +177,9 @@ def _number(value: Any, where: str) -> float:
 def metric_value(run: Run, label: str, episode: dict, metric: Metric) -> float:
     """`metric` of one episode document; IncomparableRuns naming a source or key it lacks."""
     where = f"{run.name}: {label} seed {episode['seed']}"
+    if metric.source is None and metric.field == FAILED:
+        departures = metric_value(run, label, episode, Metric(None, "lane_departures"))
+        return float(drive_failed(int(departures), str(episode.get("status", "completed"))))
     if metric.source is None:
         if metric.field not in episode:
             raise IncomparableRuns(f"{where}: {NOT_BENCH}: no {metric.field!r}")
@@ -406,8 +413,8 @@ compare --json: one document (strict JSON: NaN is null):
                                        seeds); p_worse / p_better the one-sided p-values
                                        against the margin; detectable the smallest difference
                                        this n finds (80% power); dropped the pairs left out
-                                       (no value); departures: McNemar's exact test, diff the
-                                       difference of the departure rates
+                                       (no value); departures and failed: McNemar's exact
+                                       test, diff the difference of the rates
   all.METRIC                           stratified over labels (each counts once): {diff, ci95,
                                        verdict, scale ("ratio" for errors: B / A, geometric
                                        mean over labels; "difference"; "rate"), labels, df,
@@ -419,7 +426,9 @@ compare --json: one document (strict JSON: NaN is null):
                                        did not complete or had no estimate, safety metrics a
                                        file lacks (not compared)
 METRIC: SOURCE.FIELD (fused.rmse_cm, hough:track.max_cm, ...) or an episode's car_rms_cm,
-car_max_cm, lane_departures, ...; the safety metrics on request: collisions (exact, like the
+car_max_cm, lane_departures, ...; failed (1 when the drive departed or ended off the road, in a
+collision or in unstable physics: a collision can end a drive before it departs; exact, like
+the departures); the safety metrics on request: collisions (exact, like the
 departures), hard_braking_events, min_ttc_s and min_gap_m (higher better; an episode that
 never closed on a vehicle ahead has no min_ttc_s)
 """

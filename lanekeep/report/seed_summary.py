@@ -36,6 +36,11 @@ bench --json: one document per label (a scenario, or "SCENARIO@MODEL" for a mode
   departure_rate, departure_rate_ci95, departed_episodes
                                   share of episodes with >= 1 lane departure, its
                                   Clopper-Pearson 95% interval, the count
+  failed_episodes, failure_rate, failure_rate_ci95
+                                  episodes that failed: a lane departure, or an end off the
+                                  road, in a collision or in unstable physics (a collision
+                                  can end a drive before it departs), their share and its
+                                  Clopper-Pearson 95% interval
   collided_episodes, collision_rate, collision_rate_ci95
                                   episodes that ended in a collision, their share and its
                                   Clopper-Pearson 95% interval
@@ -93,6 +98,7 @@ def summarise(label: str, reports: Sequence[EpisodeReport], scenario,
             entry.update(_spread_keys(key, [getattr(r.sources[name], key) for r in reports]))
         sources[name] = entry
     departed = sum(1 for r in reports if r.lane_departures > 0)
+    failed = sum(1 for r in reports if r.failed)
     doc: dict[str, Any] = {
         "scenario": reports[0].scenario, "label": label, "seeds": seeds, "n": len(reports),
         "mode": mode, "overrides": overrides or {}, "sources": sources,
@@ -103,6 +109,9 @@ def summarise(label: str, reports: Sequence[EpisodeReport], scenario,
         "departure_rate": departed / len(reports),
         "departure_rate_ci95": list(stats.rate_interval(departed, len(reports))),
         "departed_episodes": departed,
+        "failure_rate": failed / len(reports),
+        "failure_rate_ci95": list(stats.rate_interval(failed, len(reports))),
+        "failed_episodes": failed,
         **safety_keys(reports),
         "completed": all(r.completed for r in reports),
         "completed_episodes": sum(1 for r in reports if r.completed),

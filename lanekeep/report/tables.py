@@ -16,7 +16,7 @@ from typing import Protocol
 from lanekeep.report.seed_summary import interval_text
 from lanekeep.scoring import criteria as criteria_mod
 from lanekeep.scoring import statistics as stats
-from lanekeep.scoring.metrics import EpisodeReport
+from lanekeep.scoring.metrics import FAILED_STATUSES, EpisodeReport
 
 
 class LoopJob(Protocol):
@@ -223,7 +223,7 @@ def interval_table(docs: list[dict], wide: bool = False) -> str:
                         if k.endswith(":track"))])
     best_w = model_w + 10  # "0.48 (lanenet)"
     header = (f"{'scenario':<{scen_w}}{'n':>3}  {'fused RMSE [95% CI]':<22}{'best track':<{best_w}}"
-              f"{'fused vs tracks':<17}{'car RMS [95% CI]':<22}{'departed':<18}passed")
+              f"{'fused vs tracks':<17}{'car RMS [95% CI]':<22}{'departed':<18}{'failed':<8}passed")
     lines = [header, "-" * len(header)]
     for d in docs:
         tracks = {k: v for k, v in d["sources"].items() if k.endswith(":track")}
@@ -240,13 +240,24 @@ def interval_table(docs: list[dict], wide: bool = False) -> str:
             f"{d['label']:<{scen_w}}{d['n']:>3}  "
             f"{_center_text(fused, 'rmse_cm'):<22}{best_text:<{best_w}}"
             f"{stats.counts_text(counts):<17}{_center_text(d, 'car_rms_cm', 1):<22}"
-            f"{rate:<18}{d['passed_episodes']}/{d['n']}")
+            f"{rate:<18}{_failed_text(d):<8}{d['passed_episodes']}/{d['n']}")
     lines.extend(textwrap.wrap(_fused_vs_total(docs), WIDTH))
     lines.extend(textwrap.wrap(
         "(cm; geometric mean over seeds [95% interval, log scale]; departed = episodes with a "
-        "lane departure [Clopper-Pearson 95%]; verdicts per scenario: " + stats.LEGEND
+        "lane departure [Clopper-Pearson 95%]; failed = " + FAILED_TEXT + "; verdicts per "
+        "scenario: " + stats.LEGEND
         + "; margins: docs/statistics.md#margins)", WIDTH))
     return "\n".join(lines)
+
+
+FAILED_TEXT = ("episodes that departed or ended off the road, in a collision or in unstable "
+               "physics")
+
+
+def _failed_text(doc: dict) -> str:
+    """"1/5": the failed episodes; "-" for a document written before lanekeep counted them."""
+    failed = doc.get("failed_episodes")
+    return "-" if failed is None else f"{failed}/{doc['n']}"
 
 
 def _center_text(doc: dict, key: str, digits: int = 2) -> str:
@@ -290,8 +301,19 @@ def _compact_interval_table(docs: list[dict]) -> str:
         "(cm; geometric mean over seeds [95% interval, log scale]; departed = episodes with a "
         "lane departure; verdicts per scenario: " + stats.LEGEND + "; margins: "
         "docs/statistics.md#margins; --wide adds the best track and the departures' "
-        "Clopper-Pearson interval)", WIDTH))
+        "Clopper-Pearson interval and the failed episodes)", WIDTH))
+    lines.extend(textwrap.wrap(_failed_without_departing(docs), WIDTH))
     return "\n".join(lines)
+
+
+def _failed_without_departing(docs: list[dict]) -> str:
+    """The drives that failed without a departure (a collision, off the road, unstable
+    physics), which the departed column does not count: "" when there is none."""
+    ended = [f"{d['label']} seed {e['seed']} ({e['status'].replace('_', ' ')})"
+             for d in docs for e in d.get("episodes", [])
+             if not e.get("lane_departures") and e.get("status") in FAILED_STATUSES]
+    return ("failed without a departure (not in departed): " + ", ".join(ended)
+            if ended else "")
 
 
 def _has_safety(doc: dict) -> bool:

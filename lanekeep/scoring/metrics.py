@@ -54,6 +54,17 @@ from lanekeep.scoring.safety import SafetyTally, StepSafety
 # Look-ahead points (m) of ADE / FDE: the front detectors' window, 4-20 m, every 2 m.
 ADE_POINTS_M = (4.0, 6.0, 8.0, 10.0, 12.0, 14.0, 16.0, 18.0, 20.0)
 STATUSES = ("completed", "off_road", "collision", "interrupted", "unstable")
+# The ends of a drive that are failures of the car's: it left the road, hit a vehicle or its
+# physics blew up. An interrupted run (Ctrl-C) is not the car's failure, only a shorter drive.
+FAILED_STATUSES = ("off_road", "collision", "unstable")
+
+
+def drive_failed(lane_departures: int, status: str) -> bool:
+    """Whether a drive failed: a wheel crossed a lane boundary, or it ended in FAILED_STATUSES.
+
+    Departures alone hide a drive that a collision ended before the car left its lane; two runs
+    compared on departures alone would pair a 21 s crash with a 25 s drive that departs."""
+    return lane_departures > 0 or status in FAILED_STATUSES
 
 
 @dataclass(frozen=True)
@@ -183,6 +194,12 @@ class EpisodeReport:
     def passed(self) -> bool:
         """Every criterion met (True for a report not judged: no criteria)."""
         return all(v.passed for v in self.criteria)
+
+    @property
+    def failed(self) -> bool:
+        """The drive failed (drive_failed): a lane departure, or off the road, a collision or
+        unstable physics."""
+        return drive_failed(self.lane_departures, self.status)
 
     def failed_criteria(self) -> list[Verdict]:
         return [v for v in self.criteria if not v.passed]

@@ -72,7 +72,7 @@ MARGINS: dict[str, Margin] = {
     "car_rms_cm": Margin(0.2, 0.05), "car_max_cm": Margin(0.5, 0.05),
     "valid_share": Margin(0.02), "mmae_switches": Margin(1.0, 0.1),
     "reference_repairs": Margin(1.0, 0.1), "no_estimate_s": Margin(0.1, 0.05),
-    "lane_departures": Margin(0.0), "reference_error_corr": Margin(0.05),
+    "lane_departures": Margin(0.0), "failed": Margin(0.0), "reference_error_corr": Margin(0.05),
     # safety among other vehicles: a hard braking as the counts above; a collision is an
     # event (exact); the smallest TTC 0.5 s or 10% (a driver's reaction time is ~1 s); the
     # smallest gap 0.5 m or 5%
@@ -87,7 +87,7 @@ MARGINS: dict[str, Margin] = {
 # Positive and skewed: intervals and comparisons on the log scale (ratios).
 LOG_SCALE = frozenset({"rmse_cm", "ade_cm", "fde_cm", "max_cm", "car_rms_cm", "car_max_cm"})
 # Counted per episode as happened or not: exact tests (McNemar for pairs).
-EXACT = frozenset({"lane_departures", "collisions"})
+EXACT = frozenset({"lane_departures", "failed", "collisions"})
 NAN_PAIR = (math.nan, math.nan)
 
 

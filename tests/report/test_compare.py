@@ -129,7 +129,7 @@ def test_identical_runs_are_equivalent_with_a_zero_difference():
     result = compare_runs(run, run)
     for key in result["better_when"]:
         entry = result["labels"]["x"][key]
-        if key == "lane_departures":  # McNemar: no discordant seed, no claim either way
+        if stats.is_exact(key):  # McNemar: no discordant seed, no claim either way
             assert entry["diff"] == 0.0 and entry["verdict"] == "inconclusive"
             assert entry["p_worse"] == entry["p_better"] == 1.0
             continue
@@ -260,6 +260,22 @@ def test_departures_are_pooled_over_every_label_and_seed_exactly():
     assert pooled["p_worse"] == pytest.approx(0.5 ** 6)
 
 
+def test_a_drive_a_collision_ended_fails_though_it_never_departed():
+    """Departures alone pair A's crash (no departure: the collision ended it first) with B's
+    departure as "A better"; `failed` counts both, so the pair is concordant. Off-road and
+    unstable ends fail too; an interrupted run does not (the car did not fail)."""
+    ends = ["collision", "off_road", "unstable", "interrupted", "completed"]
+    a = bench({"x": [episode(s, 1.0, status=end) for s, end in zip(SEEDS, ends, strict=True)]})
+    b = bench({"x": [episode(s, 1.0, departures=int(s == 0)) for s in SEEDS]})
+    result = compare_runs(a, b, ["lane_departures", "failed"])
+    departures, failed = (result["labels"]["x"][k] for k in ("lane_departures", "failed"))
+    assert (departures["a_mean"], departures["b_mean"]) == (0.0, 0.2)
+    assert (failed["a_mean"], failed["b_mean"]) == (pytest.approx(0.6), 0.2)
+    assert failed["diff"] == pytest.approx(-0.4)  # seeds 1, 2 failed in A only; 0 in both
+    assert a["x"]["failed_episodes"] == 3 and b["x"]["failed_episodes"] == 1
+    assert a["x"]["failure_rate_ci95"] == list(stats.rate_interval(3, 5))
+
+
 def _holm_count(entries: list[dict], claim: str) -> int:
     """Holm's step-down by hand: the i-th smallest of m finite p-values (0-based) is rejected
     while p < alpha / (m - i); a claim counts when rejected and its verdict says it."""
@@ -326,7 +342,7 @@ def test_default_metrics_and_their_direction():
     assert result["better_when"] == {
         "fused.rmse_cm": "lower", "fused.max_cm": "lower", "fused.ade_cm": "lower",
         "fused.fde_cm": "lower", "fused.valid_share": "higher", "car_rms_cm": "lower",
-        "car_max_cm": "lower", "lane_departures": "lower"}
+        "car_max_cm": "lower", "lane_departures": "lower", "failed": "lower"}
     entry = result["labels"]["x"]["lane_departures"]
     assert set(entry) == {"a_mean", "b_mean", "diff", "ci95", "verdict", "n", "margin",
                           "p_worse", "p_better", "detectable", "dropped"}
@@ -335,7 +351,7 @@ def test_default_metrics_and_their_direction():
         "fused.rmse_cm": "max(0.1, 5%)", "fused.max_cm": "max(0.5, 5%)",
         "fused.ade_cm": "max(0.1, 5%)", "fused.fde_cm": "max(0.2, 5%)",
         "fused.valid_share": "0.02", "car_rms_cm": "max(0.2, 5%)",
-        "car_max_cm": "max(0.5, 5%)", "lane_departures": "0"}
+        "car_max_cm": "max(0.5, 5%)", "lane_departures": "0", "failed": "0"}
 
 
 def test_metric_keys_parse_and_other_sources_add_their_metrics():

@@ -187,3 +187,22 @@ def test_a_wide_interval_does_not_run_into_the_next_column():
     row = next(line for line in interval_table([wide]).splitlines()
                if line.startswith("clear_straight"))
     assert "27.12 [4.35, 168.89] " in row and "128.6 [15.1, 1059.4] " in row
+
+
+def test_a_drive_a_collision_ended_is_counted_as_failed_and_named_in_the_table():
+    """A collision can end a drive before it departs: `departed` does not count it, `failed`
+    does, and the compact table names it below the rows."""
+    crashed = dataclasses.replace(REPORTS[2], completed=False, status="collision",
+                                  stop_reason="collision")
+    doc = json.loads(dumps({"x": summarise("clear_straight", [*REPORTS[:2], crashed,
+                                                               REPORTS[3]], SCENARIO)}))["x"]
+    assert doc["departed_episodes"] == 1 and doc["failed_episodes"] == 2
+    assert doc["failure_rate"] == 0.5
+    assert doc["failure_rate_ci95"] == pytest.approx(list(stats.rate_interval(2, 4)))
+    compact = interval_table([doc])
+    assert "failed without a departure (not in departed): clear_straight seed 2 (collision)" \
+        in " ".join(compact.split())
+    header, _, row = interval_table([doc], wide=True).splitlines()[:3]
+    assert header.split()[-2:] == ["failed", "passed"] and row.split()[-2] == "2/4"
+    assert "failed without" not in interval_table(
+        [json.loads(dumps({"y": summarise("clear_straight", REPORTS, SCENARIO)}))["y"]])
