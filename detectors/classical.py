@@ -27,6 +27,7 @@ from lanekeep.detectors.image_stage import (
     drop_blobs,
     grain_noise,
     join_along_road,
+    join_dot_rows,
     reject_noise,
     warped_roi,
 )
@@ -188,7 +189,11 @@ class ClassicalDetector:
             self.remember(estimate)  # a noisy frame drops the fit, not the measured width
             return estimate
         pre, w = self.config.preprocess, self.view.window
-        bev = join_along_road(bev, w.m_per_row, pre.join_along_m)
+        if pre.join_min_dots:
+            bev = join_dot_rows(bev, w.m_per_row, w.m_per_col, pre.join_along_m,
+                                pre.join_min_dots)
+        else:
+            bev = join_along_road(bev, w.m_per_row, pre.join_along_m)
         bev = drop_blobs(bev, w.m_per_row, w.m_per_col, pre.min_blob_length_m,
                          pre.min_blob_elongation)
         lines = self.find_boundaries(bev)

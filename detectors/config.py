@@ -125,6 +125,11 @@ class Preprocess:
     # road): a row of dots becomes a dash, a dashed or solid line stays as it was. 0 (the
     # default) joins nothing.
     join_along_m: float = 0.0
+    # With `join_min_dots` = N >= 2 only dots are joined (detectors/image_stage.py
+    # join_dot_rows): pieces shorter than half of `join_along_m` and narrower than 0.3 m, where
+    # N or more of them make a row; every other piece stays as it was. 0 (the default): the
+    # whole view is closed.
+    join_min_dots: int = 0
 
     def __post_init__(self) -> None:
         if not 0.1 <= self.scale <= 1.0:
@@ -148,6 +153,9 @@ class Preprocess:
                                f"must be > 0 and finite, got {self.min_blob_elongation}")
         if not (math.isfinite(self.join_along_m) and self.join_along_m >= 0):
             raise InvalidValue("join_along_m", f"must be >= 0 and finite, got {self.join_along_m}")
+        if not (self.join_min_dots == 0 or self.join_min_dots >= 2):
+            raise InvalidValue("join_min_dots",
+                               f"must be 0 (every piece) or >= 2, got {self.join_min_dots}")
 
 
 @dataclass(frozen=True)

@@ -202,6 +202,46 @@ def join_along_road(bev: np.ndarray, m_per_row: float, length_m: float) -> np.nd
     return cv2.morphologyEx(bev, cv2.MORPH_CLOSE, kernel)
 
 
+def join_dot_rows(bev: np.ndarray, m_per_row: float, m_per_col: float, length_m: float,
+                  min_dots: int) -> np.ndarray:
+    """The binary bird's-eye view with its rows of dots joined, and nothing else changed.
+
+    A dot is an 8-connected piece shorter along the road than half of `length_m` and narrower
+    than DOT_MAX_WIDTH_M. The dots alone are closed along the road as `join_along_road` closes
+    the whole view; a joined stroke is added only where it holds `min_dots` dots or more. A row
+    of raised markers becomes a stroke; a lone speck (a crack, a fleck of shade) is not
+    stretched, and dashes, solid lines and whatever lies near them stay as they were."""
+    rows = int(round(length_m / m_per_row))
+    if rows < 2:
+        return bev
+    count, labels, stats, _ = cv2.connectedComponentsWithStats(bev, connectivity=8)
+    if count <= min_dots:  # the background and fewer than min_dots pieces: no row
+        return bev
+    dot = ((stats[:, cv2.CC_STAT_HEIGHT] * m_per_row < 0.5 * length_m)
+           & (stats[:, cv2.CC_STAT_WIDTH] * m_per_col < DOT_MAX_WIDTH_M))
+    dot[0] = False  # the background
+    if dot.sum() < min_dots:
+        return bev
+    dots = np.where(dot[labels], np.uint8(255), np.uint8(0))
+    joined = join_along_road(dots, m_per_row, length_m)
+    strokes, stroke_of = cv2.connectedComponents(joined, connectivity=8)
+    # Each dot's stroke, read at one of its own pixels (a centroid may fall outside a piece).
+    rows_px, cols_px = np.nonzero(dots)
+    first = np.full(count, -1, np.int64)
+    first[labels[rows_px, cols_px][::-1]] = np.arange(len(rows_px))[::-1]
+    members = stroke_of[rows_px[first[dot]], cols_px[first[dot]]]
+    rows_of_dots = np.bincount(members, minlength=strokes) >= min_dots
+    rows_of_dots[0] = False
+    if not rows_of_dots.any():
+        return bev
+    return np.maximum(bev, np.where(rows_of_dots[stroke_of], np.uint8(255), np.uint8(0)))
+
+
+# A raised marker is about 10 cm across; in the bird's-eye view a far one spreads over a few
+# columns. Wider pieces (a blotch, a vehicle's edge) are not dots.
+DOT_MAX_WIDTH_M = 0.3
+
+
 def _open_2x2(mask: np.ndarray) -> np.ndarray:
     """The mask's 2x2 opening: what survives of it is coherent strokes, not speckle."""
     return cv2.morphologyEx(mask, cv2.MORPH_OPEN, _KERNEL_2X2)

@@ -12,11 +12,11 @@ import pytest
 
 from lanekeep.core.config_io import InvalidValue
 from lanekeep.detectors.config import Preprocess, load_config
-from lanekeep.detectors.image_stage import join_along_road
+from lanekeep.detectors.image_stage import join_along_road, join_dot_rows
 from lanekeep.detectors.registry import make_detector
 from lanekeep.sensing.cameras import CameraRig
 
-M_PER_ROW = 0.1  # the shipped bird's-eye view's row
+M_PER_ROW, M_PER_COL = 0.1, 0.05  # the shipped bird's-eye view's pixel
 
 
 def _pieces(bev: np.ndarray) -> int:
@@ -53,6 +53,32 @@ def test_pieces_further_apart_than_the_setting_stay_apart() -> None:
     assert join_along_road(bev, M_PER_ROW, 0.1) is bev  # under two rows: nothing to join
 
 
+def test_only_rows_of_dots_are_joined_when_asked_for_dots() -> None:
+    """join_min_dots: four dots in a row join; two dots, a lone speck beside a dash, a wide
+    blotch in a row with dots and the dash itself stay as they were."""
+    bev = np.zeros((160, 240), np.uint8)
+    _dots(bev, 40, 10, 1.0, 4)  # a row of four dots
+    _dots(bev, 80, 10, 1.0, 2)  # two: not a row
+    bev[60:90, 170:173] = 255  # a 3 m dash ...
+    bev[92:94, 171:173] = 255  # ... and a speck 20 cm beyond its end (whole view: joined)
+    bev[10:12, 120:122] = bev[30:32, 120:122] = 255  # two dots around ...
+    bev[20:22, 120:130] = 255  # ... a blotch 0.5 m wide: not a dot
+    joined = join_dot_rows(bev, M_PER_ROW, M_PER_COL, 1.4, 3)
+    assert joined[10:42, 40:42].any(axis=1).all()  # the row of four: one stroke
+    assert _pieces(joined[:, :60]) == 1
+    assert np.array_equal(joined[:, 60:], bev[:, 60:])  # everything else as it was
+    assert not np.array_equal(join_along_road(bev, M_PER_ROW, 1.4)[:, 160:], bev[:, 160:])
+    assert (joined >= bev).all() and set(np.unique(joined)) <= {0, 255}
+    assert _pieces(join_dot_rows(bev, M_PER_ROW, M_PER_COL, 1.4, 2)[:, 60:100]) == 1
+    assert join_dot_rows(bev, M_PER_ROW, M_PER_COL, 0.0, 3) is bev
+
+
+@pytest.mark.parametrize("bad", [1, -1])
+def test_a_bad_dot_count_is_refused_by_name(bad: int) -> None:
+    with pytest.raises(InvalidValue, match="join_min_dots"):
+        Preprocess(join_min_dots=bad)
+
+
 @pytest.mark.parametrize("bad", [-0.5, float("nan"), float("inf")])
 def test_a_bad_join_length_is_refused_by_name(bad: float) -> None:
     with pytest.raises(InvalidValue, match="join_along_m"):
@@ -66,7 +92,8 @@ def test_the_models_join_dots_only_when_asked(straight_world, searched_view, nam
     shipped = load_config()
     assert shipped.preprocess.join_along_m == 0.0
     on = replace(shipped, preprocess=replace(shipped.preprocess, join_along_m=1.4))
-    for config, joins in ((shipped, False), (on, True)):
+    dots_only = replace(on, preprocess=replace(on.preprocess, join_min_dots=3))
+    for config, joins in ((shipped, False), (on, True), (dots_only, True)):
         detector = make_detector(name, camera, config)
         assert detector.view.window.m_per_row == M_PER_ROW
         bev = np.zeros((detector.view.rows, detector.view.cols), np.uint8)
