@@ -1,7 +1,7 @@
 """Where a classical detector goes wrong on an eval set: per-frame ego errors and overlays.
 
     python -m lanekeep.tuning.classical_errors --detector hough --condition clear \
-        [--split tuning] [--worst 8] [--out out/classical_errors]
+        [--split tuning] [--worst 8] [--out out/classical_errors] [--detectors-config F]
 
 Runs one detector over one condition's set as `lanekeep eval` does (a fresh detector state per
 sequence, frames upscaled to 1280x720), and prints what the mean hides: the share of frames
@@ -26,8 +26,9 @@ from pathlib import Path
 import cv2
 import numpy as np
 
+from lanekeep.detectors.config import DetectorsConfig
 from lanekeep.evaluation.dataset import LABEL_HEIGHT, LABEL_ROWS, LABEL_WIDTH, camera_from_vector
-from lanekeep.evaluation.detector_eval import DetectorRunner
+from lanekeep.evaluation.detector_eval import BadInput, DetectorRunner, load_detectors_config
 from lanekeep.evaluation.eval_sets import CONDITIONS, EvalRecipe, load_set
 from lanekeep.evaluation.lane_metrics import EGO_SLOTS, offset_error
 
@@ -35,12 +36,12 @@ TRUTH, LEFT, RIGHT = (0, 220, 0), (0, 0, 255), (255, 80, 0)  # BGR
 OTHER_TRUTH, OTHER = (0, 110, 0), (0, 220, 255)  # the other lanes' lines: labelled, reported
 
 
-def frame_errors(detector: str, condition: str, recipe: EvalRecipe, cache: str | None
-                 ) -> tuple[list[dict], dict]:
+def frame_errors(detector: str, condition: str, recipe: EvalRecipe, cache: str | None,
+                 config: DetectorsConfig | None = None) -> tuple[list[dict], dict]:
     """One record per frame (sequence, frame, valid, reason, offset error m, prediction) and
-    the set's arrays."""
+    the set's arrays; `config` the detectors' settings (None: the shipped ones)."""
     data, _ = load_set(condition, recipe, cache)
-    runner = DetectorRunner(detector, None)
+    runner = DetectorRunner(detector, None, config)
     records = []
     for q in range(len(data["frames"])):
         camera = camera_from_vector(data["camera"][q])
@@ -133,9 +134,18 @@ def main(argv: list[str] | None = None) -> int:
                         help="overlays of invalid frames first, then the worst valid ones")
     parser.add_argument("--out", default="out/classical_errors")
     parser.add_argument("--cache", default="out/eval_cache")
+    parser.add_argument("--detectors-config", metavar="FILE", default=None,
+                        help="a detectors TOML file to run with instead of the shipped "
+                             "settings (as `lanekeep eval --detectors-config`)")
     args = parser.parse_args(argv)
+    try:
+        config = load_detectors_config(args.detectors_config)
+    except BadInput as err:
+        print(f"classical_errors: {err}", file=sys.stderr)
+        return 2
     recipe = EvalRecipe(split=args.split)
-    records, data = frame_errors(args.detector, args.condition, recipe, args.cache or None)
+    records, data = frame_errors(args.detector, args.condition, recipe, args.cache or None,
+                                 config)
     print(f"{args.detector} on {args.split} {args.condition}:")
     print(summary(records))
     if args.worst > 0:

@@ -21,3 +21,13 @@ def test_calibration_counts_each_band_and_the_share_within_10_cm():
     assert bands[-1]["to"] == 1.0 and bands[-1]["share_ok"] == 2 / 3  # confidence 1 included
     text = summary(records)
     assert "0.8-1.0: 3 frames, 67% within 10 cm" in text and "0.2-0.4: 0 frames, -" in text
+
+
+def test_a_bad_detectors_config_is_one_line_and_exit_2(tmp_path, capsys):
+    from lanekeep.tuning.classical_errors import main
+
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[preprocess]\njoin_min_dots = 1\n")
+    assert main(["--detectors-config", str(bad), "--cache", str(tmp_path)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "join_min_dots" in err and "Traceback" not in err
