@@ -101,11 +101,15 @@ def test_the_models_join_dots_only_when_asked(straight_world, searched_view, nam
         assert _pieces(searched_view(detector, bev)) == (1 if joins else 5)
 
 
-def test_the_measured_setting_in_docs_loads() -> None:
-    """docs/data/join_dots.toml, the setting docs/experiments.md measured, is a valid file."""
+@pytest.mark.parametrize(("name", "min_dots"), [("join_dots", 0), ("join_dot_rows", 2)])
+def test_the_measured_settings_in_docs_load(name: str, min_dots: int) -> None:
+    """docs/data/join_dots.toml and join_dot_rows.toml, the settings docs/experiments.md
+    measured, are valid files that change the join and nothing else."""
     from pathlib import Path
 
-    path = Path(__file__).resolve().parents[2] / "docs" / "data" / "join_dots.toml"
+    path = Path(__file__).resolve().parents[2] / "docs" / "data" / f"{name}.toml"
     config = load_config(str(path))
     assert config.preprocess.join_along_m == 1.5
-    assert replace(config.preprocess, join_along_m=0.0) == load_config().preprocess
+    assert config.preprocess.join_min_dots == min_dots
+    assert replace(config.preprocess, join_along_m=0.0,
+                   join_min_dots=0) == load_config().preprocess
