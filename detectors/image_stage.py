@@ -157,21 +157,32 @@ def drop_blobs(bev: np.ndarray, m_per_row: float, m_per_col: float, min_length_m
                min_elongation: float) -> np.ndarray:
     """The binary bird's-eye view without its blobs: each 8-connected piece shorter than
     `min_length_m` along its own principal axis and less than `min_elongation` times as long
-    as it is wide (sun flecks; detectors/config.py Preprocess). Length and width are those
-    of the rectangle with the piece's second moments (in metres: a stripe L x W has
-    variances L^2 / 12 and W^2 / 12 along its axes), so that a line keeps its length
-    whichever way it runs across the view (a sharp turn's lines cross the columns)."""
+    as it is wide (sun flecks; detectors/config.py Preprocess); lengths as `piece_axes`."""
     if min_length_m <= 0.0:
         return bev
     count, labels = cv2.connectedComponents(bev, connectivity=8)
     if count <= 1:
         return bev
+    major, minor = piece_axes(bev, labels, count, m_per_row, m_per_col)
+    keep = (major >= min_length_m) | (major >= min_elongation * minor)
+    keep[0] = False  # the background
+    if keep[1:].all():
+        return bev
+    return np.where(keep[labels], np.uint8(255), np.uint8(0))
+
+
+def piece_axes(bev: np.ndarray, labels: np.ndarray, count: int, m_per_row: float,
+               m_per_col: float) -> tuple[np.ndarray, np.ndarray]:
+    """Each labelled piece's length and width (m): those of the rectangle with the piece's
+    second moments (a stripe L x W has variances L^2 / 12 and W^2 / 12 along its axes), so
+    that a line keeps its length whichever way it runs across the view (a sharp turn's lines
+    cross the columns). Index 0 is the background's (meaningless)."""
     rows, cols = np.nonzero(bev)
     label = labels[rows, cols]
     y = cols * m_per_col  # across the road
     x = rows * m_per_row  # along it
     n = np.bincount(label, minlength=count).astype(np.float64)
-    n[0] = 1.0  # the background has no pixels here
+    n[n == 0] = 1.0  # the background has no pixels here
     mx, my = np.bincount(label, x, count) / n, np.bincount(label, y, count) / n
     # A pixel is a cell, not a point: its own extent adds 1/12 of its size squared.
     sxx = np.bincount(label, x * x, count) / n - mx * mx + m_per_row**2 / 12.0
@@ -181,11 +192,7 @@ def drop_blobs(bev: np.ndarray, m_per_row: float, m_per_col: float, min_length_m
     spread = np.sqrt(np.maximum(half_trace * half_trace - det, 0.0))
     major = np.sqrt(12.0 * (half_trace + spread))
     minor = np.sqrt(12.0 * np.maximum(half_trace - spread, 0.0))
-    keep = (major >= min_length_m) | (major >= min_elongation * minor)
-    keep[0] = False  # the background
-    if keep[1:].all():
-        return bev
-    return np.where(keep[labels], np.uint8(255), np.uint8(0))
+    return major, minor
 
 
 def join_along_road(bev: np.ndarray, m_per_row: float, length_m: float) -> np.ndarray:
@@ -231,6 +238,8 @@ def join_dot_rows(bev: np.ndarray, m_per_row: float, m_per_col: float, length_m:
     first[labels[rows_px, cols_px][::-1]] = np.arange(len(rows_px))[::-1]
     members = stroke_of[rows_px[first[dot]], cols_px[first[dot]]]
     rows_of_dots = np.bincount(members, minlength=strokes) >= min_dots
+    rows_of_dots &= piece_axes(joined, stroke_of, strokes, m_per_row, m_per_col)[1] \
+        <= DOT_MAX_WIDTH_M
     rows_of_dots[0] = False
     if not rows_of_dots.any():
         return bev
