@@ -73,6 +73,21 @@ def test_only_rows_of_dots_are_joined_when_asked_for_dots() -> None:
     assert join_dot_rows(bev, M_PER_ROW, M_PER_COL, 0.0, 3) is bev
 
 
+def test_a_field_of_specks_is_not_made_a_band() -> None:
+    """Gravel beside a curve's edge line reached sliding_window's view as a field of specks,
+    which a join of every row of dots closed into a band 0.5 m wide that the model took for the
+    boundary (tests/detectors/test_detectors.py, clear_curve, 1.2 m off). A joined row must be
+    no wider than a dot; a row beside the field still joins."""
+    rng = np.random.default_rng(7)
+    bev = np.zeros((160, 240), np.uint8)
+    for r, c in zip(rng.integers(40, 100, 60), rng.integers(100, 112, 60), strict=True):
+        bev[r:r + 2, c:c + 2] = 255  # specks over 6 m x 0.6 m
+    _dots(bev, 40, 10, 1.0, 4)
+    joined = join_dot_rows(bev, M_PER_ROW, M_PER_COL, 1.5, 2)
+    assert np.array_equal(joined[:, 90:], bev[:, 90:])
+    assert joined[10:42, 40:42].any(axis=1).all()
+
+
 @pytest.mark.parametrize("bad", [1, -1])
 def test_a_bad_dot_count_is_refused_by_name(bad: int) -> None:
     with pytest.raises(InvalidValue, match="join_min_dots"):
