@@ -33,7 +33,9 @@ from lanekeep.report.compare import (
 )
 from lanekeep.scoring import statistics as stats
 
-GATE_METRICS = ("fused.rmse_cm", "car_rms_cm", "car_max_cm", "lane_departures")
+# `failed` beside the departures: a drive that newly ends in a collision or off the road before
+# it departs is a regression the departure count alone would not see.
+GATE_METRICS = ("fused.rmse_cm", "car_rms_cm", "car_max_cm", "lane_departures", "failed")
 
 
 @dataclass(frozen=True)

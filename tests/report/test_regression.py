@@ -110,3 +110,15 @@ def test_a_worse_that_holm_does_not_confirm_is_shown_not_failed():
     clear = [v * (1.5 + j) for v, j in zip(big, JITTER, strict=True)]
     gate = regression_gate(base, bench({**{label: big for label in labels}, "s0": clear}))
     assert not gate.passed and [f.label for f in gate.failures] == ["s0"]
+
+
+def test_drives_that_newly_end_in_a_collision_fail_the_gate_though_none_departed():
+    """Eight of ten drives now end in a collision before they leave the lane: the departures
+    see nothing (McNemar has no discordant pair), `failed` sees 8 discordant pairs one way."""
+    base = bench({"a": BASE})
+    crashed = bench({"a": BASE})
+    for e in crashed["a"]["episodes"][:8]:
+        e.update(status="collision", completed=False, stop_reason="collision")
+    gate = regression_gate(base, crashed)
+    assert [(f.label, f.metric) for f in gate.failures] == [("a", "failed")]
+    assert gate.comparison["labels"]["a"]["lane_departures"]["verdict"] == "inconclusive"
