@@ -215,9 +215,11 @@ def join_dot_rows(bev: np.ndarray, m_per_row: float, m_per_col: float, length_m:
 
     A dot is an 8-connected piece shorter along the road than half of `length_m` and narrower
     than DOT_MAX_WIDTH_M. The dots alone are closed along the road as `join_along_road` closes
-    the whole view; a joined stroke is added only where it holds `min_dots` dots or more. A row
-    of raised markers becomes a stroke; a lone speck (a crack, a fleck of shade) is not
-    stretched, and dashes, solid lines and whatever lies near them stay as they were."""
+    the whole view; a joined stroke is added only where it holds `min_dots` dots or more and is
+    itself no wider than DOT_MAX_WIDTH_M (`piece_axes`). A row of raised markers becomes a
+    stroke; a lone speck (a crack, a fleck of shade) is not stretched, a field of specks
+    (gravel, a shoulder's texture) is not made a band, and dashes, solid lines and whatever
+    lies near them stay as they were."""
     rows = int(round(length_m / m_per_row))
     if rows < 2:
         return bev
