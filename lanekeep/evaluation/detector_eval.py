@@ -60,14 +60,12 @@ class DetectorRunner:
         self.warm = False
 
     def _detector(self, camera):
-        from lanekeep.detectors.lanenet import LaneNetDetector
         from lanekeep.detectors.registry import make_detector
 
         key = camera.K.tobytes() + camera.position_m.tobytes() + camera.rotation.tobytes()
-        if key not in self._made:
-            self._made[key] = (LaneNetDetector(camera, weights=self.weights)
-                               if self.name == "lanenet"
-                               else make_detector(self.name, camera, self.config))
+        if key not in self._made:  # the settings file's [lanenet] table reaches LaneNet too
+            weights = self.weights if self.name == "lanenet" else None
+            self._made[key] = make_detector(self.name, camera, self.config, weights=weights)
         return self._made[key]
 
     def start(self, camera, first_frame) -> None:

@@ -381,6 +381,27 @@ def test_the_eval_cache_key_covers_the_code_that_renders_a_set():
         assert scoring not in names, scoring
 
 
+def test_a_settings_files_lanenet_table_reaches_lanenet(tmp_path):
+    """`--detectors-config` reaches every detector it has a table for, LaneNet's decoding
+    too: before 2026-12-01 eval built LaneNet with the shipped settings and recorded the
+    file's, so a [lanenet] table changed the JSON's record and not one figure."""
+    scores = {}
+    for name, text in (("shipped", None), ("strict", "[lanenet]\nmin_points = 1000\n")):
+        out = tmp_path / f"{name}.json"
+        argv = ["eval", "--quick", "--detectors", "lanenet", "--conditions", "clear",
+                "--cache", str(tmp_path / "c"), "--json", str(out)]
+        if text is not None:
+            settings = tmp_path / f"{name}.toml"
+            settings.write_text(text)
+            argv += ["--detectors-config", str(settings)]
+        assert main(argv) == 0
+        doc = _strict(out)
+        scores[name] = doc["conditions"]["clear"]["detectors"]["lanenet"]
+    assert doc["detectors_config"]["settings"]["lanenet"]["min_points"] == 1000
+    assert scores["shipped"]["valid"] > 0.5
+    assert scores["strict"]["valid"] == 0.0  # no boundary has 1000 points: no lane
+
+
 def test_stateless_eval_resets_lanenet_before_every_frame(tmp_path):
     """`--stateless`: the same frames without LaneNet's recurrent state (the frame-only
     ablation) score otherwise than with it, and the document says which it was."""
