@@ -63,7 +63,9 @@ bench --json: one document per label (a scenario, or "SCENARIO@MODEL" for a mode
                                   against the rmse margin (statistics.MARGINS)
   paired.mmae_loop_vs.MODEL.KEY   with --single-model: the MMAE loop's car_rms_cm, car_max_cm
                                   minus the loop driven by MODEL alone (paired, margins), and
-                                  lane_departures as episodes with one, McNemar's exact test
+                                  lane_departures (episodes with one) and failed (episodes
+                                  that failed: scoring/metrics.drive_failed), each by
+                                  McNemar's exact test
   episodes                        each seed's report document (as `run --json` writes it)
 """
 SOURCE_KEYS = tuple(f.name for f in dataclasses.fields(SourceReport))
@@ -170,6 +172,9 @@ def paired_block(reports: Sequence[EpisodeReport],
             loops[model]["lane_departures"] = stats.paired_events(
                 [a.lane_departures > 0 for a, _ in pairs],
                 [b.lane_departures > 0 for _, b in pairs]).as_dict("")
+            # a drive that hit a car or left the road before a wheel crossed a line failed too
+            loops[model]["failed"] = stats.paired_events(
+                [a.failed for a, _ in pairs], [b.failed for _, b in pairs]).as_dict("")
         block["mmae_loop_vs"] = loops
     return block
 

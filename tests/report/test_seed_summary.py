@@ -133,6 +133,21 @@ def test_the_mmae_loop_is_paired_with_each_model_alone():
     assert loop["lane_departures"]["p_worse"] == pytest.approx(
         sps.binomtest(1, 1, 0.5, alternative="greater").pvalue)
     assert loop["lane_departures"]["verdict"] == "inconclusive"
+    assert loop["failed"] == loop["lane_departures"]  # no drive ended otherwise
+
+
+def test_a_model_alone_that_collides_without_departing_is_counted_as_failed():
+    """The MMAE loop against a model-only loop that hit a car on three of four seeds before a
+    wheel crossed a line: the departures see nothing, `failed` counts them."""
+    alone = [dataclasses.replace(r, lane_departures=0, completed=not r.seed,
+                                 status="collision" if r.seed else "completed") for r in REPORTS]
+    ours = [dataclasses.replace(r, lane_departures=0) for r in REPORTS]
+    loop = summarise("clear_straight", ours, SCENARIO,
+                     single_model={"hough": alone})["paired"]["mmae_loop_vs"]["hough"]
+    assert loop["lane_departures"]["diff"] == 0.0
+    assert loop["failed"]["diff"] == pytest.approx(-0.75)
+    assert loop["failed"]["p_better"] == pytest.approx(
+        sps.binomtest(3, 3, 0.5, alternative="greater").pvalue)
 
 
 def test_one_seed_has_no_interval_and_no_verdict():
