@@ -30,12 +30,7 @@ from lanekeep.detectors.base import LaneEstimate
 from lanekeep.estimators.alignment import OdometryAlignedHistory
 from lanekeep.estimators.confidence import ConfidenceBands
 from lanekeep.estimators.consensus import corroborated
-from lanekeep.estimators.kalman import (
-    LaneTracker,
-    TrackerConfig,
-    UpdateStatus,
-    ego_motion_transform,
-)
+from lanekeep.estimators.kalman import LaneTracker, TrackerConfig, UpdateStatus
 from lanekeep.estimators.mmae import MMAE, MMAEConfig, MMAEOutput
 from lanekeep.estimators.odometry import EgoMotion
 from lanekeep.estimators.settings import EstimatorSettings
@@ -213,10 +208,6 @@ class LaneEstimator:
         # missing_model = "hold": each model's last valid detection, standing in while it has
         # none (the paper's loop has a value for every model at every step).
         self._held: dict[str, LaneEstimate] = {}
-        # reference_hold_s: the rear reference's last usable centre line, carried by odometry,
-        # and how long ago it was seen
-        self._held_reference: np.ndarray | None = None
-        self._held_reference_age_s = 0.0
 
     def _prior(self, settings: EstimatorSettings) -> np.ndarray | None:
         """The MMAE's starting probabilities (`EstimatorSettings.mmae_prior`)."""
@@ -234,7 +225,6 @@ class LaneEstimator:
         self.aligned.reset()
         self.mmae.reset()
         self._held.clear()
-        self._held_reference, self._held_reference_age_s = None, 0.0
 
     def update(self, detections: dict[str, LaneEstimate], reference: LaneEstimate,
                ego: EgoMotion, lap: Callable[[str], None] = _no_lap) -> EstimatorOutput:
@@ -249,8 +239,7 @@ class LaneEstimator:
         centres = {name: self.centre_of(detections[name]) for name in self.names}
         reference_centre = self._usable_reference(reference)
         scales = {name: self._r_scale(name, detections[name]) for name in self.names}
-        checked_against = self._reference_for_checks(reference_centre, ego, events)
-        tracked, status = self._track(centres, scales, ego, checked_against, events)
+        tracked, status = self._track(centres, scales, ego, reference_centre, events)
         lap("track")
         selection, reference_x = self._select(reference, tracked, detections, ego, events)
         selected, centre = self._output(centres, tracked, status, selection)
@@ -353,28 +342,6 @@ class LaneEstimator:
                 and abs(width - self.lane_width_m) > tolerance:
             return None
         return centre
-
-    def _reference_for_checks(self, reference: np.ndarray | None, ego: EgoMotion,
-                              events: list[str]) -> np.ndarray | None:
-        """The lane the track check asks: this step's usable reference, else (with
-        `reference_hold_s`) the last one, carried by odometry while it is at most that old.
-        Only the check reads it: the MMAE and the fallback output see this step's reading."""
-        hold = self.settings.reference_hold_s
-        if reference is not None or hold is None:
-            self._held_reference, self._held_reference_age_s = reference, 0.0
-            return reference
-        if self._held_reference is None:
-            return None
-        a, b = ego_motion_transform(self._held_reference, ego.speed_mps, ego.yaw_rate_rps,
-                                    ego.dt_s, lateral_speed_mps=ego.lateral_speed_mps)
-        self._held_reference = a @ self._held_reference + b
-        self._held_reference_age_s += ego.dt_s
-        if self._held_reference_age_s > hold + 1e-9:
-            self._held_reference = None
-            return None
-        events.append(f"track check against the reference's lane of "
-                      f"{self._held_reference_age_s:.1f} s ago, carried by odometry")
-        return self._held_reference
 
     @staticmethod
     def _gap_at_car(centre: np.ndarray, reference: np.ndarray) -> float:

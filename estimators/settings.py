@@ -148,16 +148,6 @@ class EstimatorSettings:
         "(track_start_gate_lane_widths): starts = only the one that (re)starts a track; "
         "updates = every one a track takes (a refused one is a miss).",
         choices=TRACK_REFERENCE_CHECKS)
-    # A step where the rear camera has no usable lane (none read, or its width check refused
-    # it) left the check above with nothing to ask, so every detection was let through: in
-    # tune_traffic_lead_van_three_lanes (two-model loop, seeds 1000 and 1009, 2026-12-01) a
-    # pair a lane off came in at such a step between refused ones, and the car steered into
-    # the next lane and into an overtaking car. The lane the rear camera last saw, carried by
-    # odometry, still says where the car's lane is for a moment.
-    reference_hold_s: float | None = setting(
-        None, "While the rear reference has no usable lane, the track check above asks the "
-        "last lane it had, carried by odometry, for up to this many seconds; unset: no check "
-        "without a reference this step.", bounds=(0.05, 5.0))
     # In traffic a classical front model can lose the lane for seconds (a cut-in car over
     # the paint); with none left the PID holds the wheel straight and a curve takes the car
     # out of its lane. The rear camera still sees the lane the car is on. Both this and the
