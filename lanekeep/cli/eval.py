@@ -70,8 +70,9 @@ def register(subparsers) -> None:
                    help="LaneNet weights (default: the shipped detectors/weights/lanenet.pt)")
     p.add_argument("--detectors-config", metavar="FILE", default=None,
                    help="a detectors TOML file (the keys of detectors/detectors.toml, e.g. "
-                        "[hough] binarisation = \"ridge\") that the classical detectors run "
-                        "with instead of the shipped settings (recorded in --json)")
+                        "[hough] binarisation = \"ridge\", [lanenet] width_std_m = 0.3) that "
+                        "the detectors run with instead of the shipped settings (recorded in "
+                        "--json)")
     p.add_argument("--json", metavar="FILE", default=None, help="write the results as JSON")
     p.add_argument("--quick", action="store_true",
                    help="one world and one sequence per condition (tests, smoke runs)")
