@@ -308,7 +308,7 @@ def test_a_track_starts_only_on_a_lane_that_meets_the_rear_reference_at_the_car(
     assert any("hough: track start refused: its lane 1.85 m" in e for e in out.events)
     out = estimator.update({"hough": _lane(0.3), "sliding_window": _lane(0.05)},
                            _pair(0.0, WIDTH), _ego(5))
-    assert out.tracker_status["hough"] == "initialized"  # 0.3 m: within a quarter lane
+    assert out.tracker_status["hough"] == "initialized"  # 0.3 m: within 0.15 of a lane (0.56 m)
     blind = LaneEstimator(NAMES, _settings(), reference_x_m=-4.0)
     out = blind.update({"hough": _lane(WIDTH / 2), "sliding_window": _lane(0.05)},
                        LaneEstimate.invalid("no lane"), _ego(0))
@@ -395,12 +395,12 @@ def test_the_track_start_check_is_a_setting_paper_mode_leaves_out():
     from lanekeep.driver.paper_mode import estimator_settings
     from lanekeep.scenario.schema import EstimationConfig, InvalidValue
 
-    assert estimator_settings(EstimationConfig()).track_start_gate_lane_widths == 0.25
+    assert estimator_settings(EstimationConfig()).track_start_gate_lane_widths == 0.15
     assert estimator_settings(EstimationConfig()).track_reference_check == "updates"
     paper = EstimationConfig(mode="paper")
     assert estimator_settings(paper).track_start_gate_lane_widths is None
     kept = EstimationConfig(mode="paper", paper_keeps=("track_start_check",))
-    assert estimator_settings(kept).track_start_gate_lane_widths == 0.25
+    assert estimator_settings(kept).track_start_gate_lane_widths == 0.15
     with pytest.raises(InvalidValue, match="track_start_gate_lane_widths"):
         EstimationConfig(track_start_gate_lane_widths=2.0)
 
