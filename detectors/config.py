@@ -166,8 +166,14 @@ class LaneRules:
     # road's width and not tuned here.
     lane_width_m: float = LANE_WIDTH_PRIOR_M
     width_tolerance_m: float = 0.8  # |measured - lane_width| above this: keep only the better side
-    min_half_width: float = 0.1  # a boundary's |y| at the near edge, in lane widths, at least ...
-    max_half_width: float = 1.1  # ... and at most this
+    # A boundary's |y| at the near edge, in lane widths, at least this (detectors/
+    # lane_lines.py): a line nearer the car than about its half-width lies under its wheels,
+    # which a car keeping its lane never has, so it is taken for a sun fleck, a bump's stripe
+    # or a crack. 0 = off, the behaviour since session 15 (4bf15c1 chose the pair by lane
+    # geometry and left this setting unread until 2026-12-02), under which a car passing over
+    # a line is in the lane that holds its centre. An option until measured in the loops.
+    min_half_width: float = 0.0
+    max_half_width: float = 1.1  # ... and at most this many lane widths
     min_span_m: float = 2.0  # a boundary must cover this much x
     quadratic_span_m: float = 8.0  # fit a parabola only over at least this x span
     max_curvature_1pm: float = 0.05  # |2 c2| above this: a bad fit (R < 20 m)
@@ -182,6 +188,10 @@ class LaneRules:
     def __post_init__(self) -> None:
         if not self.lane_width_m > 0:
             raise InvalidValue("lane_width_m", f"must be > 0, got {self.lane_width_m}")
+        if not 0 <= self.min_half_width < self.max_half_width:
+            raise InvalidValue("min_half_width",
+                               f"must be >= 0 and below max_half_width ({self.max_half_width}), "
+                               f"got {self.min_half_width}")
         if not 0 <= self.max_divergence_deg < 90:
             raise InvalidValue("max_divergence_deg",
                                f"must be in [0, 90) degrees, got {self.max_divergence_deg}")

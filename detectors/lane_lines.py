@@ -72,13 +72,18 @@ def choose_lanes(lines: list[Boundary], x_at: float, rules: LaneRules, width_m: 
     not run with the others (`parallel_lines`) and merging duplicates (`distinct`).
 
     Left are the lines with y > 0 there, right those with y < 0, nearest first, within
-    `rules.max_half_width` lane widths (a line further out is a neighbour's). The pair is
+    `rules.max_half_width` lane widths (a line further out is a neighbour's) and, where
+    `rules.min_half_width` is set, no nearer than that (a line under the car's wheels is taken
+    for a sun fleck, a bump's stripe or a crack; 0, the default, keeps every line). The pair is
     the nearest line on each side unless those two are not a lane width apart (within
     `rules.width_tolerance_m`) and a pair among the two nearest on each side is: then that
     pair, the one with the most support (a crack or a shadow's edge between the car and its
     line, found as a line, is skipped this way). Without a consistent pair the nearest two go
     on, and `boundaries.assemble` keeps the better one.
     """
+    if rules.min_half_width > 0:  # under the wheels: no lane line, so it neither votes on
+        near = rules.min_half_width * width_m  # the lines' direction nor hides one nearby
+        lines = [b for b in lines if abs(float(b.lane.y(x_at))) >= near]
     lines = distinct(parallel_lines(lines, x_at, rules.max_divergence_deg), x_at, min_gap_m)
     ys = {id(b): float(b.lane.y(x_at)) for b in lines}
     reach = rules.max_half_width * width_m  # further out: a neighbour's line, never the car's

@@ -1,5 +1,7 @@
 """Choosing the car's lane among every line a classical model found (detectors/lane_lines.py)."""
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -38,6 +40,31 @@ def test_a_car_passing_over_a_line_is_in_the_lane_that_holds_its_centre():
     assert ys(lanes.left, lanes.right) == pytest.approx([0.1, -WIDTH + 0.1])
     mirrored = choose_lanes([line(-b.coeffs[0]) for b in found], X_AT, RULES, WIDTH, 0.4)
     assert ys(mirrored.left, mirrored.right) == pytest.approx([WIDTH - 0.1, -0.1])
+
+
+def test_with_min_half_width_a_line_under_the_wheels_is_not_the_cars():
+    """In dappled shade a model finds its right line and a sun fleck found as a line 0.3 m
+    beside the car, not its left line: by default the fleck is the nearest line on the left
+    and goes on as a boundary (as a line the car passes over does, the test above); with
+    `min_half_width` set it is none, and the right line alone goes on. A line just outside
+    the limit still is a boundary."""
+    right = line(-WIDTH / 2 + 0.2)
+    found = [line(0.3, n=20), right]
+    lanes = choose_lanes(found, X_AT, RULES, WIDTH, 0.4)
+    assert ys(lanes.left, lanes.right) == pytest.approx([0.3, -WIDTH / 2 + 0.2])
+    rules = dataclasses.replace(RULES, min_half_width=0.25)
+    lanes = choose_lanes(found, X_AT, rules, WIDTH, 0.4)
+    assert lanes.left is None and lanes.right is right
+    edge = 0.25 * WIDTH + 0.01
+    lanes = choose_lanes([line(edge), line(edge - WIDTH)], X_AT, rules, WIDTH, 0.4)
+    assert ys(lanes.left, lanes.right) == pytest.approx([edge, edge - WIDTH])
+
+
+def test_min_half_width_must_lie_below_max_half_width():
+    with pytest.raises(ValueError, match="min_half_width"):
+        LaneRules(min_half_width=1.2)
+    with pytest.raises(ValueError, match="min_half_width"):
+        LaneRules(min_half_width=-0.1)
 
 
 def test_a_crack_between_the_car_and_its_line_is_skipped_for_a_pair_a_lane_wide():
