@@ -171,7 +171,10 @@ class LaneRules:
     # which a car keeping its lane never has, so it is taken for a sun fleck, a bump's stripe
     # or a crack. 0 = off, the behaviour since session 15 (4bf15c1 chose the pair by lane
     # geometry and left this setting unread until 2026-12-02), under which a car passing over
-    # a line is in the lane that holds its centre. An option until measured in the loops.
+    # a line is in the lane that holds its centre. Measured 2026-12-02 at 0.25 (0.93 m, inside
+    # the body's 0.95 m): the two-model loop on the tuning scenarios inconclusive (failed
+    # drives 8 -> 7 of 110), the tuning eval sets worse (their lane changes put a real line
+    # under the car): off (docs/experiments.md, session 33).
     min_half_width: float = 0.0
     max_half_width: float = 1.1  # ... and at most this many lane widths
     min_span_m: float = 2.0  # a boundary must cover this much x
