@@ -1,7 +1,7 @@
 """Where a classical detector goes wrong on an eval set: per-frame ego errors and overlays.
 
     python -m lanekeep.tuning.classical_errors --detector hough --condition clear \
-        [--split tuning] [--worst 8] [--out out/classical_errors] [--detectors-config F]
+        [--split tuning] [--quick] [--worst 8] [--out out/classical_errors] [--detectors-config F]
 
 Runs one detector over one condition's set as `lanekeep eval` does (a fresh detector state per
 sequence, frames upscaled to 1280x720), and prints what the mean hides: the share of frames
@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import argparse
 import collections
+import dataclasses
 import sys
 from pathlib import Path
 
@@ -132,6 +133,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--worst", type=int, default=8, help="overlays of the N worst frames")
     parser.add_argument("--invalid", action="store_true",
                         help="overlays of invalid frames first, then the worst valid ones")
+    parser.add_argument("--quick", action="store_true",
+                        help="the one-world set of `lanekeep eval --quick`")
     parser.add_argument("--out", default="out/classical_errors")
     parser.add_argument("--cache", default="out/eval_cache")
     parser.add_argument("--detectors-config", metavar="FILE", default=None,
@@ -143,7 +146,8 @@ def main(argv: list[str] | None = None) -> int:
     except BadInput as err:
         print(f"classical_errors: {err}", file=sys.stderr)
         return 2
-    recipe = EvalRecipe(split=args.split)
+    recipe = (dataclasses.replace(EvalRecipe.quick(), split=args.split) if args.quick
+              else EvalRecipe(split=args.split))
     records, data = frame_errors(args.detector, args.condition, recipe, args.cache or None,
                                  config)
     print(f"{args.detector} on {args.split} {args.condition}:")

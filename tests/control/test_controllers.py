@@ -227,6 +227,7 @@ def test_stanley_reads_only_the_estimate_and_the_sensors():
 
 
 @pytest.mark.slow
+@pytest.mark.full
 def test_stanley_keeps_clear_curve_in_its_lane():
     """The first 15 s at 1280x720: the straight, the clothoid into the 150 m radius and 135 m
     of the arc (the rest of the 30 s drive is more of the same arc and the way out; for CI's

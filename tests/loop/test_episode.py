@@ -5,6 +5,7 @@ import dataclasses
 
 import pytest
 from shared_runs import shared
+from tiers import CI_SCENARIOS, full_unless
 
 from lanekeep.loop.episode import Episode
 from lanekeep.report.seed_summary import fused_vs_track
@@ -39,7 +40,7 @@ def paper_reports():
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("name", shipped_scenarios())
+@pytest.mark.parametrize("name", full_unless(shipped_scenarios(), CI_SCENARIOS))
 def test_no_lane_departure_with_the_mmae_loop(name):
     """8 s of every shipped scenario with the shipped 1280x720 cameras (the full-length runs are
     `lanekeep bench`). Not at a reduced size: the detectors' pixel parameters and the trackers'
@@ -57,6 +58,7 @@ def test_no_lane_departure_with_the_mmae_loop(name):
 
 
 @pytest.mark.slow
+@pytest.mark.full
 def test_snow_keeps_its_lane_through_a_coasting_track():
     """At 8 s in snow model #1 fuses one bad fit whose curvature rate, extrapolated while its
     track then coasts, once steered the car 1.35 m off a 300 m curve by 9.3 s (a departure).
@@ -118,6 +120,7 @@ def case3_over_seeds():
 # crushed shade; seed 6 left the road) until LaneNet was fine-tuned on that world
 # (2026-11-29, detectors/weights/MODEL_CARD.md): it passes again, so the mark went.
 @pytest.mark.slow
+@pytest.mark.full
 def test_fused_is_non_inferior_to_every_models_own_track_over_seeds(case3_over_seeds):
     """The default loop's fused output against each front model's own Kalman track, paired
     over eight seeds within one case, on the steps where both had an estimate: non-inferior
@@ -132,6 +135,7 @@ def test_fused_is_non_inferior_to_every_models_own_track_over_seeds(case3_over_s
 
 
 @pytest.mark.slow
+@pytest.mark.full
 def test_no_departure_in_the_paper_cases(paper_reports):
     assert all(r.lane_departures == 0 for r in paper_reports.values()), \
         _tables(paper_reports.values())
@@ -141,8 +145,10 @@ def test_no_departure_in_the_paper_cases(paper_reports):
 # each with the shipped binarisation, docs/experiments.md, 2026-11-29, "Classical models that
 # find paint in the bird's-eye view", the "before" column: case 3 fused 8.1 cm, case 5 car max
 # 37.3 cm, case 2 car max 20.1 cm), not cases 1 and 4 (fused 0.9 and 1.1 cm, car max 3.2 and
-# 2.5 cm), for CI's time; those two run in the default loop here and in paper mode.
-TWO_MODEL_CASES = ("case2_sharp_turn", "case3_mild_turn_shade_bumps", "case5_wet_rain_turn")
+# 2.5 cm), for CI's time; those two run in the default loop here and in paper mode. CI drives
+# case 2 (tests/tiers.py); cases 3 and 5 are the `full` tier.
+TWO_MODEL_CASES = full_unless(("case2_sharp_turn", "case3_mild_turn_shade_bumps",
+                               "case5_wet_rain_turn"), CI_SCENARIOS)
 
 
 @pytest.mark.slow

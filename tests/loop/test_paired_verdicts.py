@@ -28,6 +28,7 @@ def _fused_rmse(front: str, seed: int) -> float:
 
 
 @pytest.mark.slow
+@pytest.mark.full
 def test_a_5cm_bias_on_the_front_model_is_found_worse(monkeypatch):
     """examples/sabotage.py's hough, every lane it sees 5 cm to the left, against hough itself,
     paired over three seeds: `worse` beyond the RMSE's margin, by about the bias (its trackers

@@ -130,6 +130,7 @@ CASE2_SEEDS = (2, 3, 4, 5, 6)  # the file's own seed (2), then four drawn drives
 
 
 @pytest.mark.slow
+@pytest.mark.full
 @pytest.mark.parametrize("seed", CASE2_SEEDS)
 def test_the_sized_paper_loop_keeps_the_lane_in_case2_on_every_seed(seed):
     """The seeds the next test pairs: each drives the sharp turn without a departure (one
@@ -139,6 +140,7 @@ def test_the_sized_paper_loop_keeps_the_lane_in_case2_on_every_seed(seed):
 
 
 @pytest.mark.slow
+@pytest.mark.full
 def test_case2_model_2_is_worse_in_the_sharp_turn():
     """Paper Table 3: model #2's RMSE 47.29 cm, model #1's 21.12 cm (2.24x). Ours, paired over
     five seeds (lanekeep/scoring/statistics.py): model #2 `worse` over the episode and in the
