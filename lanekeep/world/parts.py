@@ -109,10 +109,16 @@ class ConditionsInfo:
     def shaded(self, xy: np.ndarray) -> np.ndarray:
         """Whether world points (..., 2) lie in any cast shadow."""
         xy = np.asarray(xy, dtype=float)
-        out = np.zeros(xy.shape[:-1], bool)
+        flat = xy.reshape(-1, 2)
+        out = np.zeros(len(flat), bool)
         for poly in self.shadow_polygons:
-            out |= inside_convex(poly, xy)
-        return out
+            # Only the points in the polygon's bounding box are tested: a world has hundreds
+            # of shadows (every tree's), each covering a few of the points.
+            lo, hi = poly.min(axis=0), poly.max(axis=0)
+            near = np.flatnonzero(np.all((flat >= lo) & (flat <= hi), axis=1) & ~out)
+            if len(near):
+                out[near] = inside_convex(poly, flat[near])
+        return out.reshape(xy.shape[:-1])
 
 
 def inside_convex(poly: np.ndarray, xy: np.ndarray) -> np.ndarray:
