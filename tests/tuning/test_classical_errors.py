@@ -31,3 +31,22 @@ def test_a_bad_detectors_config_is_one_line_and_exit_2(tmp_path, capsys):
     assert main(["--detectors-config", str(bad), "--cache", str(tmp_path)]) == 2
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "join_min_dots" in err and "Traceback" not in err
+
+
+def test_quick_reads_the_one_world_set_of_the_split_asked(monkeypatch, tmp_path, capsys):
+    """`--quick` is `lanekeep eval --quick`'s set (one world, one sequence) of the split asked."""
+    from lanekeep.tuning import classical_errors
+
+    asked = []
+
+    def fake_frame_errors(detector, condition, recipe, cache, config=None):
+        asked.append(recipe)
+        return [], {}
+
+    monkeypatch.setattr(classical_errors, "frame_errors", fake_frame_errors)
+    for argv in (["--quick"], ["--quick", "--split", "test"], []):
+        assert classical_errors.main([*argv, "--worst", "0", "--cache", str(tmp_path)]) == 0
+    (quick_tuning, quick_test, full) = asked
+    assert (quick_tuning.worlds, quick_tuning.sequences, quick_tuning.split) == (1, 1, "tuning")
+    assert (quick_test.worlds, quick_test.sequences, quick_test.split) == (1, 1, "test")
+    assert full.worlds > 1 and full.split == "tuning"
