@@ -36,6 +36,7 @@ from lanekeep.world import paint as paint_filter
 from lanekeep.world import pavement, textures
 from lanekeep.world.appearance import MODEL_EXTENT_M, Lighting, appearance_of
 from lanekeep.world.camera_mount import apply_camera_mount, front_and_rear
+from lanekeep.world.compiled import COMPILED_WORLDS, Compiled, world_key
 from lanekeep.world.conditions import add_conditions
 from lanekeep.world.groups import (
     GROUP_MARKING,
@@ -587,6 +588,9 @@ def check_buildable(scenario: Scenario) -> None:
 def build(scenario: Scenario, layout: WorldLayout | None = None) -> World:
     """Compile a scenario into a ready-to-step World with the car at its start pose.
 
+    A scenario built before in this process starts from a copy of that build's compiled
+    model (lanekeep/world/compiled.py): the same world, in milliseconds.
+
     Raises:
       ScenarioError: a check across the scenario's fields failed (a speed bump beyond the
         road's end, a vehicle in a lane that does not exist, shadows the sun cannot cast, a
@@ -594,15 +598,13 @@ def build(scenario: Scenario, layout: WorldLayout | None = None) -> World:
     """
     try:
         road = scenario.build_road()
-        spec, marking_names, conditions = build_spec(scenario, road, layout)
-        model = spec.compile()
-        apply_camera_mount(model, scenario.camera)
-        cameras = front_and_rear(model, scenario.camera.width, scenario.camera.height)
-        for name, coefficients in (("front", scenario.camera.distortion),
-                                   ("rear", scenario.camera.rear_distortion)):
-            if is_distorted(coefficients):  # a folding lens, named before any render
-                lens_zoom(cameras[name], coefficients)
-        _check_control_period(scenario, model.opt.timestep)
+        key = world_key(scenario, layout)
+        compiled = COMPILED_WORLDS.take(key)
+        if compiled is None:
+            compiled = _compile(scenario, road, layout)
+            COMPILED_WORLDS.keep(key, compiled)
+        model, marking_names, conditions = compiled.model, compiled.marking_names, \
+            compiled.conditions
         traffic = make_flow(conditions.traffic_plan if conditions else None, road)
     except ScenarioError:
         raise
@@ -616,6 +618,21 @@ def build(scenario: Scenario, layout: WorldLayout | None = None) -> World:
                   laid_layout(road, layout), traffic)
     world.reset()
     return world
+
+
+def _compile(scenario: Scenario, road: Road, layout: WorldLayout | None) -> Compiled:
+    """The scenario's compiled model with its cameras mounted, the marking geoms' boundaries
+    and what the conditions added (raises ValueError on a check across fields)."""
+    spec, marking_names, conditions = build_spec(scenario, road, layout)
+    model = spec.compile()
+    apply_camera_mount(model, scenario.camera)
+    cameras = front_and_rear(model, scenario.camera.width, scenario.camera.height)
+    for name, coefficients in (("front", scenario.camera.distortion),
+                               ("rear", scenario.camera.rear_distortion)):
+        if is_distorted(coefficients):  # a folding lens, named before any render
+            lens_zoom(cameras[name], coefficients)
+    _check_control_period(scenario, model.opt.timestep)
+    return Compiled(model, marking_names, conditions)
 
 
 class SimulationError(RuntimeError):
