@@ -130,6 +130,11 @@ class Preprocess:
     # N or more of them make a row; every other piece stays as it was. 0 (the default): the
     # whole view is closed.
     join_min_dots: int = 0
+    # Fog taken out of the frame row by row before either model binarises it
+    # (detectors/defog.py): the fog's colour from the horizon, each row's transmission from
+    # how far the road's level there has risen towards it. Off (the default) reads the frame
+    # as it is. Measured on the tuning sets in docs/experiments.md (session 35).
+    defog: bool = False
 
     def __post_init__(self) -> None:
         if not 0.1 <= self.scale <= 1.0:

@@ -17,6 +17,7 @@ import cv2
 import numpy as np
 
 from lanekeep.detectors.birds_eye import BirdsEye
+from lanekeep.detectors.defog import estimate_fog
 from lanekeep.detectors.vehicle_mask import VehicleFilter
 from lanekeep.geometry.camera_model import CameraModel
 
@@ -282,10 +283,16 @@ class RegionOfInterest:
 
 
 def region_of_interest(frame: np.ndarray, view: BirdsEye, preprocess,
-                       vehicles: VehicleFilter | None = None) -> RegionOfInterest:
+                       vehicles: VehicleFilter | None = None,
+                       camera: CameraModel | None = None) -> RegionOfInterest:
     """Crop, scale and destreak a frame, and find what vehicles cover in it (the part of the
-    image stage that does not depend on the model)."""
+    image stage that does not depend on the model); with `preprocess.defog` (and the
+    frame's `camera`) the fog is taken out first (detectors/defog.py)."""
     rgb = crop_and_scale(frame, view.crop_top, preprocess.scale)
+    if preprocess.defog and camera is not None:
+        fog = estimate_fog(frame, camera)
+        if fog is not None:
+            rgb = fog.clear(rgb, view.crop_top, preprocess.scale)
     rgb = open_along_rows(rgb, destreak_pixels(preprocess, frame.shape[0]))
     grey = cv2.cvtColor(rgb, cv2.COLOR_RGB2GRAY)
     covered = None if vehicles is None else vehicles.covered(grey)
@@ -315,10 +322,13 @@ class RoiMemo:
         self._entries: list[_MemoEntry] = []  # most recent first
 
     def get(self, frame: np.ndarray, view: BirdsEye, preprocess,
-            vehicles: VehicleFilter | None = None) -> RegionOfInterest:
-        """`region_of_interest(frame, view, preprocess, vehicles)`, computed once per frame."""
+            vehicles: VehicleFilter | None = None,
+            camera: CameraModel | None = None) -> RegionOfInterest:
+        """`region_of_interest(frame, view, preprocess, vehicles, camera)`, computed once per
+        frame."""
         key = (frame.shape, view.crop_top, preprocess,
-               None if vehicles is None else (vehicles.preprocess, vehicles.px_per_m.tobytes()))
+               None if vehicles is None else (vehicles.preprocess, vehicles.px_per_m.tobytes()),
+               _camera_key(camera) if preprocess.defog else None)
         with self._lock:
             entry = next((e for e in self._entries if e.frame is frame and e.key == key), None)
             if entry is None:
@@ -329,7 +339,7 @@ class RoiMemo:
             source = frame[view.crop_top:]  # the only rows a region reads
             if entry.roi is None or not _same_pixels(entry.pixels, source):
                 pixels = source.copy()
-                roi = region_of_interest(frame, view, preprocess, vehicles)
+                roi = region_of_interest(frame, view, preprocess, vehicles, camera)
                 entry.pixels, entry.roi = pixels, roi  # together: a failure leaves neither
             return entry.roi
 
@@ -342,6 +352,14 @@ class _MemoEntry:
         self.lock = threading.Lock()
         self.pixels: np.ndarray | None = None
         self.roi: RegionOfInterest | None = None
+
+
+def _camera_key(camera: CameraModel | None) -> tuple | None:
+    """What of a camera the region of interest depends on (its fog's rows and distances)."""
+    if camera is None:
+        return None
+    return (camera.width, camera.height, camera.K.tobytes(), camera.position_m.tobytes(),
+            camera.rotation.tobytes())
 
 
 def _same_pixels(a: np.ndarray, b: np.ndarray) -> bool:
@@ -360,8 +378,8 @@ def warped_roi(frame: np.ndarray, camera: CameraModel, view: BirdsEye, preproces
     image and not covered by a vehicle. For the models that find paint in the bird's-eye
     view itself, where a line runs along the rows and can be averaged along its length."""
     check_frame(frame, camera)
-    roi = (region_of_interest(frame, view, preprocess, vehicles) if memo is None
-           else memo.get(frame, view, preprocess, vehicles))
+    roi = (region_of_interest(frame, view, preprocess, vehicles, camera) if memo is None
+           else memo.get(frame, view, preprocess, vehicles, camera))
     seen = view.warp(np.full(roi.grey.shape, 255, np.uint8)) == 255
     if roi.covered is not None:
         seen &= view.warp(roi.covered.view(np.uint8) * np.uint8(255)) == 0
@@ -394,8 +412,8 @@ def binary_bird_eye(frame: np.ndarray, camera: CameraModel, view: BirdsEye, prep
     the other models that read the same frame.
     """
     check_frame(frame, camera)
-    roi = (region_of_interest(frame, view, preprocess, vehicles) if memo is None
-           else memo.get(frame, view, preprocess, vehicles))
+    roi = (region_of_interest(frame, view, preprocess, vehicles, camera) if memo is None
+           else memo.get(frame, view, preprocess, vehicles, camera))
     mask = roi.hide(binarise(roi))
     # Fill first (a flooded mask is noise whatever it holds); the speckle test after the rain
     # streaks are gone, for a 1-px streak fails the opening just as sensor noise does.

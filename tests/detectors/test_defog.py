@@ -1,0 +1,99 @@
+"""Fog taken out row by row (detectors/defog.py): on a synthetic road under linear fog, the
+transmission is read back from the road's own rise towards the fog's colour and the paint's
+step over the road restored; a frame without fog, or with a dark horizon, is left alone."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+
+from lanekeep.detectors.config import load_config
+from lanekeep.detectors.defog import estimate_fog
+from lanekeep.detectors.hough import HoughDetector
+from lanekeep.detectors.image_stage import region_of_interest
+from lanekeep.detectors.sliding_window import SlidingWindowDetector
+from lanekeep.geometry.camera_model import CameraModel
+
+W, H = 1280, 720
+K = np.array([[900.0, 0.0, W / 2], [0.0, 900.0, H / 2], [0.0, 0.0, 1.0]])
+CAMERA = CameraModel.from_mounting("front", K, W, H, 1.5, math.radians(-6.0), x_m=1.0)
+ROAD, PAINT = 70.0, 200.0  # grey levels of the scene without fog
+LINES_M = (1.8, -1.8)  # the car's lane: its boundaries' lateral positions
+AIR = np.array([188.0, 190.0, 194.0])
+FOG_END_M = 60.0  # linear fog, as MuJoCo draws it: t = 1 - distance / end
+
+
+def _scene(fog_end_m: float | None, air: np.ndarray = AIR) -> tuple[np.ndarray, np.ndarray]:
+    """A straight road with two lines under linear fog (None: clear air): the frame, and each
+    row's true transmission."""
+    cols, rows = np.meshgrid(np.arange(W) + 0.5, np.arange(H) + 0.5)
+    ground, seen = CAMERA.pixels_to_ground(np.stack([cols, rows], axis=-1))
+    x = np.where(seen, ground[..., 0], np.inf)
+    y = ground[..., 1]
+    paint = np.zeros((H, W), bool)
+    for line in LINES_M:
+        paint |= seen & (np.abs(y - line) < 0.075)
+    scene = np.where(paint, PAINT, ROAD)[..., None] * np.ones(3)
+    if fog_end_m is None:
+        t = np.ones((H, W))
+        scene[~seen] = air
+    else:
+        t = np.clip(1.0 - (x - CAMERA.position_m[0]) / fog_end_m, 0.0, 1.0)
+    frame = t[..., None] * scene + (1.0 - t[..., None]) * air
+    return np.clip(frame, 0, 255).round().astype(np.uint8), t[:, W // 2]
+
+
+def test_the_transmission_is_read_back_from_the_roads_rise():
+    frame, truth = _scene(FOG_END_M)
+    fog = estimate_fog(frame, CAMERA)
+    assert fog is not None
+    np.testing.assert_allclose(fog.airlight, AIR, atol=1.0)
+    rows = np.arange(fog.first_row, H)
+    ground, _ = CAMERA.pixels_to_ground(np.stack([np.full(len(rows), W / 2), rows + 0.5], 1))
+    near = (ground[:, 0] >= 6.0) & (ground[:, 0] <= 12.0)  # the road it takes for clear
+    mid = (ground[:, 0] > 8.0) & (ground[:, 0] < 40.0)
+    relative = truth[rows[mid]] / np.median(truth[rows[near]])
+    np.testing.assert_allclose(fog.transmission[mid], np.minimum(relative, 1.0), atol=0.03)
+
+
+def test_clearing_restores_the_paints_step_over_the_road():
+    frame, truth = _scene(FOG_END_M)
+    fog = estimate_fog(frame, CAMERA)
+    clear = fog.clear(frame, 0, 1.0).astype(float)
+    row = int(np.argmin(np.abs(truth - 0.5)))  # where the fog halves the contrast
+    foggy_step = frame[row].astype(float).max() - np.median(frame[row, W // 2 - 50:W // 2 + 50])
+    step = clear[row].max() - np.median(clear[row, W // 2 - 50:W // 2 + 50])
+    assert foggy_step < 0.6 * (PAINT - ROAD)
+    assert step == pytest.approx(PAINT - ROAD, rel=0.15)
+
+
+@pytest.mark.parametrize("air", [AIR, np.array([40.0, 45.0, 35.0])], ids=["sky", "dark_horizon"])
+def test_a_frame_without_fog_is_left_as_it_is(air):
+    frame, _ = _scene(None, air)
+    assert estimate_fog(frame, CAMERA) is None
+    config = load_config()
+    on = dataclasses.replace(config, preprocess=dataclasses.replace(config.preprocess,
+                                                                      defog=True))
+    view = HoughDetector(CAMERA, on).view
+    plain = region_of_interest(frame, view, config.preprocess, None, CAMERA)
+    defogged = region_of_interest(frame, view, on.preprocess, None, CAMERA)
+    assert np.array_equal(plain.rgb, defogged.rgb)
+
+
+@pytest.mark.parametrize("model", [HoughDetector, SlidingWindowDetector])
+def test_each_model_reads_the_cleared_frame(model):
+    """What clearing does to a frame the models read: on this clean synthetic road both find
+    the lane with or without it (the gain is on rendered fog, whose paint is worn and whose
+    road has grain: docs/experiments.md, session 35); cleared, they still find both lines and
+    the centre."""
+    frame, _ = _scene(FOG_END_M / 2)  # dense: the lines fade out within 30 m
+    config = load_config()
+    on = dataclasses.replace(config, preprocess=dataclasses.replace(config.preprocess,
+                                                                      defog=True))
+    estimate = model(CAMERA, on).detect(frame)
+    assert estimate.valid, estimate.reason
+    assert estimate.offset_m == pytest.approx(0.0, abs=0.03)
+    assert estimate.left is not None and estimate.right is not None
