@@ -3,20 +3,23 @@
 Fog (and haze) mixes each pixel with the fog's colour by how far its ray runs through it:
 I = t J + (1 - t) A, with J the scene, A the airlight (the fog's colour, what the horizon
 shows) and t in (0, 1] the transmission. Paint's step over the road shrinks with t, and so
-does its ratio to the road: 20 m ahead in the fog scenario's world a line is a few grey
-levels over the road, below both models' thresholds, which were set where t is 1. A flat road
-seen by a forward camera has one distance per image row, so t is one number per row, and the
-road itself measures it: its level rises from the near rows towards A with distance. From
+does its ratio to the road, until far paint falls below both models' thresholds, which
+were set where t is 1 (`python -m lanekeep.tuning.classical_errors --condition fog`). A flat
+road seen by a forward camera has one distance per image row, so t is one number per row, and
+the road itself measures it: its level rises from the near rows towards A with distance. From
 that rise, t(row) = (A - road(row)) / (A - road near the car), and J = A - (A - I) / t.
 
 The fog is read only from what the camera sees and its calibration (the horizon row, each
 row's ground distance): the airlight is the median colour of a band just above the horizon,
 the road's level per row the median of the image's middle columns. It is taken for fog only
-when the horizon band is brighter than the near road, by `MIN_AIR_STEP` grey levels, and the
-road 30-45 m ahead has risen between `RISE` of the way towards it: without fog the far road
-is as dark as the near one (a clear day), or the horizon is darker than the road (trees,
-buildings, night). Transmission never rises with distance (a sunlit patch ahead of a shaded
-one is not clearer air), and is never below `MIN_TRANSMISSION` (beyond that, noise only).
+when the horizon band is of one colour (`MAX_HORIZON_SPREAD`) and brighter than the near road
+by `MIN_AIR_STEP` grey levels, and the road 30-45 m ahead has risen between `RISE` of the way
+towards it: without fog the far road is as dark as the near one (a clear day), or the horizon
+is darker than the road (trees, buildings, night), or a pattern (a skyline in clear air). The
+transmission is relative to the road 6-12 m ahead (`NEAR_M`), which is taken for clear: the
+cleared frame is the road as it looks there. Transmission never rises with distance (a sunlit
+patch ahead of a shaded one is not clearer air), and is never below `MIN_TRANSMISSION`
+(beyond that, noise only).
 """
 
 from __future__ import annotations
@@ -29,6 +32,11 @@ import numpy as np
 from lanekeep.geometry.camera_model import CameraModel
 
 MIN_AIR_STEP = 25.0  # grey levels the horizon band stands above the near road, at least
+# Fog makes the horizon one colour (everything that far is airlight); buildings, trees or a
+# skyline in clear air make it a pattern. The band's grey spread (SD) is at most this: on the
+# tuning eval sets (2026-12-02) 5-30 where the fog set's frames were taken for fog, 22-83
+# where a sunlit road ahead of building shade passed the rise test (buildings, half shade).
+MAX_HORIZON_SPREAD = 25.0
 RISE = (0.3, 1.2)  # the far road's rise towards the airlight, a share of the whole way
 NEAR_M = (6.0, 12.0)  # ground distances (m) of the rows that give the road's own level
 FAR_M = (30.0, 45.0)  # ... and of the rows whose rise tells fog
@@ -69,6 +77,8 @@ def estimate_fog(frame: np.ndarray, camera: CameraModel) -> Fog | None:
     band = frame[max(0, horizon_row - int(HORIZON_BAND * h)):horizon_row + 1]
     airlight = np.median(band.reshape(-1, 3), axis=0).astype(np.float32)
     air = _grey(airlight)
+    if float(cv2.cvtColor(band, cv2.COLOR_RGB2GRAY).std()) > MAX_HORIZON_SPREAD:
+        return None
     first = horizon_row + 2
     rows = np.arange(first, h)
     centre = np.stack([np.full(len(rows), w / 2.0), rows + 0.5], axis=1)

@@ -83,6 +83,16 @@ def test_a_frame_without_fog_is_left_as_it_is(air):
     assert np.array_equal(plain.rgb, defogged.rgb)
 
 
+def test_a_skyline_at_the_horizon_is_no_fog():
+    """A road that brightens ahead under a horizon of buildings (a sunlit road beyond a
+    shade, in clear air) is not taken for fog: fog leaves the horizon one colour."""
+    frame, _ = _scene(FOG_END_M)
+    horizon = int(CAMERA.horizon_row())
+    band = frame[horizon - 30:horizon + 1]
+    band[:, (np.arange(W) // 40) % 2 == 0] = 60  # dark facades between bright sky
+    assert estimate_fog(frame, CAMERA) is None
+
+
 @pytest.mark.parametrize("model", [HoughDetector, SlidingWindowDetector])
 def test_each_model_reads_the_cleared_frame(model):
     """What clearing does to a frame the models read: on this clean synthetic road both find
