@@ -1,6 +1,7 @@
-"""Fog taken out row by row (detectors/defog.py): on a synthetic road under linear fog, the
-transmission is read back from the road's own rise towards the fog's colour and the paint's
-step over the road restored; a frame without fog, or with a dark horizon, is left alone."""
+"""Fog taken out row by row (detectors/defog.py): on a synthetic road in fog (Koschmieder's
+law), the transmission is read back from the road's own rise towards the fog's colour and the
+paint's step over the road restored; a frame without fog, a dark horizon or a skyline is left
+alone."""
 
 from __future__ import annotations
 
@@ -23,12 +24,13 @@ CAMERA = CameraModel.from_mounting("front", K, W, H, 1.5, math.radians(-6.0), x_
 ROAD, PAINT = 70.0, 200.0  # grey levels of the scene without fog
 LINES_M = (1.8, -1.8)  # the car's lane: its boundaries' lateral positions
 AIR = np.array([188.0, 190.0, 194.0])
-FOG_END_M = 60.0  # linear fog, as MuJoCo draws it: t = 1 - distance / end
+VISIBILITY_M = 60.0  # Koschmieder's law, as the world draws fog: t = exp(-3.912 d / V)
 
 
-def _scene(fog_end_m: float | None, air: np.ndarray = AIR) -> tuple[np.ndarray, np.ndarray]:
-    """A straight road with two lines under linear fog (None: clear air): the frame, and each
-    row's true transmission."""
+def _scene(visibility_m: float | None, air: np.ndarray = AIR
+           ) -> tuple[np.ndarray, np.ndarray]:
+    """A straight road with two lines in fog of this visibility (None: clear air): the frame,
+    and each row's true transmission."""
     cols, rows = np.meshgrid(np.arange(W) + 0.5, np.arange(H) + 0.5)
     ground, seen = CAMERA.pixels_to_ground(np.stack([cols, rows], axis=-1))
     x = np.where(seen, ground[..., 0], np.inf)
@@ -37,17 +39,18 @@ def _scene(fog_end_m: float | None, air: np.ndarray = AIR) -> tuple[np.ndarray, 
     for line in LINES_M:
         paint |= seen & (np.abs(y - line) < 0.075)
     scene = np.where(paint, PAINT, ROAD)[..., None] * np.ones(3)
-    if fog_end_m is None:
+    if visibility_m is None:
         t = np.ones((H, W))
         scene[~seen] = air
     else:
-        t = np.clip(1.0 - (x - CAMERA.position_m[0]) / fog_end_m, 0.0, 1.0)
+        distance = np.hypot(x - CAMERA.position_m[0], y - CAMERA.position_m[1])
+        t = np.exp(-3.912 * distance / visibility_m)  # 0 beyond the horizon
     frame = t[..., None] * scene + (1.0 - t[..., None]) * air
     return np.clip(frame, 0, 255).round().astype(np.uint8), t[:, W // 2]
 
 
 def test_the_transmission_is_read_back_from_the_roads_rise():
-    frame, truth = _scene(FOG_END_M)
+    frame, truth = _scene(VISIBILITY_M)
     fog = estimate_fog(frame, CAMERA)
     assert fog is not None
     np.testing.assert_allclose(fog.airlight, AIR, atol=1.0)
@@ -60,14 +63,23 @@ def test_the_transmission_is_read_back_from_the_roads_rise():
 
 
 def test_clearing_restores_the_paints_step_over_the_road():
-    frame, truth = _scene(FOG_END_M)
+    """Far rows get the step the paint has over the road 6-12 m ahead (the road the clearing
+    takes for clear), where the fog had taken more than half of it."""
+    frame, truth = _scene(VISIBILITY_M)
     fog = estimate_fog(frame, CAMERA)
-    clear = fog.clear(frame, 0, 1.0).astype(float)
-    row = int(np.argmin(np.abs(truth - 0.5)))  # where the fog halves the contrast
-    foggy_step = frame[row].astype(float).max() - np.median(frame[row, W // 2 - 50:W // 2 + 50])
-    step = clear[row].max() - np.median(clear[row, W // 2 - 50:W // 2 + 50])
-    assert foggy_step < 0.6 * (PAINT - ROAD)
-    assert step == pytest.approx(PAINT - ROAD, rel=0.15)
+    clear = fog.clear(frame, 0, 1.0)
+
+    def step(image: np.ndarray, row: int) -> float:
+        road = np.median(image[row, W // 2 - 50:W // 2 + 50].astype(float))
+        return float(image[row].astype(float).max() - road)
+
+    rows = np.arange(H)
+    ground, seen = CAMERA.pixels_to_ground(np.stack([np.full(H, W / 2), rows + 0.5], 1))
+    near = rows[seen & (ground[:, 0] >= 6.0) & (ground[:, 0] <= 12.0)]
+    near_step = float(np.median([step(frame, r) for r in near]))
+    far = int(np.argmin(np.abs(truth - 0.5 * np.median(truth[near]))))  # half the near light
+    assert step(frame, far) < 0.6 * near_step
+    assert step(clear, far) == pytest.approx(near_step, rel=0.15)
 
 
 @pytest.mark.parametrize("air", [AIR, np.array([40.0, 45.0, 35.0])], ids=["sky", "dark_horizon"])
@@ -86,7 +98,7 @@ def test_a_frame_without_fog_is_left_as_it_is(air):
 def test_a_skyline_at_the_horizon_is_no_fog():
     """A road that brightens ahead under a horizon of buildings (a sunlit road beyond a
     shade, in clear air) is not taken for fog: fog leaves the horizon one colour."""
-    frame, _ = _scene(FOG_END_M)
+    frame, _ = _scene(VISIBILITY_M)
     horizon = int(CAMERA.horizon_row())
     band = frame[horizon - 30:horizon + 1]
     band[:, (np.arange(W) // 40) % 2 == 0] = 60  # dark facades between bright sky
@@ -99,7 +111,7 @@ def test_each_model_reads_the_cleared_frame(model):
     the lane with or without it (the gain is on rendered fog, whose paint is worn and whose
     road has grain: docs/experiments.md, session 35); cleared, they still find both lines and
     the centre."""
-    frame, _ = _scene(FOG_END_M / 2)  # dense: the lines fade out within 30 m
+    frame, _ = _scene(VISIBILITY_M / 2)  # dense: the lines fade out within 30 m
     config = load_config()
     on = dataclasses.replace(config, preprocess=dataclasses.replace(config.preprocess,
                                                                       defog=True))
