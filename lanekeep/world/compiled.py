@@ -30,9 +30,11 @@ import mujoco
 from lanekeep.scenario.schema import Scenario
 from lanekeep.world.parts import ConditionsInfo, WorldLayout
 
-# Worlds kept per process: each is 30-60 MB (its textures); four cover a test module's or
-# a comparison's worlds without growing a long-lived process much.
-SLOTS = 4
+# Worlds kept per process. Each is about 30 MB (clear_curve's model, mostly its textures),
+# and a bench worker or an environment reset to new seeds never asks for one again, so few:
+# replayed over CI's build log (2026-12-02), two per process reuse 93 builds, four 102, eight
+# 110, of the 174 repeats.
+SLOTS = 2
 
 
 @dataclass(frozen=True)
@@ -56,7 +58,8 @@ def world_key(scenario: Scenario, layout: WorldLayout | None) -> str:
 
 
 class CompiledWorlds:
-    """The latest `slots` compiled worlds by key, thread-safe; `take` and `keep` copy."""
+    """The `slots` most recently used compiled worlds by key, thread-safe; `take` and `keep`
+    copy."""
 
     def __init__(self, slots: int = SLOTS) -> None:
         self._slots = slots
