@@ -20,6 +20,9 @@ transmission is relative to the road 6-12 m ahead (`NEAR_M`), which is taken for
 cleared frame is the road as it looks there. Transmission never rises with distance (a sunlit
 patch ahead of a shaded one is not clearer air), and is never below `MIN_TRANSMISSION`
 (beyond that, noise only).
+
+Distances are ahead of the car (vehicle x): a rear camera's rows lie behind it, so its frames
+are left as they are (the rear models were not measured with it).
 """
 
 from __future__ import annotations
