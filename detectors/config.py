@@ -133,7 +133,8 @@ class Preprocess:
     # Fog taken out of the frame row by row before either model binarises it
     # (detectors/defog.py): the fog's colour from the horizon, each row's transmission from
     # how far the road's level there has risen towards it. Off (the default) reads the frame
-    # as it is. Measured on the tuning sets in docs/experiments.md (session 35).
+    # as it is. Measured on the tuning sets in docs/experiments.md (session 35); its rule for
+    # the default was not met on the snow tuning scenario (inconclusive; session 36).
     defog: bool = False
 
     def __post_init__(self) -> None:
