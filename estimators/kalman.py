@@ -34,6 +34,8 @@ from filterpy.kalman import KalmanFilter
 from numpy.typing import ArrayLike
 from scipy.stats import chi2
 
+from lanekeep.geometry.vehicle_motion import PeriodMotion
+
 N_COEF = 3  # c0, c1, c2
 DIM_X = 2 * N_COEF  # coefficients and their rates
 
@@ -212,15 +214,8 @@ def ego_motion_transform(
         A (3, 3) and b (3,).
     """
     c = np.asarray(coefficients, dtype=float)
-    yaw = yaw_rate_rps * dt_s
-    ds = float(np.hypot(speed_mps, lateral_speed_mps)) * dt_s * (1.0 if speed_mps >= 0 else -1.0)
-    if abs(yaw) < 1e-9:
-        tx, ty = ds, 0.0
-    else:  # chord of an arc of radius ds / yaw
-        tx, ty = ds / yaw * np.sin(yaw), ds / yaw * (1.0 - np.cos(yaw))
-    if lateral_speed_mps != 0.0:  # the arc is travelled at the slip angle beta to the body x
-        beta = np.arctan2(lateral_speed_mps, abs(speed_mps)) * (1.0 if speed_mps >= 0 else -1.0)
-        tx, ty = tx * np.cos(beta) - ty * np.sin(beta), tx * np.sin(beta) + ty * np.cos(beta)
+    motion = PeriodMotion.of(speed_mps, yaw_rate_rps, dt_s, lateral_speed_mps)
+    tx, ty, yaw = motion.tx_m, motion.ty_m, motion.yaw_rad
     x_old = tx + np.linspace(0.0, fit_range_m, fit_points)
     v_old = np.vander(x_old, N_COEF, increasing=True)
     y_old = v_old @ c

@@ -43,6 +43,7 @@ import numpy as np
 
 from lanekeep.driver.driver import REFERENCE
 from lanekeep.loop.episode import Episode
+from lanekeep.loop.overrides import PluginOverrides
 from lanekeep.scenario.schema import load_scenario, shipped_scenarios
 from lanekeep.scoring import independence
 from lanekeep.scoring.step_result import StepResult
@@ -67,13 +68,13 @@ def _error(estimate: float | None, truth: float) -> float:
 
 
 def run_episode(name: str, seed: int, size: tuple[int, int], seconds: float | None,
-                reference: str | None = None) -> Trace:
+                reference: str | None = None, detectors_config: str | None = None) -> Trace:
     """Drive one episode and keep, per step, every source's error and where it looked;
-    `reference`: the MMAE's reference detector instead of the scenario's."""
+    `reference`: the MMAE's reference detector instead of the scenario's; `detectors_config`:
+    a detectors file in place of the scenario's `[detectors]` (as `--detectors-config`)."""
     scenario = dataclasses.replace(load_scenario(name), seed=seed)
-    if reference is not None:
-        scenario = dataclasses.replace(scenario, estimation=dataclasses.replace(
-            scenario.estimation, reference_detector=reference))
+    scenario = PluginOverrides(reference_detector=reference,
+                               detectors_config=detectors_config).apply(scenario)
     with Episode(scenario, render_size=size) as episode:
         road = episode.truth.road
         models = list(episode.driver.front)
@@ -168,15 +169,26 @@ def row_line(source: str, row: dict) -> str:
 
 
 def reference_summary(traces: list[Trace]) -> dict:
-    """The reference's own error over all episodes: RMSE and max (cm) over the steps it gave
-    an offset, and the share of steps it did."""
-    e = np.concatenate([np.asarray(t.errors[REFERENCE], dtype=float) for t in traces])
+    """The reference's own error over all episodes: RMSE, max and mean (its bias) in cm over
+    the steps it gave an offset, the share of steps it did, and each episode's mean and valid
+    share (so that two runs over the same seeds can be paired)."""
+    per = [np.asarray(t.errors[REFERENCE], dtype=float) for t in traces]
+    e = np.concatenate(per)
     ok = np.isfinite(e)
+
+    def mean_cm(v: np.ndarray) -> float:
+        v = v[np.isfinite(v)]
+        return float(100.0 * v.mean()) if len(v) else math.nan
+
     return _json_safe({"rmse_cm": float(100.0 * np.sqrt(np.mean(e[ok] ** 2))) if ok.any()
                        else math.nan,
                        "max_cm": float(100.0 * np.max(np.abs(e[ok]))) if ok.any() else math.nan,
+                       "mean_cm": mean_cm(e),
                        "valid_share": float(ok.mean()) if len(e) else math.nan,
-                       "steps": int(len(e))})
+                       "steps": int(len(e)),
+                       "episode_mean_cm": [mean_cm(v) for v in per],
+                       "episode_valid_share": [float(np.isfinite(v).mean()) if len(v)
+                                               else math.nan for v in per]})
 
 
 def report(document: dict) -> int:
@@ -191,8 +203,10 @@ def report(document: dict) -> int:
         print(f"{name}: seeds {entry['seeds']} ({', '.join(entry['statuses'])})")
         ref = entry.get("reference")
         if ref:
+            bias = ref.get("mean_cm")  # absent in reports before 2026-12-02
             print(f"  reference error: RMSE {_cell(ref['rmse_cm'], 1, '.2f')} cm, max "
-                  f"{_cell(ref['max_cm'], 1, '.1f')} cm, valid "
+                  f"{_cell(ref['max_cm'], 1, '.1f')} cm, mean "
+                  f"{'-' if bias is None else _cell(bias, 1, '+.2f')} cm, valid "
                   f"{_cell(ref['valid_share'], 100, '.1f')}% of {ref['steps']} steps")
         for source, row in entry["sources"].items():
             print(row_line(source, row))
@@ -214,6 +228,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--boots", type=int, default=independence.BOOTSTRAPS)
     parser.add_argument("--reference-detector", default=None, metavar="NAME",
                         help="the MMAE's reference instead of each scenario's (e.g. rowanchor)")
+    parser.add_argument("--detectors-config", default=None, metavar="FILE",
+                        help="a detectors file's settings for every scenario (e.g. a "
+                             "[rowanchor] table)")
     parser.add_argument("--json", help="write the verdicts here")
     parser.add_argument("--read", help="print a JSON this tool wrote, run nothing")
     args = parser.parse_args(argv)
@@ -224,13 +241,14 @@ def main(argv: list[str] | None = None) -> int:
     width, height = (int(v) for v in args.size.lower().split("x"))
     document = {"settings": {"tau_m": args.tau, "align": args.align, "size": args.size,
                              "seconds": args.seconds, "boots": args.boots,
-                             "reference_detector": args.reference_detector},
+                             "reference_detector": args.reference_detector,
+                             "detectors_config": args.detectors_config},
                 "scenarios": {}}
     for name in args.scenarios or shipped_scenarios():
         nominal = load_scenario(name).seed
         seeds = [nominal + k for k in range(1, args.seeds + 1)]
-        traces = [run_episode(name, seed, (width, height), args.seconds, args.reference_detector)
-                  for seed in seeds]
+        traces = [run_episode(name, seed, (width, height), args.seconds, args.reference_detector,
+                              args.detectors_config) for seed in seeds]
         sources = [n for n in traces[0].errors if n != REFERENCE]
         document["scenarios"][name] = {
             "seeds": seeds, "statuses": [t.status for t in traces],
