@@ -74,6 +74,11 @@ class Detector(Protocol):
 
     Detectors are made by `detectors.registry.make_detector(name, camera, config, distortion)`,
     which calls the detector's factory as `factory(camera, config=..., distortion=...)`.
+
+    A detector that carries what it saw from frame to frame may also define
+    `move(speed_mps, yaw_rate_rps, dt_s, lateral_speed_mps)`: the driver calls it before each
+    frame with the period's motion from the car's own sensors (wheel speed, yaw rate and the
+    odometry's sideslip estimate; never the simulator's state).
     """
 
     name: str

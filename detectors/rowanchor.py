@@ -39,6 +39,7 @@ from lanekeep.detectors.config import DetectorsConfig, GroundWindow, load_config
 from lanekeep.detectors.lanenet_decode import (
     CURVATURE_PRIOR_PER_M,
     CURVATURE_PRIOR_SHAPE,
+    UNSEEN_WEIGHT,
     WIDTH_STD_M,
     DecodeSettings,
     Proposals,
@@ -47,6 +48,7 @@ from lanekeep.detectors.lanenet_decode import (
 )
 from lanekeep.detectors.lanenet_targets import CellGrid
 from lanekeep.detectors.network_io import WeightsError, one_torch_thread, read_weights_blob
+from lanekeep.detectors.point_memory import PointMemory
 from lanekeep.detectors.rowanchor_model import (
     LANES,
     MIRRORED_LANES,
@@ -57,7 +59,9 @@ from lanekeep.detectors.rowanchor_model import (
     column_spread,
     decode,
 )
+from lanekeep.detectors.seen_paint import PaintTest, paint_under_points
 from lanekeep.geometry.camera_model import CameraModel
+from lanekeep.geometry.vehicle_motion import PeriodMotion
 
 FORMAT = "lanekeep-rowanchor/1"
 DEFAULT_WEIGHTS = "weights/rowanchor.pt"  # inside the detectors package
@@ -119,10 +123,31 @@ class RowAnchorSettings:
     # reads across a dash gap from the lines around it and leant into the lane there by about
     # 6 px on case 4's rear frames, biasing the offset by 1-3 cm (docs/observer.md).
     seen_spread_px: float = 0.0
+    # Each point checked against the frame: paint-wide ridge under it or not
+    # (detectors/seen_paint.py). A point without paint under it weighs `unseen_weight` in the
+    # lane fit, as LaneNet's points off paint do. Off (every point seen) as shipped.
+    paint_test: bool = False
+    paint_min_ratio: float = PaintTest.min_ratio  # the ridge's least height, a share of the road
+    paint_min_step: float = PaintTest.min_step  # ... and in grey levels
+    paint_tolerance_px: float = PaintTest.tolerance_px  # the network's placement error, at 1280
+    unseen_weight: float = UNSEEN_WEIGHT  # an unseen point's weight in the ego pair's fit
+    # The ego lines' painted points of the last `memory_frames` frames, carried into this one
+    # by the car's motion (wheel speed and yaw rate; detectors/point_memory.py), join this
+    # frame's: a dash seen a few frames ago is painted evidence in a frame whose near view is
+    # a gap. Needs `paint_test`. 0 = one frame, no memory (as shipped).
+    memory_frames: int = 0
 
     def __post_init__(self) -> None:
         if not self.seen_spread_px >= 0.0:
             raise ValueError(f"seen_spread_px must be >= 0 (0 = off), not {self.seen_spread_px}")
+        if self.memory_frames < 0 or (self.memory_frames and not self.paint_test):
+            raise ValueError("memory_frames must be >= 0, and needs paint_test = true (only "
+                             "points with paint under them are carried)")
+        self.paint()  # its own checks
+
+    def paint(self) -> PaintTest:
+        return PaintTest(tolerance_px=self.paint_tolerance_px, min_ratio=self.paint_min_ratio,
+                         min_step=self.paint_min_step)
 
     def decode(self) -> DecodeSettings:
         return DecodeSettings(score_threshold=self.presence_threshold, inlier_px=self.inlier_px,
@@ -130,7 +155,7 @@ class RowAnchorSettings:
                               seed=self.seed, curvature_prior_per_m=self.curvature_prior_per_m,
                               curvature_prior_shape=self.curvature_prior_shape,
                               width_std_m=self.width_std_m, score_power=0.0,
-                              max_range_m=self.max_range_m)
+                              max_range_m=self.max_range_m, unseen_weight=self.unseen_weight)
 
 
 def _pooled(position: np.ndarray, presence: np.ndarray, spread: np.ndarray, bins: int
@@ -153,7 +178,9 @@ def _pooled(position: np.ndarray, presence: np.ndarray, spread: np.ndarray, bins
 
 
 class RowAnchorDetector:
-    """`Detector` protocol over the row-anchor network: one frame, no state between frames."""
+    """`Detector` protocol over the row-anchor network: one frame, no state between frames
+    unless `memory_frames` carries painted points (then the driver tells it the car's motion
+    before each frame, `move`)."""
 
     weights_format = FORMAT  # the files `--weights` may give it (registry.weights_fit)
 
@@ -179,6 +206,8 @@ class RowAnchorDetector:
         if distortion is not None and np.any(np.asarray(distortion) != 0):
             self.distortion = np.asarray(distortion, dtype=float)
         self._decode = self.settings.decode()
+        self._paint = self.settings.paint()
+        self.memory = PointMemory(self.settings.memory_frames, self.settings.max_range_m)
         self.last_points: dict[str, np.ndarray] = {}
 
     @property
@@ -187,6 +216,13 @@ class RowAnchorDetector:
 
     def reset(self) -> None:
         self.last_points = {}
+        self.memory.reset()
+
+    def move(self, speed_mps: float, yaw_rate_rps: float, dt_s: float,
+             lateral_speed_mps: float = 0.0) -> None:
+        """The car's motion since the last frame, from its own sensors: carries what the memory
+        holds (nothing without `memory_frames`)."""
+        self.memory.move(PeriodMotion.of(speed_mps, yaw_rate_rps, dt_s, lateral_speed_mps))
 
     def points(self, frame: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The network's read of one frame: x (lanes, anchors) in this frame's pixels and the
@@ -229,6 +265,8 @@ class RowAnchorDetector:
         if self.settings.seen_spread_px > 0.0:
             seen = np.minimum(1.0, self.settings.seen_spread_px
                               / np.maximum(spread[lane, anchor], 1e-6))
+        if self.settings.paint_test:
+            seen = seen * paint_under_points(frame, pts, self._camera_for(w, h), self._paint)
         props = Proposals(pts, boxes, scores, lane.astype(np.int64), np.ones(len(lane)), seen)
         if self.distortion is not None and len(pts):
             camera = self._camera_for(w, h)
@@ -236,6 +274,31 @@ class RowAnchorDetector:
                                       self.distortion, P=camera.K).reshape(-1, 2)
             props = Proposals(und, boxes, scores, props.slots, props.slot_probs, props.paint)
         return props
+
+    def _with_memory(self, props: Proposals, camera: CameraModel, w: int, h: int) -> Proposals:
+        """This frame's proposals and the ego lines' painted points of the last frames, carried
+        here and projected into this frame (as painted proposals); this frame's painted ego
+        points are remembered for the next frames."""
+        xy, slots = self.memory.recall()
+        ego = (props.slots <= 1) & (props.paint >= 0.5)
+        ground, ok = camera.pixels_to_ground(props.points_px[ego])
+        ok &= np.all(np.isfinite(ground), axis=-1)
+        self.memory.remember(ground[ok], props.slots[ego][ok])
+        if not len(xy):
+            return props
+        px, front = camera.project_ground(xy)
+        inside = front & (px[:, 0] >= 0) & (px[:, 0] <= w - 1) & (px[:, 1] >= 0) & (
+            px[:, 1] <= h - 1)
+        px, slots, n = px[inside], slots[inside], int(inside.sum())
+        half_w, half_h = w / self.model.config.bins / 2.0, h / self.model.config.anchors / 2.0
+        boxes = np.stack([px[:, 0] - half_w, px[:, 1] - half_h, px[:, 0] + half_w,
+                          px[:, 1] + half_h], -1).reshape(-1, 4)
+        return Proposals(np.concatenate([props.points_px, px]),
+                         np.concatenate([props.boxes_px, boxes]),
+                         np.concatenate([props.scores, np.ones(n)]),
+                         np.concatenate([props.slots, slots]),
+                         np.concatenate([props.slot_probs, np.ones(n)]),
+                         np.concatenate([props.paint, np.ones(n)]))
 
     def _camera_for(self, width: int, height: int) -> CameraModel:
         if (self.camera.width, self.camera.height) == (width, height):
@@ -252,6 +315,8 @@ class RowAnchorDetector:
             self.last_points = {LANES[s]: props.points_px[props.slots == s]
                                 for s in range(len(LANES))}
             camera = self._camera_for(w, h)
+            if self.settings.memory_frames:
+                props = self._with_memory(props, camera, w, h)
             grid = CellGrid(w, h, self.model.config.anchors, self.model.config.bins)
             boundaries = fit_boundaries(props, grid, self._decode, camera)
             rules = self.config.lane

@@ -27,7 +27,7 @@ from lanekeep.detectors.registry import make_detector
 from lanekeep.driver.config import DriverConfig
 from lanekeep.driver.detection import DetectionRunner, group_jobs
 from lanekeep.estimators.lane_estimator import EstimatorOutput, LaneEstimator
-from lanekeep.estimators.odometry import DeadReckoning
+from lanekeep.estimators.odometry import DeadReckoning, EgoMotion
 from lanekeep.estimators.roll import RollFilter, corrected
 
 REFERENCE = "reference"  # the key of the reference's estimate beside the front models' labels
@@ -88,9 +88,12 @@ class Driver:
     def perceive(self, observation: Observation) -> Belief:
         """Detections, roll correction and the estimator's update for one observation."""
         events: list[str] = []
+        signals = observation.signals
+        ego = self.odometry.update(signals.speed_mps, signals.yaw_rate_rps)
+        self._tell_motion(ego)
         detected = self.detect(observation.frames, events)
-        estimates = self._roll_corrected(detected, observation.signals)
-        estimate = self._estimate(estimates, observation.signals)  # laps "track" and "mmae"
+        estimates = self._roll_corrected(detected, signals)
+        estimate = self._estimate(estimates, ego)  # laps "track" and "mmae"
         events.extend(estimate.events)
         return Belief(estimates=estimates, estimate=estimate, events=events)
 
@@ -130,10 +133,16 @@ class Driver:
         return {name: corrected(e, self.roll.offset_error_m(camera.get(name, "front")))
                 for name, e in estimates.items()}
 
-    def _estimate(self, estimates: dict[str, LaneEstimate], signals: VehicleSignals
-                  ) -> EstimatorOutput:
+    def _tell_motion(self, ego: EgoMotion) -> None:
+        """The period's motion, from wheel speed and yaw rate, to each detector that carries
+        what it saw across frames (one with a `move` method: detectors/base.py)."""
+        for detector in [*self.front.values(), self.reference]:
+            move = getattr(detector, "move", None)
+            if callable(move):
+                move(ego.speed_mps, ego.yaw_rate_rps, ego.dt_s, ego.lateral_speed_mps)
+
+    def _estimate(self, estimates: dict[str, LaneEstimate], ego: EgoMotion) -> EstimatorOutput:
         front = {name: estimates[name] for name in self.front}
-        ego = self.odometry.update(signals.speed_mps, signals.yaw_rate_rps)
         return self.estimator.update(front, estimates[REFERENCE], ego, lap=self.clock.lap)
 
     def close(self) -> None:

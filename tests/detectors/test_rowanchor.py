@@ -318,3 +318,41 @@ def test_seen_spread_weights_wide_points_as_inferred(rear_frame):
     assert 0.0 < b.paint.min() < 1.0
     with pytest.raises(ValueError, match="seen_spread_px"):
         RowAnchorSettings(seen_spread_px=-1.0)
+
+
+def test_paint_test_calls_points_on_paint_seen_and_leaves_their_places(rear_frame):
+    """`paint_test`: each proposal's `paint` is 1 where a paint-wide ridge lies under it, 0
+    elsewhere (detectors/seen_paint.py); the points themselves do not move."""
+    frame, camera, _ = rear_frame
+    plain = RowAnchorDetector(camera).proposals(frame)
+    tested = RowAnchorDetector(camera, settings=RowAnchorSettings(paint_test=True)
+                               ).proposals(frame)
+    np.testing.assert_array_equal(plain.points_px, tested.points_px)
+    assert set(np.unique(tested.paint)) <= {0.0, 1.0}
+    ego = tested.slots <= 1
+    assert 0.3 < tested.paint[ego].mean() < 1.0, tested.paint[ego].mean()
+
+
+def test_memory_carries_painted_points_only_when_told_the_motion(rear_frame):
+    """`memory_frames`: the ego lines' painted points are kept in ground coordinates and
+    carried by the motion `move` is told (1 m back here); a detector told no motion between
+    two frames reads the second as a fresh detector would."""
+    frame, camera, truth = rear_frame
+    settings = RowAnchorSettings(paint_test=True, memory_frames=3)
+    moving = RowAnchorDetector(camera, settings=settings)
+    first = moving.detect(frame)
+    props = moving.proposals(frame)
+    painted = (props.slots <= 1) & (props.paint >= 0.5)
+    ground, ok = camera.pixels_to_ground(props.points_px[painted])
+    moving.move(10.0, 0.0, 0.1)
+    carried, slots = moving.memory.recall()
+    np.testing.assert_allclose(carried, ground[ok] - [1.0, 0.0], atol=1e-9)
+    np.testing.assert_array_equal(slots, props.slots[painted][ok])
+    second = moving.detect(frame)
+    assert first.valid and second.valid and second.offset_m != first.offset_m
+    assert abs(second.offset_m - truth) < 0.15
+    still = RowAnchorDetector(camera, settings=settings)
+    still.detect(frame)
+    assert still.detect(frame).offset_m == first.offset_m
+    with pytest.raises(ValueError, match="paint_test"):
+        RowAnchorSettings(memory_frames=3)

@@ -1,0 +1,84 @@
+"""Is there paint under a point a network placed? A look at the frame around each point.
+
+A row-anchor network places every boundary on every anchor row where it lies, paint or no
+paint: across a dash gap it draws the line from whatever is around it, and there it leans into
+the lane (docs/observer.md, "Why it leans"). Its placement on painted rows is good. So the
+observer asks the frame itself, at each point, whether a stripe brighter than the road on both
+sides of it lies there: a paint-wide ridge within the network's placement error. That is a
+look at pixels, not a model: nothing is learnt, and it shares no weights or cues' tuning with
+the front models.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from lanekeep.geometry.camera_model import CameraModel
+
+REFERENCE_WIDTH_PX = 1280  # pixel sizes below are given at this frame width
+
+
+@dataclass(frozen=True)
+class PaintTest:
+    """A stripe counts as paint when its brightest pixel exceeds the road on both sides by a
+    share of the road's level and by a few grey levels."""
+
+    paint_width_m: float = 0.15  # the stripe looked for, across the line
+    tolerance_px: float = 5.0  # the network's placement error on painted rows (median ~3 px)
+    min_ratio: float = 0.10  # peak >= road x (1 + min_ratio) ...
+    min_step: float = 8.0  # ... and >= road + min_step grey levels
+
+    def __post_init__(self) -> None:
+        if not (self.paint_width_m > 0 and self.tolerance_px >= 0 and self.min_ratio >= 0
+                and self.min_step >= 0):
+            raise ValueError("paint_width_m must be > 0 and the tolerances >= 0")
+
+
+def paint_under_points(frame: np.ndarray, points_px: np.ndarray, camera: CameraModel,
+                       test: PaintTest) -> np.ndarray:
+    """For each point (N, 2) (column, row) of `frame` (H, W, 3 RGB, the camera's view): 1.0
+    where a paint-wide ridge lies within the tolerance of it along its row, else 0.0."""
+    pts = np.asarray(points_px, dtype=float).reshape(-1, 2)
+    seen = np.zeros(len(pts))
+    if not len(pts):
+        return seen
+    h, w = frame.shape[:2]
+    grey = cv2.blur(cv2.cvtColor(frame, cv2.COLOR_RGB2GRAY), (3, 3)).astype(np.float32)
+    half_px = _half_widths_px(pts, camera.scaled(w, h) if (camera.width, camera.height)
+                              != (w, h) else camera, test.paint_width_m)
+    tol = test.tolerance_px * w / REFERENCE_WIDTH_PX
+    for k, ((u, v), half) in enumerate(zip(pts, half_px, strict=True)):
+        row = int(round(v))
+        if not (0 <= row < h) or not np.isfinite(half):
+            continue
+        inner = half + tol
+        side = max(2.0, 2.0 * half)  # the road beside: a stripe's width or two
+        lo, hi = int(np.floor(u - inner)), int(np.ceil(u + inner)) + 1
+        left = grey[row, max(0, int(np.floor(u - inner - side))):max(0, lo)]
+        right = grey[row, min(w, hi):min(w, int(np.ceil(u + inner + side)) + 1)]
+        middle = grey[row, max(0, lo):min(w, hi)]
+        if not (len(left) and len(right) and len(middle)):
+            continue
+        road = max(float(np.median(left)), float(np.median(right)))
+        peak = float(middle.max())
+        seen[k] = float(peak >= road * (1.0 + test.min_ratio) and peak - road >= test.min_step)
+    return seen
+
+
+def _half_widths_px(points_px: np.ndarray, camera: CameraModel, width_m: float) -> np.ndarray:
+    """Half a stripe's width in pixels at each point: its ground point projected with the
+    stripe's two edges across the line (NaN where the point is not on the ground)."""
+    ground, ok = camera.pixels_to_ground(points_px)
+    half = np.full(len(points_px), np.nan)
+    if not ok.any():
+        return half
+    xy = ground[ok]
+    edges = np.concatenate([xy + [0.0, width_m / 2.0], xy - [0.0, width_m / 2.0]])
+    px, front = camera.project_ground(edges)
+    n = len(xy)
+    across = np.abs(px[:n, 0] - px[n:, 0]) / 2.0
+    half[np.flatnonzero(ok)] = np.where(front[:n] & front[n:], np.maximum(across, 0.5), np.nan)
+    return half
