@@ -3,6 +3,7 @@
     detector = RowAnchorDetector(camera, weights="detectors/weights/rowanchor.pt")
     estimate = detector.detect(frame)   # ego lane, vehicle frame
     detector.last_points                # {lane name: (N, 2) frame pixels} of that frame
+    detector.move(speed, yaw_rate, dt)  # in a loop, before each frame: the car's motion
 
 Selected as the MMAE's reference with `reference_detector = "rowanchor"` (scenario
 `[estimation]`) or `--reference-detector rowanchor`; it is not the default.
@@ -39,7 +40,6 @@ from lanekeep.detectors.config import DetectorsConfig, GroundWindow, load_config
 from lanekeep.detectors.lanenet_decode import (
     CURVATURE_PRIOR_PER_M,
     CURVATURE_PRIOR_SHAPE,
-    UNSEEN_WEIGHT,
     WIDTH_STD_M,
     DecodeSettings,
     Proposals,
@@ -125,17 +125,22 @@ class RowAnchorSettings:
     seen_spread_px: float = 0.0
     # Each point checked against the frame: paint-wide ridge under it or not
     # (detectors/seen_paint.py). A point without paint under it weighs `unseen_weight` in the
-    # lane fit, as LaneNet's points off paint do. Off (every point seen) as shipped.
-    paint_test: bool = False
+    # lane fit, as LaneNet's points off paint do. On since 2026-12-02 with the memory below
+    # (docs/observer.md, "Painted points carried across frames": on six tuning scenarios the
+    # observer's |bias| fell 1.41 cm [1.14, 1.68], its RMSE from 3-4 to 1-2 cm).
+    paint_test: bool = True
     paint_min_ratio: float = PaintTest.min_ratio  # the ridge's least height, a share of the road
     paint_min_step: float = PaintTest.min_step  # ... and in grey levels
     paint_tolerance_px: float = PaintTest.tolerance_px  # the network's placement error, at 1280
-    unseen_weight: float = UNSEEN_WEIGHT  # an unseen point's weight in the ego pair's fit
+    # An unseen point's weight in the ego pair's fit (LaneNet's decoder: 0.3); with painted
+    # points carried from earlier frames the inferred ones are hardly needed.
+    unseen_weight: float = 0.05
     # The ego lines' painted points of the last `memory_frames` frames, carried into this one
     # by the car's motion (wheel speed and yaw rate; detectors/point_memory.py), join this
     # frame's: a dash seen a few frames ago is painted evidence in a frame whose near view is
-    # a gap. Needs `paint_test`. 0 = one frame, no memory (as shipped).
-    memory_frames: int = 0
+    # a gap. Needs `paint_test`. 0 = one frame, no memory (the weights' first behaviour, with
+    # paint_test = false and unseen_weight = 0.3).
+    memory_frames: int = 10
 
     def __post_init__(self) -> None:
         if not self.seen_spread_px >= 0.0:

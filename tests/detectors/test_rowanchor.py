@@ -305,10 +305,12 @@ def test_column_spread_is_narrow_on_a_sure_column_and_wide_on_a_guess():
 def test_seen_spread_weights_wide_points_as_inferred(rear_frame):
     """`seen_spread_px`: each proposal's `paint` (how surely it is seen, the lane fit's weight)
     is min(1, seen_spread_px / spread); 0 (the default) leaves every point seen, so the
-    detector reads exactly as before."""
+    detector reads exactly as before (the paint test off: it sets `paint` too)."""
     frame, camera, _ = rear_frame
-    plain = RowAnchorDetector(camera)
-    weighted = RowAnchorDetector(camera, settings=RowAnchorSettings(seen_spread_px=4.0))
+    one_frame = {"paint_test": False, "memory_frames": 0}
+    plain = RowAnchorDetector(camera, settings=RowAnchorSettings(**one_frame))
+    weighted = RowAnchorDetector(camera, settings=RowAnchorSettings(seen_spread_px=4.0,
+                                                                    **one_frame))
     a, b = plain.proposals(frame), weighted.proposals(frame)
     np.testing.assert_array_equal(a.points_px, b.points_px)
     assert np.all(a.paint == 1.0)
@@ -324,9 +326,10 @@ def test_paint_test_calls_points_on_paint_seen_and_leaves_their_places(rear_fram
     """`paint_test`: each proposal's `paint` is 1 where a paint-wide ridge lies under it, 0
     elsewhere (detectors/seen_paint.py); the points themselves do not move."""
     frame, camera, _ = rear_frame
-    plain = RowAnchorDetector(camera).proposals(frame)
-    tested = RowAnchorDetector(camera, settings=RowAnchorSettings(paint_test=True)
-                               ).proposals(frame)
+    plain = RowAnchorDetector(camera, settings=RowAnchorSettings(paint_test=False,
+                                                                 memory_frames=0)
+                              ).proposals(frame)
+    tested = RowAnchorDetector(camera).proposals(frame)  # the default since 2026-12-02
     np.testing.assert_array_equal(plain.points_px, tested.points_px)
     assert set(np.unique(tested.paint)) <= {0.0, 1.0}
     ego = tested.slots <= 1
@@ -355,4 +358,4 @@ def test_memory_carries_painted_points_only_when_told_the_motion(rear_frame):
     still.detect(frame)
     assert still.detect(frame).offset_m == first.offset_m
     with pytest.raises(ValueError, match="paint_test"):
-        RowAnchorSettings(memory_frames=3)
+        RowAnchorSettings(paint_test=False, memory_frames=3)
