@@ -170,8 +170,8 @@ def row_line(source: str, row: dict) -> str:
 
 def reference_summary(traces: list[Trace]) -> dict:
     """The reference's own error over all episodes: RMSE, max and mean (its bias) in cm over
-    the steps it gave an offset, the share of steps it did, and each episode's mean and valid
-    share (so that two runs over the same seeds can be paired)."""
+    the steps it gave an offset, the share of steps it did, and each episode's mean, RMSE and
+    valid share (so that two runs over the same seeds can be paired)."""
     per = [np.asarray(t.errors[REFERENCE], dtype=float) for t in traces]
     e = np.concatenate(per)
     ok = np.isfinite(e)
@@ -180,6 +180,10 @@ def reference_summary(traces: list[Trace]) -> dict:
         v = v[np.isfinite(v)]
         return float(100.0 * v.mean()) if len(v) else math.nan
 
+    def rmse_cm(v: np.ndarray) -> float:
+        v = v[np.isfinite(v)]
+        return float(100.0 * np.sqrt(np.mean(v**2))) if len(v) else math.nan
+
     return _json_safe({"rmse_cm": float(100.0 * np.sqrt(np.mean(e[ok] ** 2))) if ok.any()
                        else math.nan,
                        "max_cm": float(100.0 * np.max(np.abs(e[ok]))) if ok.any() else math.nan,
@@ -187,6 +191,7 @@ def reference_summary(traces: list[Trace]) -> dict:
                        "valid_share": float(ok.mean()) if len(e) else math.nan,
                        "steps": int(len(e)),
                        "episode_mean_cm": [mean_cm(v) for v in per],
+                       "episode_rmse_cm": [rmse_cm(v) for v in per],
                        "episode_valid_share": [float(np.isfinite(v).mean()) if len(v)
                                                else math.nan for v in per]})
 
