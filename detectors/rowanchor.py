@@ -232,11 +232,13 @@ class RowAnchorDetector:
     def points(self, frame: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The network's read of one frame: x (lanes, anchors) in this frame's pixels and the
         presence probability (lanes, anchors)."""
-        x, presence, _ = self.read(frame)
+        x, presence, _ = self.read(frame, spread=False)
         return x, presence
 
-    def read(self, frame: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """`points` and each point's column spread (lanes, anchors), in pixels at 1280 wide."""
+    def read(self, frame: np.ndarray, spread: bool = True
+             ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """`points` and each point's column spread (lanes, anchors), in pixels at 1280 wide
+        (zeros without `spread`: its softmax over every column costs as much as the decoding)."""
         cfg = self.model.config
         h, w = frame.shape[:2]
         small = frame if (h, w) == (cfg.height, cfg.width) else cv2.resize(
@@ -247,18 +249,19 @@ class RowAnchorDetector:
                 item = torch.cat([item, item.flip(-1)])
             logits = self.model(item)
         position, presence = decode(logits)
-        spread = column_spread(logits) * (1280.0 / cfg.bins)
+        columns = (column_spread(logits) * (1280.0 / cfg.bins) if spread
+                   else np.zeros_like(position))
         if self.settings.mirror:
-            position, presence, spread = _pooled(position, presence, spread, cfg.bins)
+            position, presence, columns = _pooled(position, presence, columns, cfg.bins)
         else:
-            position, presence, spread = position[0], presence[0], spread[0]
-        return bin_to_x(position, w, cfg.bins), presence, spread
+            position, presence, columns = position[0], presence[0], columns[0]
+        return bin_to_x(position, w, cfg.bins), presence, columns
 
     def proposals(self, frame: np.ndarray) -> Proposals:
         """The anchor points above the presence threshold, as the shared fit takes them."""
         cfg = self.model.config
         h, w = frame.shape[:2]
-        x, presence, spread = self.read(frame)
+        x, presence, spread = self.read(frame, spread=self.settings.seen_spread_px > 0.0)
         rows = anchor_rows(h, cfg.anchors)
         lane, anchor = np.nonzero(presence > self._decode.score_threshold)
         pts = np.stack([x[lane, anchor], rows[anchor]], -1).reshape(-1, 2)

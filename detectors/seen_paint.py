@@ -46,26 +46,47 @@ def paint_under_points(frame: np.ndarray, points_px: np.ndarray, camera: CameraM
     if not len(pts):
         return seen
     h, w = frame.shape[:2]
-    grey = cv2.blur(cv2.cvtColor(frame, cv2.COLOR_RGB2GRAY), (3, 3)).astype(np.float32)
     half_px = _half_widths_px(pts, camera.scaled(w, h) if (camera.width, camera.height)
                               != (w, h) else camera, test.paint_width_m)
     tol = test.tolerance_px * w / REFERENCE_WIDTH_PX
+    grey_rows: dict[int, np.ndarray] = {}
     for k, ((u, v), half) in enumerate(zip(pts, half_px, strict=True)):
         row = int(round(v))
         if not (0 <= row < h) or not np.isfinite(half):
             continue
+        if row not in grey_rows:
+            grey_rows[row] = _grey_row(frame, row)
+        grey = grey_rows[row]
         inner = half + tol
         side = max(2.0, 2.0 * half)  # the road beside: a stripe's width or two
         lo, hi = int(np.floor(u - inner)), int(np.ceil(u + inner)) + 1
-        left = grey[row, max(0, int(np.floor(u - inner - side))):max(0, lo)]
-        right = grey[row, min(w, hi):min(w, int(np.ceil(u + inner + side)) + 1)]
-        middle = grey[row, max(0, lo):min(w, hi)]
+        left = grey[max(0, int(np.floor(u - inner - side))):max(0, lo)]
+        right = grey[min(w, hi):min(w, int(np.ceil(u + inner + side)) + 1)]
+        middle = grey[max(0, lo):min(w, hi)]
         if not (len(left) and len(right) and len(middle)):
             continue
-        road = max(float(np.median(left)), float(np.median(right)))
+        road = max(_median(left), _median(right))
         peak = float(middle.max())
         seen[k] = float(peak >= road * (1.0 + test.min_ratio) and peak - road >= test.min_step)
     return seen
+
+
+def _grey_row(frame: np.ndarray, row: int) -> np.ndarray:
+    """One row of the frame's grey image after a 3x3 box blur (a pixel's neighbours, not single
+    grains), float32: the rows either side and no more are converted, for the blur of the
+    middle row reads only those (the image's own border where the row is its first or last)."""
+    top = max(0, row - 1)
+    strip = cv2.cvtColor(np.ascontiguousarray(frame[top:row + 2]), cv2.COLOR_RGB2GRAY)
+    if row - top == 1 and strip.shape[0] == 3:
+        return cv2.blur(strip, (3, 3))[1].astype(np.float32)
+    return cv2.blur(cv2.cvtColor(frame, cv2.COLOR_RGB2GRAY), (3, 3))[row].astype(np.float32)
+
+
+def _median(values: np.ndarray) -> float:
+    """numpy's median of a short row segment, without its per-call overhead."""
+    ordered = np.sort(values)
+    n = len(ordered)
+    return float((ordered[(n - 1) // 2] + ordered[n // 2]) / np.float32(2.0))
 
 
 def _half_widths_px(points_px: np.ndarray, camera: CameraModel, width_m: float) -> np.ndarray:
