@@ -265,9 +265,7 @@ class RowAnchorDetector:
         rows = anchor_rows(h, cfg.anchors)
         lane, anchor = np.nonzero(presence > self._decode.score_threshold)
         pts = np.stack([x[lane, anchor], rows[anchor]], -1).reshape(-1, 2)
-        half_w, half_h = w / cfg.bins / 2.0, h / cfg.anchors / 2.0
-        boxes = np.stack([pts[:, 0] - half_w, pts[:, 1] - half_h, pts[:, 0] + half_w,
-                          pts[:, 1] + half_h], -1).reshape(-1, 4)
+        boxes = self._cell_boxes(pts, w, h)
         scores = presence[lane, anchor].astype(np.float64)
         seen = np.ones(len(lane))
         if self.settings.seen_spread_px > 0.0:
@@ -298,15 +296,21 @@ class RowAnchorDetector:
         inside = front & (px[:, 0] >= 0) & (px[:, 0] <= w - 1) & (px[:, 1] >= 0) & (
             px[:, 1] <= h - 1)
         px, slots, n = px[inside], slots[inside], int(inside.sum())
-        half_w, half_h = w / self.model.config.bins / 2.0, h / self.model.config.anchors / 2.0
-        boxes = np.stack([px[:, 0] - half_w, px[:, 1] - half_h, px[:, 0] + half_w,
-                          px[:, 1] + half_h], -1).reshape(-1, 4)
+        boxes = self._cell_boxes(px, w, h)
         return Proposals(np.concatenate([props.points_px, px]),
                          np.concatenate([props.boxes_px, boxes]),
                          np.concatenate([props.scores, np.ones(n)]),
                          np.concatenate([props.slots, slots]),
                          np.concatenate([props.slot_probs, np.ones(n)]),
                          np.concatenate([props.paint, np.ones(n)]))
+
+    def _cell_boxes(self, points_px: np.ndarray, w: int, h: int) -> np.ndarray:
+        """(N, 4) x0 y0 x1 y1: one column bin wide and one anchor row tall about each point."""
+        cfg = self.model.config
+        half_w, half_h = w / cfg.bins / 2.0, h / cfg.anchors / 2.0
+        return np.stack([points_px[:, 0] - half_w, points_px[:, 1] - half_h,
+                         points_px[:, 0] + half_w, points_px[:, 1] + half_h],
+                        -1).reshape(-1, 4)
 
     def _camera_for(self, width: int, height: int) -> CameraModel:
         if (self.camera.width, self.camera.height) == (width, height):
