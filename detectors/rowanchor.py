@@ -132,6 +132,10 @@ class RowAnchorSettings:
     paint_min_ratio: float = PaintTest.min_ratio  # the ridge's least height, a share of the road
     paint_min_step: float = PaintTest.min_step  # ... and in grey levels
     paint_tolerance_px: float = PaintTest.tolerance_px  # the network's placement error, at 1280
+    # A double line's middle (the gap between its two stripes, where the network places the
+    # boundary) counts as paint when a stripe lies either side of it this far apart (m);
+    # 0 = one stripe only, which calls a double line unseen throughout.
+    paint_double_gap_m: float = PaintTest.double_gap_m
     # An unseen point's weight in the ego pair's fit (LaneNet's decoder: 0.3); with painted
     # points carried from earlier frames the inferred ones are hardly needed.
     unseen_weight: float = 0.05
@@ -152,7 +156,7 @@ class RowAnchorSettings:
 
     def paint(self) -> PaintTest:
         return PaintTest(tolerance_px=self.paint_tolerance_px, min_ratio=self.paint_min_ratio,
-                         min_step=self.paint_min_step)
+                         min_step=self.paint_min_step, double_gap_m=self.paint_double_gap_m)
 
     def decode(self) -> DecodeSettings:
         return DecodeSettings(score_threshold=self.presence_threshold, inlier_px=self.inlier_px,

@@ -30,45 +30,71 @@ class PaintTest:
     tolerance_px: float = 5.0  # the network's placement error on painted rows (median ~3 px)
     min_ratio: float = 0.10  # peak >= road x (1 + min_ratio) ...
     min_step: float = 8.0  # ... and >= road + min_step grey levels
+    # A double line (two stripes this far apart, the point between them on the gap) is paint
+    # too: two ridges, one a stripe's width either side of the gap, each brighter than the
+    # road outside them. 0 = single stripes only. Why: a row-anchor network places a double
+    # line's boundary on its middle, the gap, where a one-stripe test sees road.
+    double_gap_m: float = 0.0
 
     def __post_init__(self) -> None:
         if not (self.paint_width_m > 0 and self.tolerance_px >= 0 and self.min_ratio >= 0
-                and self.min_step >= 0):
-            raise ValueError("paint_width_m must be > 0 and the tolerances >= 0")
+                and self.min_step >= 0 and self.double_gap_m >= 0):
+            raise ValueError("paint_width_m must be > 0 and the tolerances and double_gap_m >= 0")
+
+    def passes(self, peak: float, road: float) -> bool:
+        """A peak over this road level counts as paint."""
+        return peak >= road * (1.0 + self.min_ratio) and peak - road >= self.min_step
 
 
 def paint_under_points(frame: np.ndarray, points_px: np.ndarray, camera: CameraModel,
                        test: PaintTest) -> np.ndarray:
     """For each point (N, 2) (column, row) of `frame` (H, W, 3 RGB, the camera's view): 1.0
-    where a paint-wide ridge lies within the tolerance of it along its row, else 0.0."""
+    where a paint-wide ridge lies within the tolerance of it along its row, or (with
+    `double_gap_m`) a double line's two ridges either side of it, else 0.0."""
     pts = np.asarray(points_px, dtype=float).reshape(-1, 2)
     seen = np.zeros(len(pts))
     if not len(pts):
         return seen
     h, w = frame.shape[:2]
-    half_px = _half_widths_px(pts, camera.scaled(w, h) if (camera.width, camera.height)
-                              != (w, h) else camera, test.paint_width_m)
+    scaled = camera.scaled(w, h) if (camera.width, camera.height) != (w, h) else camera
+    half_px = _half_widths_px(pts, scaled, test.paint_width_m)
+    gap_px = (_half_widths_px(pts, scaled, test.double_gap_m) if test.double_gap_m > 0
+              else np.full(len(pts), np.nan))  # half the gap, in pixels
     tol = test.tolerance_px * w / REFERENCE_WIDTH_PX
     grey_rows: dict[int, np.ndarray] = {}
-    for k, ((u, v), half) in enumerate(zip(pts, half_px, strict=True)):
+    for k, ((u, v), half, gap_half) in enumerate(zip(pts, half_px, gap_px, strict=True)):
         row = int(round(v))
         if not (0 <= row < h) or not np.isfinite(half):
             continue
         if row not in grey_rows:
             grey_rows[row] = _grey_row(frame, row)
         grey = grey_rows[row]
-        inner = half + tol
         side = max(2.0, 2.0 * half)  # the road beside: a stripe's width or two
-        lo, hi = int(np.floor(u - inner)), int(np.ceil(u + inner)) + 1
-        left = grey[max(0, int(np.floor(u - inner - side))):max(0, lo)]
-        right = grey[min(w, hi):min(w, int(np.ceil(u + inner + side)) + 1)]
-        middle = grey[max(0, lo):min(w, hi)]
-        if not (len(left) and len(right) and len(middle)):
-            continue
-        road = max(_median(left), _median(right))
-        peak = float(middle.max())
-        seen[k] = float(peak >= road * (1.0 + test.min_ratio) and peak - road >= test.min_step)
+        stripe = _stripe(grey, u, half + tol, side)
+        if stripe is not None and test.passes(stripe[0], max(stripe[1], stripe[2])):
+            seen[k] = 1.0
+        elif np.isfinite(gap_half):
+            offset = gap_half + half  # each stripe's centre from the gap's middle
+            left, right = _stripe(grey, u - offset, half + tol, side), _stripe(
+                grey, u + offset, half + tol, side)
+            if left is not None and right is not None:
+                road = max(left[1], right[2])  # outside the pair: the gap is not the road
+                seen[k] = float(test.passes(left[0], road) and test.passes(right[0], road))
     return seen
+
+
+def _stripe(grey: np.ndarray, centre: float, reach: float, side: float
+            ) -> tuple[float, float, float] | None:
+    """The brightest level within `reach` of `centre` along a grey row and the road's median
+    level in `side` pixels beyond each end; None where a part lies off the row."""
+    w = len(grey)
+    lo, hi = int(np.floor(centre - reach)), int(np.ceil(centre + reach)) + 1
+    left = grey[max(0, int(np.floor(centre - reach - side))):max(0, lo)]
+    right = grey[min(w, hi):min(w, int(np.ceil(centre + reach + side)) + 1)]
+    middle = grey[max(0, lo):min(w, hi)]
+    if not (len(left) and len(right) and len(middle)):
+        return None
+    return float(middle.max()), _median(left), _median(right)
 
 
 def _grey_row(frame: np.ndarray, row: int) -> np.ndarray:

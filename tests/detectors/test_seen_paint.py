@@ -4,6 +4,7 @@ is paint; flat road, a one-sided edge (a shoulder) and the sky are not."""
 import math
 
 import numpy as np
+import pytest
 
 from lanekeep.detectors.seen_paint import PaintTest, paint_under_points
 from lanekeep.geometry.camera_model import CameraModel
@@ -43,3 +44,39 @@ def test_a_faint_stripe_needs_the_configured_contrast():
     point = np.array([[400.0, 600.0]])
     assert paint_under_points(frame, point, camera, PaintTest())[0] == 0
     assert paint_under_points(frame, point, camera, PaintTest(min_ratio=0.05, min_step=5.0))[0]
+
+
+def _double_line_frame(gap_px: int, stripe_px: int) -> np.ndarray:
+    """Road 90, rows 590-610 crossed by two stripes of 130 either side of column 640."""
+    frame = np.full((H, W, 3), 90, np.uint8)
+    inner = gap_px // 2
+    frame[590:611, 640 - inner - stripe_px:640 - inner] = 130
+    frame[590:611, 640 + inner:640 + inner + stripe_px] = 130
+    return frame
+
+
+def test_a_point_on_a_double_lines_gap_is_paint_only_with_the_double_test():
+    """At row 600 of this camera a 15 cm stripe is 28 px and a 12 cm gap 23 px: the one-stripe
+    test finds the two stripes beside the point and takes them for the road."""
+    camera, frame = _rear_camera(), _double_line_frame(gap_px=23, stripe_px=28)
+    point = np.array([[640.0, 600.0]])
+    assert paint_under_points(frame, point, camera, PaintTest())[0] == 0
+    assert paint_under_points(frame, point, camera, PaintTest(double_gap_m=0.12))[0] == 1
+
+
+def test_the_double_test_needs_a_stripe_on_both_sides():
+    camera, double = _rear_camera(), PaintTest(double_gap_m=0.12)
+    one_side = _double_line_frame(gap_px=23, stripe_px=28)
+    one_side[590:611, 640:] = 90  # the right stripe gone
+    wide = _double_line_frame(gap_px=200, stripe_px=28)  # two lines a metre apart
+    point = np.array([[640.0, 600.0]])
+    assert paint_under_points(one_side, point, camera, double)[0] == 0
+    assert paint_under_points(wide, point, camera, double)[0] == 0
+    # a single stripe under the point passes either way
+    np.testing.assert_array_equal(
+        paint_under_points(_frame(), np.array([[400.0, 600.0]]), camera, double), [1])
+
+
+def test_a_negative_double_gap_is_refused():
+    with pytest.raises(ValueError, match="double_gap_m"):
+        PaintTest(double_gap_m=-0.1)
