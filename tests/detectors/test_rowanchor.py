@@ -359,3 +359,35 @@ def test_memory_carries_painted_points_only_when_told_the_motion(rear_frame):
     assert still.detect(frame).offset_m == first.offset_m
     with pytest.raises(ValueError, match="paint_test"):
         RowAnchorSettings(paint_test=False, memory_frames=3)
+
+
+@pytest.fixture(scope="module")
+def double_line_rear_frame():
+    """s_bend's rear camera at 640x360 on its first straight: a solid white line on the
+    car's right, a double yellow centre line on its left."""
+    from lanekeep.scenario.schema import load_scenario
+    from lanekeep.sensing.cameras import CameraRig, RenderSettings
+    from lanekeep.sensing.snapshot import place_on_road
+    from lanekeep.world.build import build
+
+    world = build(load_scenario("s_bend"))
+    x, y, yaw = place_on_road(world, 40.0, 0.0)
+    with CameraRig(world.model, RenderSettings(640, 360)) as rig:
+        return rig.render_rgb(world.data, "rear"), rig.cameras["rear"]
+
+
+def test_the_double_test_sees_a_double_centre_line(double_line_rear_frame):
+    """The network places a double line on its gap; the one-stripe test calls it unseen, the
+    double test (`paint_double_gap_m`) paint, and leaves the solid line's points as they were."""
+    frame, camera = double_line_rear_frame
+
+    def paint_by_slot(gap_m: float) -> dict[int, np.ndarray]:
+        settings = RowAnchorSettings(paint_double_gap_m=gap_m, memory_frames=0)
+        props = RowAnchorDetector(camera, settings=settings).proposals(frame)
+        return {int(s): props.paint[props.slots == s] for s in (0, 1)}
+
+    single, double = paint_by_slot(0.0), paint_by_slot(0.12)
+    shares = {s: (single[s].mean(), double[s].mean()) for s in (0, 1)}
+    solid, centre = sorted(shares, key=lambda s: -shares[s][0])  # the solid line: seen anyway
+    assert shares[solid][0] > 0.8 and np.array_equal(single[solid], double[solid]), shares
+    assert shares[centre][0] < 0.5 and shares[centre][1] > 0.9, shares
