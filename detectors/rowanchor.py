@@ -134,7 +134,9 @@ class RowAnchorSettings:
     paint_tolerance_px: float = PaintTest.tolerance_px  # the network's placement error, at 1280
     # A double line's middle (the gap between its two stripes, where the network places the
     # boundary) counts as paint when a stripe lies either side of it this far apart (m);
-    # 0 = one stripe only, which calls a double line unseen throughout.
+    # 0 = one stripe only, which calls a double line unseen throughout (before 2026-12-02,
+    # session 38: on s_bend the observer's bias -1.64 -> +0.03 cm; docs/observer.md, "A
+    # double line is paint too").
     paint_double_gap_m: float = PaintTest.double_gap_m
     # An unseen point's weight in the ego pair's fit (LaneNet's decoder: 0.3); with painted
     # points carried from earlier frames the inferred ones are hardly needed.

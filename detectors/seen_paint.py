@@ -33,8 +33,9 @@ class PaintTest:
     # A double line (two stripes this far apart, the point between them on the gap) is paint
     # too: two ridges, one a stripe's width either side of the gap, each brighter than the
     # road outside them. 0 = single stripes only. Why: a row-anchor network places a double
-    # line's boundary on its middle, the gap, where a one-stripe test sees road.
-    double_gap_m: float = 0.0
+    # line's boundary on its middle, the gap, where a one-stripe test sees road. 0.12 m: the
+    # world's double gap (MarkingStyle.double_gap_m), a common one on real roads.
+    double_gap_m: float = 0.12
 
     def __post_init__(self) -> None:
         if not (self.paint_width_m > 0 and self.tolerance_px >= 0 and self.min_ratio >= 0

@@ -60,8 +60,8 @@ def test_a_point_on_a_double_lines_gap_is_paint_only_with_the_double_test():
     test finds the two stripes beside the point and takes them for the road."""
     camera, frame = _rear_camera(), _double_line_frame(gap_px=23, stripe_px=28)
     point = np.array([[640.0, 600.0]])
-    assert paint_under_points(frame, point, camera, PaintTest())[0] == 0
-    assert paint_under_points(frame, point, camera, PaintTest(double_gap_m=0.12))[0] == 1
+    assert paint_under_points(frame, point, camera, PaintTest(double_gap_m=0.0))[0] == 0
+    assert paint_under_points(frame, point, camera, PaintTest())[0] == 1  # the default: 0.12 m
 
 
 def test_the_double_test_needs_a_stripe_on_both_sides():
