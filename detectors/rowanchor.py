@@ -138,6 +138,9 @@ class RowAnchorSettings:
     # session 38: on s_bend the observer's bias -1.64 -> +0.03 cm; docs/observer.md, "A
     # double line is paint too").
     paint_double_gap_m: float = PaintTest.double_gap_m
+    # The ridge read as the brightest stripe-wide mean, not the brightest pixel (seen_paint.py:
+    # grain on coarse asphalt passes a one-pixel peak).
+    paint_stripe_mean: bool = PaintTest.stripe_mean
     # An unseen point's weight in the ego pair's fit (LaneNet's decoder: 0.3); with painted
     # points carried from earlier frames the inferred ones are hardly needed.
     unseen_weight: float = 0.05
@@ -158,7 +161,8 @@ class RowAnchorSettings:
 
     def paint(self) -> PaintTest:
         return PaintTest(tolerance_px=self.paint_tolerance_px, min_ratio=self.paint_min_ratio,
-                         min_step=self.paint_min_step, double_gap_m=self.paint_double_gap_m)
+                         min_step=self.paint_min_step, double_gap_m=self.paint_double_gap_m,
+                         stripe_mean=self.paint_stripe_mean)
 
     def decode(self) -> DecodeSettings:
         return DecodeSettings(score_threshold=self.presence_threshold, inlier_px=self.inlier_px,

@@ -36,6 +36,11 @@ class PaintTest:
     # line's boundary on its middle, the gap, where a one-stripe test sees road. 0.12 m: the
     # world's double gap (MarkingStyle.double_gap_m), a common one on real roads.
     double_gap_m: float = 0.12
+    # The ridge's height read as the brightest run of a stripe's width (its mean) instead of
+    # the brightest pixel. Why: on coarse asphalt the brightest of a few dozen pixels stands
+    # 10-20 grey levels over the road's median by grain alone, so bare road passes the test;
+    # a painted stripe is bright across its width.
+    stripe_mean: bool = False
 
     def __post_init__(self) -> None:
         if not (self.paint_width_m > 0 and self.tolerance_px >= 0 and self.min_ratio >= 0
@@ -71,23 +76,25 @@ def paint_under_points(frame: np.ndarray, points_px: np.ndarray, camera: CameraM
             grey_rows[row] = _grey_row(frame, row)
         grey = grey_rows[row]
         side = max(2.0, 2.0 * half)  # the road beside: a stripe's width or two
-        stripe = _stripe(grey, u, half + tol, side)
+        run = max(1, int(round(2.0 * half))) if test.stripe_mean else 1
+        stripe = _stripe(grey, u, half + tol, side, run)
         if stripe is not None and test.passes(stripe[0], max(stripe[1], stripe[2])):
             seen[k] = 1.0
         elif np.isfinite(gap_half):
             offset = gap_half + half  # each stripe's centre from the gap's middle
-            left, right = _stripe(grey, u - offset, half + tol, side), _stripe(
-                grey, u + offset, half + tol, side)
+            left, right = _stripe(grey, u - offset, half + tol, side, run), _stripe(
+                grey, u + offset, half + tol, side, run)
             if left is not None and right is not None:
                 road = max(left[1], right[2])  # outside the pair: the gap is not the road
                 seen[k] = float(test.passes(left[0], road) and test.passes(right[0], road))
     return seen
 
 
-def _stripe(grey: np.ndarray, centre: float, reach: float, side: float
+def _stripe(grey: np.ndarray, centre: float, reach: float, side: float, run: int = 1
             ) -> tuple[float, float, float] | None:
-    """The brightest level within `reach` of `centre` along a grey row and the road's median
-    level in `side` pixels beyond each end; None where a part lies off the row."""
+    """The brightest mean of `run` neighbouring pixels within `reach` of `centre` along a grey
+    row (the brightest pixel for 1) and the road's median level in `side` pixels beyond each
+    end; None where a part lies off the row."""
     w = len(grey)
     lo, hi = int(np.floor(centre - reach)), int(np.ceil(centre + reach)) + 1
     left = grey[max(0, int(np.floor(centre - reach - side))):max(0, lo)]
@@ -95,7 +102,12 @@ def _stripe(grey: np.ndarray, centre: float, reach: float, side: float
     middle = grey[max(0, lo):min(w, hi)]
     if not (len(left) and len(right) and len(middle)):
         return None
-    return float(middle.max()), _median(left), _median(right)
+    if run > 1 and len(middle) > run:
+        sums = np.cumsum(np.concatenate([[0.0], middle.astype(np.float64)]))
+        peak = float((sums[run:] - sums[:-run]).max() / run)
+    else:
+        peak = float(middle.max()) if run == 1 else float(middle.mean())
+    return peak, _median(left), _median(right)
 
 
 def _grey_row(frame: np.ndarray, row: int) -> np.ndarray:
