@@ -80,3 +80,18 @@ def test_the_double_test_needs_a_stripe_on_both_sides():
 def test_a_negative_double_gap_is_refused():
     with pytest.raises(ValueError, match="double_gap_m"):
         PaintTest(double_gap_m=-0.1)
+
+
+def test_grain_passes_a_one_pixel_peak_but_not_a_stripe_wide_mean():
+    """Coarse asphalt: road 90 with bright grains of 160 every 7 and 5 pixels. After the 3x3
+    blur the brightest pixel near a point on bare road stands well over the road's median; the
+    brightest mean over a stripe's width does not. A painted stripe passes either way."""
+    camera = _rear_camera()
+    frame = np.full((H, W, 3), 90, np.uint8)
+    frame[:, ::7] = 160
+    frame[:, ::5] = 160
+    frame[:, 386:414] = 130  # a 28 px stripe at column 400 (15 cm at row 600)
+    bare, painted = np.array([[800.0, 600.0]]), np.array([[400.0, 600.0]])
+    assert paint_under_points(frame, bare, camera, PaintTest())[0] == 1  # grain taken for paint
+    assert paint_under_points(frame, bare, camera, PaintTest(stripe_mean=True))[0] == 0
+    assert paint_under_points(frame, painted, camera, PaintTest(stripe_mean=True))[0] == 1
