@@ -139,7 +139,9 @@ class RowAnchorSettings:
     # double line is paint too").
     paint_double_gap_m: float = PaintTest.double_gap_m
     # The ridge read as the brightest stripe-wide mean, not the brightest pixel (seen_paint.py:
-    # grain on coarse asphalt passes a one-pixel peak).
+    # grain on coarse asphalt passes a one-pixel peak). Off: on eight tuning scenarios neither
+    # the observer's |bias| nor its RMSE was better, and a gentle S-curve's RMSE was worse
+    # (docs/observer.md, "Grain taken for paint").
     paint_stripe_mean: bool = PaintTest.stripe_mean
     # An unseen point's weight in the ego pair's fit (LaneNet's decoder: 0.3); with painted
     # points carried from earlier frames the inferred ones are hardly needed.
